@@ -1,0 +1,63 @@
+#pragma once
+// Frame cost model of time-critical rendering (Funkhouser & Sequin 1993; Gobbetti & Bouvier 1999):
+//   frame = t_init + t_final + sum_i (t_setup + max(t_tri * tris_i + t_vert * verts_i, t_pix * pixels_i)) + safety
+// All times in milliseconds.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace tcr {
+
+struct CostModel {
+    double t_init_ms = 0.0;   ///< per frame, before the objects
+    double t_final_ms = 0.0;  ///< per frame, after the objects (swap, read-back)
+    double t_setup_ms = 0.0;  ///< per drawn object
+    double t_tri_ms = 0.0;    ///< per triangle
+    double t_vert_ms = 0.0;   ///< per vertex
+    double t_pix_ms = 0.0;    ///< per covered pixel
+    double safety_ms = 0.0;   ///< allowance for the system's own noise
+
+    /// Time of one object: t_setup + max(geometry, fill).
+    double object_ms(double triangles, double vertices, double pixels) const noexcept {
+        const double geometry = t_tri_ms * triangles + t_vert_ms * vertices;
+        const double fill = t_pix_ms * pixels;
+        return t_setup_ms + (geometry > fill ? geometry : fill);
+    }
+    /// Fixed part of a frame: t_init + t_final + safety.
+    double frame_fixed_ms() const noexcept { return t_init_ms + t_final_ms + safety_ms; }
+    /// Fewer triangles than this save no time: the object is fill bound (r_min of the sources).
+    double min_useful_triangles(double pixels, double vertices_per_triangle = 0.5) const noexcept {
+        const double per_tri = t_tri_ms + t_vert_ms * vertices_per_triangle;
+        return per_tri > 0 ? t_pix_ms * pixels / per_tri : 0.0;
+    }
+};
+
+/// One timed draw of one object (or a frame of one object) used for calibration.
+struct CostSample {
+    double triangles = 0, vertices = 0, pixels = 0;
+    double time_ms = 0;  ///< measured time of the draw, including per-object setup
+};
+
+struct CalibrationResult {
+    CostModel model;
+    double rms_error_ms = 0;        ///< root mean square residual over the samples
+    double mean_relative_error = 0; ///< mean |predicted - measured| / measured
+    size_t geometry_bound = 0;      ///< samples the fit classed geometry bound
+    size_t fill_bound = 0;
+};
+
+/// Fits t_setup, t_tri, t_vert and t_pix to samples by least squares on the model
+/// t = t_setup + max(t_tri*T + t_vert*V, t_pix*P): alternates between classifying each sample
+/// as geometry or fill bound and solving the linear least-squares problem of that split
+/// (all coefficients clamped to >= 0), until the split stops changing.
+/// \pre at least 4 samples with varied triangle and pixel counts.
+CalibrationResult fit_cost_model(const std::vector<CostSample>& samples);
+
+/// Reads and writes the calibration file (format documented in libtcr/CALIBRATION.md):
+/// text lines "key value" with keys t_init_ms, t_final_ms, t_setup_ms, t_tri_ms, t_vert_ms,
+/// t_pix_ms, safety_ms; '#' starts a comment. \throw std::runtime_error naming file and line.
+CostModel read_cost_model(const std::string& path);
+void write_cost_model(const std::string& path, const CostModel& model, const std::string& comment = "");
+
+} // namespace tcr

@@ -1,0 +1,51 @@
+#pragma once
+// Extraction of an index buffer at any resolution (TOM paper, section 3.2):
+// vertices [0, n) are sent as they are; each corner v of the active triangles is
+// mapped by `while (v >= n) v = substitute[v]`.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "tom/view.h"
+
+namespace tom {
+
+/// The resolution actually extracted.
+struct Extracted {
+    uint32_t vertex_count = 0;    ///< n: the caller draws vertices [0, n)
+    uint32_t triangle_count = 0;  ///< triangles written (3 indices each)
+};
+
+/// Number of triangles alive at resolution `vertex_count` (clamped to
+/// [min_vertex_count, vertex_count]). O(log T) chain walks; allocates nothing.
+uint32_t active_triangle_count(const MeshView& mesh, uint32_t vertex_count) noexcept;
+
+/// Smallest resolution n whose active triangle count is >= `triangle_count`
+/// (the full vertex count if `triangle_count` exceeds the mesh's).
+uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_count) noexcept;
+
+/// Resolution for a fraction in [0, 1] of the mesh's triangles (see vertex_count_for_triangles).
+uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction) noexcept;
+
+/// Writes the index buffer at resolution `vertex_count` (clamped as above) into `destination`.
+/// destination must hold 3 * active_triangle_count(mesh, vertex_count) indices; at most
+/// `destination_capacity` indices (rounded down to whole triangles) are written.
+/// Every written index is < the returned vertex_count; no triangle is degenerate.
+/// The uint16_t form requires vertex_count <= 65536. Allocates nothing.
+Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint32_t* destination, size_t destination_capacity) noexcept;
+Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint16_t* destination, size_t destination_capacity) noexcept;
+
+/// Substitution-chain statistics of one resolution (the paper's Fig. 6).
+struct ChainStats {
+    uint64_t corners = 0;        ///< corners of the active triangles
+    uint64_t steps = 0;          ///< substitution steps walked over all corners
+    uint32_t max_steps = 0;
+    /// histogram[k] = corners whose chain has k steps; the last bin counts >= its index.
+    static constexpr int histogram_bins = 16;
+    uint64_t histogram[histogram_bins] = {};
+};
+
+/// Walks the active triangles at resolution `vertex_count` and counts chain lengths.
+ChainStats chain_stats(const MeshView& mesh, uint32_t vertex_count) noexcept;
+
+} // namespace tom

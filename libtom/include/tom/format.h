@@ -1,0 +1,83 @@
+#pragma once
+// Reading and writing .tom files. The format is specified in libtom/FORMAT.md.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tom/builder.h"
+#include "tom/view.h"
+
+namespace tom {
+
+constexpr uint32_t format_version_major = 1;
+constexpr uint32_t format_version_minor = 0;
+
+enum class IndexSize {
+    automatic,  ///< 16-bit when every mesh of the file has <= 65536 vertices, else 32-bit (per mesh)
+    bits16,     ///< 16-bit (only for meshes of <= 65536 vertices; others use 32-bit)
+    bits32,
+};
+
+struct WriteOptions {
+    IndexSize index_size = IndexSize::automatic;
+};
+
+/// The complete file image of `meshes`. Deterministic: equal inputs give equal bytes.
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
+
+/// Writes `meshes` to `path` through a temporary file in the same folder that is
+/// renamed into place, so `path` never holds a truncated file.
+/// \throw IoError naming the path when the file cannot be written or renamed.
+void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
+
+/// Writes bytes to `path` atomically (temporary file + rename). \throw IoError.
+void write_bytes_atomically(const std::string& path, const void* data, size_t bytes);
+
+struct OpenOptions {
+    bool verify_checksums = true;  ///< CRC-32 of every section; costs one pass over the file
+};
+
+/// One entry of the section table, for inspection (tominfo).
+struct SectionInfo {
+    char type[5] = {0, 0, 0, 0, 0};
+    uint32_t mesh = 0;
+    uint64_t offset = 0;
+    uint64_t bytes = 0;
+    uint32_t checksum = 0;
+};
+
+/// A validated .tom file, mapped read-only (or held in memory), used in place.
+/// Move-only. Every view it hands out stays valid while the File lives.
+class File {
+public:
+    /// Maps and validates `path` (every rule of FORMAT.md).
+    /// \throw FormatError naming the path, byte offset, field and rule; IoError when unreadable.
+    static File open(const std::string& path, const OpenOptions& options = {});
+    /// Validates a copy of `bytes`; `name` stands for the path in messages. \throw FormatError.
+    static File from_bytes(const void* bytes, size_t size, const std::string& name = "<memory>", const OpenOptions& options = {});
+
+    File(File&&) noexcept;
+    File& operator=(File&&) noexcept;
+    ~File();
+
+    const std::string& path() const noexcept;
+    uint32_t version_major() const noexcept;
+    uint32_t version_minor() const noexcept;
+    uint64_t file_bytes() const noexcept;
+    uint32_t mesh_count() const noexcept;
+    const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count()
+    const std::vector<SectionInfo>& sections() const noexcept;
+
+private:
+    struct Impl;
+    explicit File(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+/// CRC-32 (IEEE 802.3, reflected, as zlib's crc32) of a byte range.
+uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0) noexcept;
+
+} // namespace tom

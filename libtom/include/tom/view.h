@@ -1,0 +1,52 @@
+#pragma once
+// A read-only view of one sorted TOM mesh: the form extraction works on,
+// whether the data lives in a mapped .tom file or in a TomMesh in memory.
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+namespace tom {
+
+/// Pointers into sorted streams; nothing is owned. Optional streams are null.
+/// Invariants (checked by the reader for files, by construction for builds):
+///   min_vertex_count <= vertex_count; for i >= min_vertex_count substitute[i] < i,
+///   for i < min_vertex_count substitute[i] == i; every triangle index < vertex_count;
+///   triangles alive at resolution n are a prefix of the triangle array.
+struct MeshView {
+    std::string_view name;
+    uint32_t vertex_count = 0;
+    uint32_t triangle_count = 0;
+    uint32_t min_vertex_count = 0;   ///< survivors: the coarsest resolution
+    uint32_t index_size = 4;         ///< bytes per stored index: 2 or 4
+    int32_t material = -1;
+    const float* positions = nullptr;  ///< xyz * vertex_count
+    const float* normals = nullptr;    ///< xyz * vertex_count, or null
+    const float* texcoords = nullptr;  ///< uv * vertex_count, or null
+    const float* colors = nullptr;     ///< rgba * vertex_count, or null
+    const void* substitute = nullptr;  ///< index_size bytes * vertex_count
+    const void* triangles = nullptr;   ///< index_size bytes * 3 * triangle_count
+    float bounds_min[3] = {0, 0, 0};
+    float bounds_max[3] = {0, 0, 0};
+    const uint8_t* metadata = nullptr; ///< metadata entries (FORMAT.md, section META)
+    size_t metadata_bytes = 0;
+
+    uint32_t substitute_at(uint32_t i) const noexcept {
+        return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];
+    }
+    uint32_t corner(uint32_t c) const noexcept {
+        return index_size == 2 ? static_cast<const uint16_t*>(triangles)[c] : static_cast<const uint32_t*>(triangles)[c];
+    }
+};
+
+/// A value stored in a mesh's metadata area, found by key; empty data if absent.
+struct MetadataValue {
+    const uint8_t* data = nullptr;
+    size_t bytes = 0;
+    bool found() const noexcept { return data != nullptr; }
+};
+
+/// Looks a key up in view.metadata (entries are validated when a file is opened).
+MetadataValue find_metadata(const MeshView& view, std::string_view key) noexcept;
+
+} // namespace tom

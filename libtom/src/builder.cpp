@@ -1,0 +1,752 @@
+// Greedy vertex substitution into a Totally Ordered Mesh.
+//
+// This work is based on:
+// - E. Gobbetti, E. Bouvier. Time-critical multiresolution scene rendering / The Totally Ordered
+//   Mesh. 1999: vertex substitution, binary oracle + fairness predicate, total order of vertices
+//   and triangles, memoryless penalty dV + |v1-v2| dA + inversion + normal angle.
+// - M. Garland, P. Heckbert. Surface Simplification Using Quadric Error Metrics. 1997.
+// - P. Lindstrom, G. Turk. Fast and Memory Efficient Polygonal Simplification. 1998.
+// - A. Kapoulkine. meshoptimizer, simplifier: the idea of passes of independent collapses sorted
+//   by cost, and of classifying vertices (manifold, border, locked) to restrict their targets.
+//
+// Algorithm (both strategies):
+//   classify vertices: interior (any edge neighbour), border (only along its border loop),
+//   locked (non-manifold, border corners, coincident copies: never removed, may be a target)
+//   repeat: pick the legal substitution v1 -> v2 of lowest penalty, rewrite v1's triangles to v2,
+//           the ones containing v2 die; record (v1, v2)
+//   until no legal substitution is left. Sort: survivors first, then removed vertices from the
+//   last removed to the first; triangles by the resolution at which they die.
+
+#include "tom/builder.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace tom {
+
+namespace {
+
+struct Vec3 {
+    float x, y, z;
+};
+inline Vec3 sub(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
+
+// Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22)
+struct Quadric {
+    double a00, a01, a02, a11, a12, a22, b0, b1, b2, c;
+};
+
+inline void add_plane(Quadric& q, double nx, double ny, double nz, double d, double w) {
+    q.a00 += w * nx * nx, q.a01 += w * nx * ny, q.a02 += w * nx * nz;
+    q.a11 += w * ny * ny, q.a12 += w * ny * nz, q.a22 += w * nz * nz;
+    q.b0 += w * nx * d, q.b1 += w * ny * d, q.b2 += w * nz * d;
+    q.c += w * d * d;
+}
+
+inline void add(Quadric& q, const Quadric& r) {
+    q.a00 += r.a00, q.a01 += r.a01, q.a02 += r.a02, q.a11 += r.a11, q.a12 += r.a12, q.a22 += r.a22;
+    q.b0 += r.b0, q.b1 += r.b1, q.b2 += r.b2, q.c += r.c;
+}
+
+inline double evaluate(const Quadric& q, Vec3 p) {
+    const double x = p.x, y = p.y, z = p.z;
+    const double r = q.a00 * x * x + q.a11 * y * y + q.a22 * z * z + 2 * (q.a01 * x * y + q.a02 * x * z + q.a12 * y * z) +
+                     2 * (q.b0 * x + q.b1 * y + q.b2 * z) + q.c;
+    return r > 0 ? r : 0;
+}
+
+enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2 };
+
+constexpr uint32_t kNone = UINT32_MAX;
+constexpr float kBoundaryWeight = 4.0f;  // border edge planes vs. area-weighted face planes
+
+// Open-addressing hash of directed edges (a, b) -> count.
+class EdgeCounter {
+public:
+    explicit EdgeCounter(size_t edges) {
+        size_t cap = 16;
+        while (cap < edges * 2) cap *= 2;
+        keys_.assign(cap, UINT64_MAX);
+        counts_.assign(cap, 0);
+        mask_ = cap - 1;
+    }
+    void add(uint32_t a, uint32_t b) { ++counts_[slot(key(a, b))]; }
+    uint32_t count(uint32_t a, uint32_t b) const {
+        const uint64_t k = key(a, b);
+        for (size_t i = hash(k) & mask_;; i = (i + 1) & mask_) {
+            if (keys_[i] == k) return counts_[i];
+            if (keys_[i] == UINT64_MAX) return 0;
+        }
+    }
+
+private:
+    static uint64_t key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
+    static size_t hash(uint64_t k) {
+        k ^= k >> 33;
+        k *= 0xff51afd7ed558ccdULL;
+        k ^= k >> 33;
+        return size_t(k);
+    }
+    size_t slot(uint64_t k) {
+        for (size_t i = hash(k) & mask_;; i = (i + 1) & mask_) {
+            if (keys_[i] == k) return i;
+            if (keys_[i] == UINT64_MAX) {
+                keys_[i] = k;
+                return i;
+            }
+        }
+    }
+    std::vector<uint64_t> keys_;
+    std::vector<uint32_t> counts_;
+    size_t mask_ = 0;
+};
+
+struct Candidate {
+    float cost;
+    uint32_t v, u;
+};
+
+// Shared state of one build: current triangles, vertex classes, removal record.
+struct Builder {
+    uint32_t n = 0, m = 0;
+    const Vec3* pos = nullptr;
+    const Vec3* vnormal = nullptr;
+    Predicate predicate = Predicate::quadric;
+    std::vector<uint32_t> idx;  // current corners, rewritten by substitutions
+    std::vector<uint8_t> dead;  // per triangle
+    std::vector<uint8_t> kind;
+    std::vector<uint8_t> removed;
+    std::vector<uint32_t> border_next, border_prev;
+    std::vector<Quadric> quadric;
+    std::vector<uint32_t> pair_offsets, pair_data;  // non-edge pairs closer than the threshold
+    std::vector<uint32_t> removed_order, removed_target;
+    std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
+    std::vector<Candidate> scratch;    // candidate targets of one vertex
+
+    bool contains(uint32_t t, uint32_t v) const {
+        return idx[3 * t] == v || idx[3 * t + 1] == v || idx[3 * t + 2] == v;
+    }
+    // the two other corners of t in winding order after v
+    void others(uint32_t t, uint32_t v, uint32_t& a, uint32_t& b) const {
+        const uint32_t* c = &idx[3 * t];
+        const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
+        a = c[(k + 1) % 3], b = c[(k + 2) % 3];
+    }
+
+    // A border loop of three edges cannot lose a vertex (it would fold onto itself).
+    bool border_move_allowed(uint32_t v, uint32_t u) const {
+        if (kind[v] != kBorder) return true;
+        if (u != border_next[v] && u != border_prev[v]) return false;
+        return border_next[border_next[v]] != border_prev[v];
+    }
+
+    // The binary oracle's geometric and topological tests for v -> u:
+    // - no surviving triangle of v flips (or becomes zero-area);
+    // - link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
+    //   otherwise edges v-w and u-w merge into a non-manifold edge;
+    // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
+    template <class Adj>
+    bool illegal(const Adj& adj, uint32_t v, uint32_t u) const {
+        const Vec3 pv = pos[v], pu = pos[u];
+        bool bad = false;
+        uint32_t nv[64], nu[64], opposite[64];
+        size_t cv = 0, cu = 0, co = 0;
+        auto note = [](uint32_t* list, size_t& count, uint32_t w) {
+            for (size_t i = 0; i < count; ++i)
+                if (list[i] == w) return;
+            if (count < 64) list[count++] = w;
+        };
+        adj.each(v, [&](uint32_t t) {
+            if (bad) return;
+            uint32_t a, b;
+            others(t, v, a, b);
+            note(nv, cv, a);
+            note(nv, cv, b);
+            if (a == u || b == u) {
+                note(opposite, co, a == u ? b : a);
+                return;
+            }
+            const Vec3 pa = pos[a], pb = pos[b];
+            const Vec3 n0 = cross(sub(pa, pv), sub(pb, pv));
+            const Vec3 n1 = cross(sub(pa, pu), sub(pb, pu));
+            if (dot(n0, n1) <= 0.0f && dot(n0, n0) > 0.0f) bad = true;
+        });
+        if (bad || cv >= 64) return true;  // cv == 64: a vertex of extreme valence, leave it
+        adj.each(u, [&](uint32_t t) {
+            if (bad) return;
+            uint32_t a, b;
+            others(t, u, a, b);
+            note(nu, cu, a);
+            note(nu, cu, b);
+            if (a == v || b == v) return;
+            // does v have a triangle (v, a, b) or (v, b, a) that would become this one?
+            adj.each(v, [&](uint32_t s) {
+                if (!bad && contains(s, a) && contains(s, b)) bad = true;
+            });
+        });
+        if (bad || cu >= 64) return true;
+        for (size_t i = 0; i < cv; ++i) {
+            const uint32_t w = nv[i];
+            if (w == u) continue;
+            bool shared = false, ok = false;
+            for (size_t j = 0; j < cu; ++j) shared |= nu[j] == w;
+            for (size_t j = 0; j < co; ++j) ok |= opposite[j] == w;
+            if (shared && !ok) return true;
+        }
+        return false;
+    }
+
+    template <class Adj>
+    float cost(const Adj& adj, uint32_t v, uint32_t u) const {
+        if (predicate == Predicate::quadric) return float(evaluate(quadric[v], pos[u]));
+        // memoryless penalty (TOM paper section 4.1): volume swept by v's triangles, distance x area
+        // change, rotation of the surviving triangles (inversion penalty), angle between vertex normals
+        const Vec3 pv = pos[v], pu = pos[u];
+        const Vec3 d = sub(pu, pv);
+        const float dist = length(d);
+        float volume = 0, area0 = 0, area1 = 0, rotation = 0;
+        adj.each(v, [&](uint32_t t) {
+            uint32_t a, b;
+            others(t, v, a, b);
+            const Vec3 pa = pos[a], pb = pos[b];
+            const Vec3 n0 = cross(sub(pa, pv), sub(pb, pv));
+            const float l0 = length(n0);
+            area0 += 0.5f * l0;
+            if (a == u || b == u) return;  // dies
+            const Vec3 n1 = cross(sub(pa, pu), sub(pb, pu));
+            const float l1 = length(n1);
+            area1 += 0.5f * l1;
+            volume += std::fabs(dot(d, n0)) * (1.0f / 6.0f);
+            if (l0 > 0 && l1 > 0) rotation += 0.5f * l0 * (1.0f - dot(n0, n1) / (l0 * l1));
+        });
+        const float normal_term = 1.0f - dot(vnormal[v], vnormal[u]);
+        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term;
+    }
+
+    // Best legal substitution of v, or false when v has none.
+    template <class Adj>
+    bool best_target(const Adj& adj, uint32_t v, Candidate& best) {
+        if (kind[v] == kLocked || removed[v]) return false;
+        scratch.clear();
+        auto offer = [&](uint32_t u) {
+            if (u == v || removed[u]) return;
+            for (const Candidate& c : scratch)
+                if (c.u == u) return;
+            if (!border_move_allowed(v, u)) return;
+            scratch.push_back({0.0f, v, u});
+        };
+        if (kind[v] == kBorder) {
+            offer(border_next[v]);
+            offer(border_prev[v]);
+        } else {
+            adj.each(v, [&](uint32_t t) {
+                uint32_t a, b;
+                others(t, v, a, b);
+                offer(a);
+                offer(b);
+            });
+        }
+        if (!pair_offsets.empty())
+            for (uint32_t k = pair_offsets[v]; k < pair_offsets[v + 1]; ++k) {
+                const uint32_t u = pair_data[k];
+                bool seen = false;
+                for (const Candidate& c : scratch) seen |= c.u == u;
+                if (!seen && u != v && !removed[u]) scratch.push_back({0.0f, v, u});
+            }
+        if (scratch.empty()) return false;
+        for (Candidate& c : scratch) c.cost = cost(adj, v, c.u);
+        // check legality cheapest first; neighbourhoods are small
+        std::sort(scratch.begin(), scratch.end(), [](const Candidate& a, const Candidate& b) {
+            return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
+        });
+        for (const Candidate& c : scratch)
+            if (!illegal(adj, v, c.u)) {
+                best = c;
+                return true;
+            }
+        return false;
+    }
+
+    // Substitutes v -> u in v's live triangles.
+    template <class Adj>
+    void apply(const Adj& adj, uint32_t v, uint32_t u) {
+        const uint32_t step = uint32_t(removed_order.size());
+        adj.each(v, [&](uint32_t t) {
+            if (contains(t, u)) {
+                dead[t] = 1;
+                death_step[t] = step;
+            } else {
+                uint32_t* c = &idx[3 * t];
+                for (int k = 0; k < 3; ++k)
+                    if (c[k] == v) c[k] = u;
+            }
+        });
+        removed[v] = 1;
+        removed_order.push_back(v);
+        removed_target.push_back(u);
+        if (predicate == Predicate::quadric) add(quadric[u], quadric[v]);
+        if (kind[v] == kBorder) {
+            const uint32_t p = border_prev[v], q = border_next[v];
+            if (u == q) {
+                border_prev[u] = p;
+                border_next[p] = u;
+            } else if (u == p) {
+                border_next[u] = q;
+                border_prev[q] = u;
+            } else {  // a pair contraction joined this border to another part
+                border_next[p] = u;
+                border_prev[q] = u;
+                if (kind[u] != kLocked) kind[u] = kLocked;
+            }
+        }
+    }
+};
+
+// Triangles around each vertex as compressed rows, rebuilt from the live triangles.
+struct CsrAdjacency {
+    std::vector<uint32_t> offsets, data;
+    const Builder* b = nullptr;
+    void rebuild(const Builder& builder, const std::vector<uint32_t>& live_triangles) {
+        b = &builder;
+        offsets.assign(builder.n + 1, 0);
+        for (uint32_t t : live_triangles)
+            for (int k = 0; k < 3; ++k) ++offsets[builder.idx[3 * t + k] + 1];
+        for (uint32_t v = 0; v < builder.n; ++v) offsets[v + 1] += offsets[v];
+        data.resize(offsets[builder.n]);
+        std::vector<uint32_t>& fill = scratch;
+        fill.assign(offsets.begin(), offsets.end() - 1);
+        for (uint32_t t : live_triangles)
+            for (int k = 0; k < 3; ++k) data[fill[builder.idx[3 * t + k]]++] = t;
+    }
+    template <class F>
+    void each(uint32_t v, F&& f) const {
+        for (uint32_t k = offsets[v]; k < offsets[v + 1]; ++k) {
+            const uint32_t t = data[k];
+            if (!b->dead[t]) f(t);
+        }
+    }
+    std::vector<uint32_t> scratch;
+};
+
+// Triangles around each vertex as singly linked corner lists that substitutions splice together.
+struct ListAdjacency {
+    std::vector<uint32_t> first, next;  // first corner of a vertex; next corner of the same vertex
+    Builder* b = nullptr;
+    void build(Builder& builder) {
+        b = &builder;
+        first.assign(builder.n, kNone);
+        next.assign(size_t(builder.m) * 3, kNone);
+        for (uint32_t c = uint32_t(next.size()); c-- > 0;) {
+            const uint32_t v = builder.idx[c];
+            next[c] = first[v];
+            first[v] = c;
+        }
+    }
+    template <class F>
+    void each(uint32_t v, F&& f) const {
+        for (uint32_t c = first[v]; c != kNone; c = next[c])
+            if (!b->dead[c / 3]) f(c / 3);
+    }
+    // drops the corners of dead triangles from v's list
+    void compact(uint32_t v) {
+        uint32_t* link = &first[v];
+        while (*link != kNone) {
+            if (b->dead[*link / 3])
+                *link = next[*link];
+            else
+                link = &next[*link];
+        }
+    }
+    // moves v's corners to u's list (after v's triangles were rewritten to u)
+    void splice(uint32_t v, uint32_t u) {
+        uint32_t* link = &first[v];
+        while (*link != kNone) link = &next[*link];
+        *link = first[u];
+        first[u] = first[v];
+        first[v] = kNone;
+    }
+};
+
+// LSD radix sort of candidates by cost (non-negative floats sort like their bits); stable.
+void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp) {
+    tmp.resize(items.size());
+    for (int shift = 0; shift < 32; shift += 11) {
+        uint32_t hist[2048] = {};
+        for (const Candidate& c : items) {
+            uint32_t bits;
+            std::memcpy(&bits, &c.cost, 4);
+            ++hist[(bits >> shift) & 2047];
+        }
+        uint32_t sum = 0;
+        for (uint32_t& h : hist) {
+            const uint32_t x = h;
+            h = sum;
+            sum += x;
+        }
+        for (const Candidate& c : items) {
+            uint32_t bits;
+            std::memcpy(&bits, &c.cost, 4);
+            tmp[hist[(bits >> shift) & 2047]++] = c;
+        }
+        items.swap(tmp);
+    }
+}
+
+void classify(Builder& b, BuildStats& stats) {
+    const uint32_t n = b.n, m = b.m;
+    b.kind.assign(n, kInterior);
+    b.border_next.assign(n, kNone);
+    b.border_prev.assign(n, kNone);
+    EdgeCounter edges(size_t(m) * 3);
+    for (uint32_t c = 0; c < m * 3; ++c) edges.add(b.idx[c], b.idx[c - c % 3 + (c + 1) % 3]);
+    std::vector<uint8_t> open_out(n, 0), open_in(n, 0);
+    for (uint32_t c = 0; c < m * 3; ++c) {
+        const uint32_t a = b.idx[c], e = b.idx[c - c % 3 + (c + 1) % 3];
+        const uint32_t fwd = edges.count(a, e), rev = edges.count(e, a);
+        if (fwd > 1 || rev > 1) {  // non-manifold or inconsistently oriented
+            b.kind[a] = kLocked;
+            b.kind[e] = kLocked;
+        } else if (rev == 0) {
+            b.border_next[a] = e;
+            b.border_prev[e] = a;
+            open_out[a] = uint8_t(std::min(open_out[a] + 1, 255));
+            open_in[e] = uint8_t(std::min(open_in[e] + 1, 255));
+        }
+    }
+    for (uint32_t v = 0; v < n; ++v) {
+        if (b.kind[v] == kLocked) continue;
+        if (open_out[v] == 0 && open_in[v] == 0) continue;
+        if (open_out[v] == 1 && open_in[v] == 1)
+            b.kind[v] = kBorder;
+        else
+            b.kind[v] = kLocked;
+    }
+    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart
+    std::vector<uint32_t> order(n);
+    for (uint32_t v = 0; v < n; ++v) order[v] = v;
+    auto less = [&](uint32_t a, uint32_t c) {
+        const Vec3 p = b.pos[a], q = b.pos[c];
+        if (p.x != q.x) return p.x < q.x;
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a < c;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+        const Vec3 p = b.pos[order[i]], q = b.pos[order[i + 1]];
+        if (p.x == q.x && p.y == q.y && p.z == q.z) {
+            b.kind[order[i]] = kLocked;
+            b.kind[order[i + 1]] = kLocked;
+        }
+    }
+    // a border vertex whose loop neighbour is locked keeps its pointers; pointers of locked
+    // vertices are never followed from a locked vertex itself
+    for (uint32_t v = 0; v < n; ++v) {
+        stats.locked_vertices += b.kind[v] == kLocked;
+        stats.border_vertices += b.kind[v] == kBorder;
+    }
+}
+
+void init_quadrics(Builder& b) {
+    b.quadric.assign(b.n, Quadric{});
+    for (uint32_t t = 0; t < b.m; ++t) {
+        const uint32_t i0 = b.idx[3 * t], i1 = b.idx[3 * t + 1], i2 = b.idx[3 * t + 2];
+        const Vec3 p0 = b.pos[i0], p1 = b.pos[i1], p2 = b.pos[i2];
+        Vec3 nrm = cross(sub(p1, p0), sub(p2, p0));
+        const float len = length(nrm);
+        if (len == 0.0f) continue;
+        const float area = 0.5f * len;
+        nrm = {nrm.x / len, nrm.y / len, nrm.z / len};
+        const double d = -double(dot(nrm, p0));
+        Quadric q{};
+        add_plane(q, nrm.x, nrm.y, nrm.z, d, area);
+        add(b.quadric[i0], q);
+        add(b.quadric[i1], q);
+        add(b.quadric[i2], q);
+        // open edges: a plane through the edge, perpendicular to the triangle, keeps borders in place
+        const uint32_t c[3] = {i0, i1, i2};
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = c[k], e = c[(k + 1) % 3];
+            if (b.border_next[a] != e || b.border_prev[e] != a) continue;
+            const Vec3 pa = b.pos[a], pe = b.pos[e];
+            const Vec3 edge = sub(pe, pa);
+            Vec3 en = cross(edge, nrm);
+            const float el = length(en);
+            if (el == 0.0f) continue;
+            en = {en.x / el, en.y / el, en.z / el};
+            Quadric qe{};
+            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(dot(edge, edge)));
+            add(b.quadric[a], qe);
+            add(b.quadric[e], qe);
+        }
+    }
+}
+
+// Non-edge pairs closer than t, found on a uniform grid of cell size t (at most 8 per vertex).
+void find_pairs(Builder& b, float t, BuildStats& stats) {
+    if (!(t > 0.0f)) return;
+    struct Cell {
+        int64_t key;
+        uint32_t v;
+    };
+    std::vector<Cell> cells(b.n);
+    auto cell_key = [&](int64_t x, int64_t y, int64_t z) { return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL); };
+    auto coord = [&](float x) { return int64_t(std::floor(x / t)); };
+    for (uint32_t v = 0; v < b.n; ++v)
+        cells[v] = {cell_key(coord(b.pos[v].x), coord(b.pos[v].y), coord(b.pos[v].z)), v};
+    std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& c) { return a.key < c.key || (a.key == c.key && a.v < c.v); });
+    b.pair_offsets.assign(b.n + 1, 0);
+    std::vector<std::vector<uint32_t>> found(b.n);
+    const float t2 = t * t;
+    for (uint32_t v = 0; v < b.n; ++v) {
+        if (b.kind[v] == kLocked) continue;
+        const Vec3 p = b.pos[v];
+        const int64_t cx = coord(p.x), cy = coord(p.y), cz = coord(p.z);
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const int64_t key = cell_key(cx + dx, cy + dy, cz + dz);
+                    auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const Cell& c, int64_t k) { return c.key < k; });
+                    for (; it != cells.end() && it->key == key && found[v].size() < 8; ++it) {
+                        const uint32_t u = it->v;
+                        const Vec3 d = sub(b.pos[u], p);
+                        if (u != v && dot(d, d) <= t2) found[v].push_back(u);
+                    }
+                }
+        std::sort(found[v].begin(), found[v].end());
+        found[v].erase(std::unique(found[v].begin(), found[v].end()), found[v].end());
+    }
+    for (uint32_t v = 0; v < b.n; ++v) b.pair_offsets[v + 1] = b.pair_offsets[v] + uint32_t(found[v].size());
+    b.pair_data.reserve(b.pair_offsets[b.n]);
+    for (uint32_t v = 0; v < b.n; ++v) b.pair_data.insert(b.pair_data.end(), found[v].begin(), found[v].end());
+    stats.pair_candidates = b.pair_offsets[b.n];
+}
+
+void run_passes(Builder& b, float fraction, BuildStats& stats) {
+    CsrAdjacency adj;
+    std::vector<uint32_t> live_vertices, live_triangles;
+    for (uint32_t v = 0; v < b.n; ++v)
+        if (b.kind[v] != kLocked) live_vertices.push_back(v);
+    for (uint32_t t = 0; t < b.m; ++t) live_triangles.push_back(t);
+    std::vector<Candidate> candidates, tmp;
+    std::vector<uint32_t> pass_mark(b.n, 0);
+    uint32_t alive_count = b.n;
+    for (uint32_t pass = 1;; ++pass) {
+        adj.rebuild(b, live_triangles);
+        candidates.clear();
+        for (uint32_t v : live_vertices) {
+            Candidate c;
+            if (b.best_target(adj, v, c)) candidates.push_back(c);
+        }
+        if (candidates.empty()) break;
+        sort_candidates(candidates, tmp);
+        ++stats.passes;
+        size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
+        size_t executed = 0;
+        for (int attempt = 0; attempt < 2 && executed == 0; ++attempt) {
+            if (attempt == 1) quota = candidates.size();  // nothing went through: try them all
+            for (const Candidate& c : candidates) {
+                if (executed >= quota) break;
+                if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
+                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u)) continue;
+                b.apply(adj, c.v, c.u);
+                pass_mark[c.v] = pass_mark[c.u] = pass;
+                ++executed;
+            }
+        }
+        if (executed == 0) break;
+        alive_count -= uint32_t(executed);
+        size_t keep = 0;
+        for (uint32_t v : live_vertices)
+            if (!b.removed[v]) live_vertices[keep++] = v;
+        live_vertices.resize(keep);
+        keep = 0;
+        for (uint32_t t : live_triangles)
+            if (!b.dead[t]) live_triangles[keep++] = t;
+        live_triangles.resize(keep);
+    }
+}
+
+void run_heap(Builder& b) {
+    ListAdjacency adj;
+    adj.build(b);
+    struct Entry {
+        float cost;
+        uint32_t v, u, stamp;
+        bool operator<(const Entry& o) const {  // std heap is a max-heap: invert
+            return cost > o.cost || (cost == o.cost && v > o.v);
+        }
+    };
+    std::vector<Entry> heap;
+    std::vector<uint32_t> stamp(b.n, 0);
+    heap.reserve(b.n * 2);
+    auto evaluate_vertex = [&](uint32_t v) {
+        ++stamp[v];
+        Candidate c;
+        if (b.best_target(adj, v, c)) {
+            heap.push_back({c.cost, v, c.u, stamp[v]});
+            std::push_heap(heap.begin(), heap.end());
+        }
+    };
+    for (uint32_t v = 0; v < b.n; ++v)
+        if (b.kind[v] != kLocked) {
+            Candidate c;
+            if (b.best_target(adj, v, c)) heap.push_back({c.cost, v, c.u, stamp[v]});
+        }
+    std::make_heap(heap.begin(), heap.end());
+    std::vector<uint32_t> ring;
+    std::vector<uint32_t> ring_mark(b.n, kNone);
+    while (!heap.empty()) {
+        std::pop_heap(heap.begin(), heap.end());
+        const Entry e = heap.back();
+        heap.pop_back();
+        if (b.removed[e.v] || e.stamp != stamp[e.v]) continue;
+        if (b.removed[e.u]) {  // a pair target went away without touching v's triangles
+            evaluate_vertex(e.v);
+            continue;
+        }
+        b.apply(adj, e.v, e.u);
+        adj.splice(e.v, e.u);
+        adj.compact(e.u);
+        ring.clear();
+        ring.push_back(e.u);
+        ring_mark[e.u] = e.v;
+        adj.each(e.u, [&](uint32_t t) {
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t w = b.idx[3 * t + k];
+                if (ring_mark[w] != e.v) {
+                    ring_mark[w] = e.v;
+                    ring.push_back(w);
+                }
+            }
+        });
+        for (uint32_t w : ring) {
+            if (b.kind[w] == kLocked) continue;
+            adj.compact(w);
+            evaluate_vertex(w);
+        }
+    }
+}
+
+} // namespace
+
+MeshView TomMesh::view() const noexcept {
+    MeshView v;
+    v.name = name;
+    v.vertex_count = vertex_count();
+    v.triangle_count = triangle_count();
+    v.min_vertex_count = min_vertex_count;
+    v.index_size = 4;
+    v.material = material;
+    v.positions = positions.data();
+    v.normals = normals.empty() ? nullptr : normals.data();
+    v.texcoords = texcoords.empty() ? nullptr : texcoords.data();
+    v.colors = colors.empty() ? nullptr : colors.data();
+    v.substitute = substitute.data();
+    v.triangles = triangles.data();
+    for (int k = 0; k < 3; ++k) v.bounds_min[k] = bounds_min[k], v.bounds_max[k] = bounds_max[k];
+    return v;
+}
+
+const char* to_string(Predicate p) noexcept { return p == Predicate::quadric ? "quadric" : "memoryless"; }
+const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "passes" : "heap"; }
+
+TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out) {
+    BuildStats stats;
+    Builder b;
+    b.n = mesh.vertex_count();
+    b.m = mesh.triangle_count();
+    static_assert(sizeof(Vec3) == 12, "Vec3 must alias xyz floats");
+    b.pos = reinterpret_cast<const Vec3*>(mesh.positions.data());
+    std::vector<float> normals_storage;
+    if (mesh.normals.size() == mesh.positions.size()) {
+        b.vnormal = reinterpret_cast<const Vec3*>(mesh.normals.data());
+    } else {
+        Mesh tmp;
+        tmp.positions = mesh.positions;
+        tmp.indices = mesh.indices;
+        compute_normals(tmp);
+        normals_storage.swap(tmp.normals);
+        b.vnormal = reinterpret_cast<const Vec3*>(normals_storage.data());
+    }
+    b.predicate = params.predicate;
+    b.idx = mesh.indices;
+    b.dead.assign(b.m, 0);
+    b.removed.assign(b.n, 0);
+    b.death_step.assign(b.m, kNone);
+    b.removed_order.reserve(b.n);
+    b.removed_target.reserve(b.n);
+    classify(b, stats);
+    if (b.predicate == Predicate::quadric) init_quadrics(b);
+    find_pairs(b, params.pair_threshold, stats);
+
+    if (params.strategy == Strategy::heap)
+        run_heap(b);
+    else
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), stats);
+
+    // total order: survivors first (in input order), then removed vertices, last removed first
+    const uint32_t n = b.n, m = b.m;
+    const uint32_t removed_count = uint32_t(b.removed_order.size());
+    const uint32_t s = n - removed_count;
+    std::vector<uint32_t> new_index(n, kNone);
+    TomMesh out;
+    out.name = mesh.name;
+    out.material = mesh.material;
+    out.min_vertex_count = s;
+    out.original_index.resize(n);
+    uint32_t next = 0;
+    for (uint32_t v = 0; v < n; ++v)
+        if (!b.removed[v]) new_index[v] = next++;
+    assert(next == s);
+    for (uint32_t j = 0; j < removed_count; ++j) new_index[b.removed_order[j]] = n - 1 - j;
+    for (uint32_t v = 0; v < n; ++v) out.original_index[new_index[v]] = v;
+    out.substitute.resize(n);
+    for (uint32_t i = 0; i < s; ++i) out.substitute[i] = i;
+    for (uint32_t j = 0; j < removed_count; ++j) out.substitute[n - 1 - j] = new_index[b.removed_target[j]];
+
+    auto permute = [&](const std::vector<float>& in, std::vector<float>& dst, size_t width) {
+        if (in.empty()) return;
+        dst.resize(size_t(n) * width);
+        for (uint32_t i = 0; i < n; ++i)
+            std::memcpy(&dst[size_t(i) * width], &in[size_t(out.original_index[i]) * width], width * sizeof(float));
+    };
+    permute(mesh.positions, out.positions, 3);
+    permute(mesh.normals, out.normals, 3);
+    permute(mesh.texcoords, out.texcoords, 2);
+    permute(mesh.colors, out.colors, 4);
+
+    // triangle t is alive at resolution r >= key(t): key = n - step for a triangle killed by
+    // substitution `step` (its removed vertex gets index n-1-step), s for the survivors.
+    // Counting sort by key, stable in input order.
+    std::vector<uint32_t> bucket(n + 2, 0);
+    auto key_of = [&](uint32_t t) { return b.death_step[t] == kNone ? s : n - b.death_step[t]; };
+    for (uint32_t t = 0; t < m; ++t) ++bucket[key_of(t) + 1];
+    for (uint32_t k = 0; k <= n; ++k) bucket[k + 1] += bucket[k];
+    out.triangles.resize(size_t(m) * 3);
+    for (uint32_t t = 0; t < m; ++t) {
+        const uint32_t slot = bucket[key_of(t)]++;
+        for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[mesh.indices[3 * size_t(t) + k]];
+    }
+
+    for (int k = 0; k < 3; ++k) {
+        out.bounds_min[k] = n ? std::numeric_limits<float>::max() : 0.0f;
+        out.bounds_max[k] = n ? std::numeric_limits<float>::lowest() : 0.0f;
+    }
+    for (uint32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            out.bounds_min[k] = std::min(out.bounds_min[k], mesh.positions[3 * size_t(i) + k]);
+            out.bounds_max[k] = std::max(out.bounds_max[k], mesh.positions[3 * size_t(i) + k]);
+        }
+    stats.substitutions = removed_count;
+    if (stats_out) *stats_out = stats;
+    return out;
+}
+
+} // namespace tom

@@ -1,0 +1,262 @@
+// glTF 2.0 import through tinygltf, with Draco (KHR_draco_mesh_compression) decoding.
+//
+// tinygltf ignores a failed Draco decode and leaves the accessors without data, and checks
+// little of what accessors claim; so every accessor used here is validated against its
+// buffer view and buffer before a byte is read: a primitive that cannot be decoded is an
+// error that names it, never an empty mesh.
+
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_ENABLE_DRACO
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "import_backends.h"
+#include "tom/errors.h"
+
+namespace tom::detail {
+
+namespace {
+
+// Textures are not decoded: accept every image as it is.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; }
+
+std::string one_line(std::string s) {
+    for (char& c : s)
+        if (c == '\n' || c == '\r') c = ' ';
+    while (!s.empty() && s.back() == ' ') s.pop_back();
+    return s;
+}
+
+int component_count(int type) {
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    default: return 0;
+    }
+}
+
+int component_bytes(int component_type) {
+    switch (component_type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+    }
+}
+
+class PrimitiveReader {
+public:
+    PrimitiveReader(const tinygltf::Model& model, std::string where) : model_(model), where_(std::move(where)) {}
+
+    [[noreturn]] void fail(const std::string& what) const { throw ImportError(where_ + ": " + what); }
+
+    // Validates accessor `index` and returns a pointer to element 0 plus the stride.
+    const uint8_t* locate(int index, const char* role, size_t& count, size_t& stride, int& components, int& ctype) const {
+        const std::string name = std::string(role) + " accessor " + std::to_string(index);
+        if (index < 0 || size_t(index) >= model_.accessors.size()) fail(name + " does not exist");
+        const tinygltf::Accessor& a = model_.accessors[size_t(index)];
+        if (a.sparse.isSparse) fail(name + " is sparse, which is not supported");
+        if (a.bufferView < 0 || size_t(a.bufferView) >= model_.bufferViews.size())
+            fail(name + " has no data (buffer view " + std::to_string(a.bufferView) + "; a failed Draco decode leaves it so)");
+        const tinygltf::BufferView& view = model_.bufferViews[size_t(a.bufferView)];
+        if (view.buffer < 0 || size_t(view.buffer) >= model_.buffers.size())
+            fail(name + ": buffer view " + std::to_string(a.bufferView) + " refers to missing buffer " + std::to_string(view.buffer));
+        const tinygltf::Buffer& buffer = model_.buffers[size_t(view.buffer)];
+        components = component_count(a.type);
+        ctype = a.componentType;
+        const size_t elem = size_t(components) * size_t(component_bytes(ctype));
+        if (elem == 0) fail(name + " has an invalid type or component type");
+        count = a.count;
+        if (count == 0) fail(name + " is empty");
+        stride = view.byteStride ? view.byteStride : elem;
+        if (stride < elem) fail(name + ": byte stride " + std::to_string(stride) + " is smaller than an element (" + std::to_string(elem) + ")");
+        if (view.byteOffset > buffer.data.size() || view.byteLength > buffer.data.size() - view.byteOffset)
+            fail(name + ": buffer view " + std::to_string(a.bufferView) + " lies outside buffer " + std::to_string(view.buffer) + " (" +
+                 std::to_string(buffer.data.size()) + " bytes)");
+        const size_t need = a.byteOffset + stride * (count - 1) + elem;
+        if (a.byteOffset > view.byteLength || need > view.byteLength || (count - 1) > (SIZE_MAX - elem) / stride)
+            fail(name + ": " + std::to_string(count) + " elements need " + std::to_string(need) + " bytes but buffer view " +
+                 std::to_string(a.bufferView) + " has " + std::to_string(view.byteLength));
+        return buffer.data.data() + view.byteOffset + a.byteOffset;
+    }
+
+    // Reads a float attribute with `want` components (normalized integers accepted where glTF allows).
+    std::vector<float> read_floats(int index, const char* role, int want_min, int want_max, bool allow_normalized, size_t expect_count) const {
+        size_t count, stride;
+        int components, ctype;
+        const uint8_t* p = locate(index, role, count, stride, components, ctype);
+        const std::string name = std::string(role) + " accessor " + std::to_string(index);
+        if (components < want_min || components > want_max) fail(name + " has " + std::to_string(components) + " components");
+        if (expect_count && count != expect_count)
+            fail(name + " has " + std::to_string(count) + " elements but POSITION has " + std::to_string(expect_count));
+        const bool normalized = model_.accessors[size_t(index)].normalized;
+        if (ctype != TINYGLTF_COMPONENT_TYPE_FLOAT && !(allow_normalized && normalized &&
+                                                         (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)))
+            fail(name + " has component type " + std::to_string(ctype) + ", expected float" + (allow_normalized ? " or normalized unsigned byte/short" : ""));
+        std::vector<float> out(count * size_t(components));
+        for (size_t i = 0; i < count; ++i) {
+            const uint8_t* e = p + i * stride;
+            for (int k = 0; k < components; ++k) {
+                float x;
+                if (ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) {
+                    std::memcpy(&x, e + 4 * k, 4);
+                } else if (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+                    x = float(e[k]) / 255.0f;
+                } else {
+                    uint16_t u;
+                    std::memcpy(&u, e + 2 * k, 2);
+                    x = float(u) / 65535.0f;
+                }
+                out[i * size_t(components) + size_t(k)] = x;
+            }
+        }
+        return out;
+    }
+
+    std::vector<uint32_t> read_indices(int index, size_t vertex_count) const {
+        size_t count, stride;
+        int components, ctype;
+        const uint8_t* p = locate(index, "indices", count, stride, components, ctype);
+        const std::string name = "indices accessor " + std::to_string(index);
+        if (components != 1) fail(name + " is not SCALAR");
+        if (ctype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ctype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            ctype != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(name + " has component type " + std::to_string(ctype) + ", expected an unsigned integer");
+        std::vector<uint32_t> out(count);
+        for (size_t i = 0; i < count; ++i) {
+            const uint8_t* e = p + i * stride;
+            uint32_t v;
+            if (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
+                v = e[0];
+            } else if (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+                uint16_t u;
+                std::memcpy(&u, e, 2);
+                v = u;
+            } else {
+                std::memcpy(&v, e, 4);
+            }
+            if (v >= vertex_count)
+                fail(name + ": index " + std::to_string(v) + " at position " + std::to_string(i) + " is out of range (" +
+                     std::to_string(vertex_count) + " vertices)");
+            out[i] = v;
+        }
+        return out;
+    }
+
+private:
+    const tinygltf::Model& model_;
+    std::string where_;
+};
+
+// Triangle lists from TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN index sequences.
+std::vector<uint32_t> to_triangle_list(const std::vector<uint32_t>& in, int mode) {
+    std::vector<uint32_t> out;
+    if (mode == TINYGLTF_MODE_TRIANGLES) {
+        out.assign(in.begin(), in.begin() + ptrdiff_t(in.size() / 3 * 3));
+    } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (size_t i = 2; i < in.size(); ++i) {
+            if (i % 2 == 0)
+                out.insert(out.end(), {in[i - 2], in[i - 1], in[i]});
+            else
+                out.insert(out.end(), {in[i - 1], in[i - 2], in[i]});  // keep the winding
+        }
+    } else {  // fan
+        for (size_t i = 2; i < in.size(); ++i) out.insert(out.end(), {in[0], in[i - 1], in[i]});
+    }
+    return out;
+}
+
+const char* mode_name(int mode) {
+    switch (mode) {
+    case TINYGLTF_MODE_POINTS: return "POINTS";
+    case TINYGLTF_MODE_LINE: return "LINES";
+    case TINYGLTF_MODE_LINE_LOOP: return "LINE_LOOP";
+    case TINYGLTF_MODE_LINE_STRIP: return "LINE_STRIP";
+    default: return "unknown";
+    }
+}
+
+} // namespace
+
+ImportResult import_gltf(const std::string& path, bool binary) {
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    tinygltf::Model model;
+    std::string err, warn;
+    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path) : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    if (!ok) throw ImportError(path + ": cannot read glTF: " + one_line(err.empty() ? warn : err));
+    ImportResult result;
+    if (!warn.empty()) result.warnings.push_back(one_line(warn));
+    for (const std::string& ext : model.extensionsRequired)
+        if (ext != "KHR_draco_mesh_compression" && ext != "KHR_materials_pbrSpecularGlossiness" && ext != "KHR_texture_transform" &&
+            ext != "KHR_materials_unlit")
+            throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
+
+    const std::string stem = file_stem(path);
+    for (size_t mi = 0; mi < model.meshes.size(); ++mi) {
+        const tinygltf::Mesh& gm = model.meshes[mi];
+        const std::string mesh_name = gm.name.empty() ? "mesh" + std::to_string(mi) : gm.name;
+        for (size_t pi = 0; pi < gm.primitives.size(); ++pi) {
+            const tinygltf::Primitive& prim = gm.primitives[pi];
+            const std::string where = path + ": mesh " + std::to_string(mi) + " '" + mesh_name + "' primitive " + std::to_string(pi);
+            const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+            if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+                result.skipped.push_back("mesh " + std::to_string(mi) + " '" + mesh_name + "' primitive " + std::to_string(pi) + ": mode " +
+                                         mode_name(mode) + " has no triangles");
+                continue;
+            }
+            PrimitiveReader reader(model, where);
+            auto attr = [&](const char* key) {
+                auto it = prim.attributes.find(key);
+                return it == prim.attributes.end() ? -1 : it->second;
+            };
+            const int pos_index = attr("POSITION");
+            if (pos_index < 0) reader.fail("has no POSITION attribute");
+            Mesh mesh;
+            mesh.name = stem + "/" + mesh_name + (gm.primitives.size() > 1 ? "#" + std::to_string(pi) : std::string());
+            mesh.material = prim.material;
+            mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, false, 0);
+            const size_t n = mesh.positions.size() / 3;
+            if (attr("NORMAL") >= 0) mesh.normals = reader.read_floats(attr("NORMAL"), "NORMAL", 3, 3, false, n);
+            if (attr("TEXCOORD_0") >= 0) mesh.texcoords = reader.read_floats(attr("TEXCOORD_0"), "TEXCOORD_0", 2, 2, true, n);
+            if (attr("COLOR_0") >= 0) {
+                std::vector<float> c = reader.read_floats(attr("COLOR_0"), "COLOR_0", 3, 4, true, n);
+                if (c.size() == n * 3) {
+                    mesh.colors.resize(n * 4);
+                    for (size_t v = 0; v < n; ++v) {
+                        for (int k = 0; k < 3; ++k) mesh.colors[4 * v + size_t(k)] = c[3 * v + size_t(k)];
+                        mesh.colors[4 * v + 3] = 1.0f;
+                    }
+                } else {
+                    mesh.colors.swap(c);
+                }
+            }
+            std::vector<uint32_t> seq;
+            if (prim.indices >= 0) {
+                seq = reader.read_indices(prim.indices, n);
+            } else {
+                seq.resize(n);
+                for (size_t v = 0; v < n; ++v) seq[v] = uint32_t(v);
+            }
+            mesh.indices = to_triangle_list(seq, mode);
+            if (mesh.indices.empty()) reader.fail("has no complete triangle");
+            for (size_t i = 0; i < mesh.positions.size(); ++i)
+                if (!std::isfinite(mesh.positions[i])) reader.fail("POSITION of vertex " + std::to_string(i / 3) + " is not finite");
+            result.meshes.push_back(std::move(mesh));
+        }
+    }
+    if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
+    return result;
+}
+
+} // namespace tom::detail

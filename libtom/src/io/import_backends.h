@@ -1,0 +1,14 @@
+#pragma once
+// The readers behind import_file(); private to tom::io.
+
+#include <string>
+
+#include "tom/import.h"
+
+namespace tom::detail {
+
+ImportResult import_openmesh(const std::string& path, const std::string& extension);
+ImportResult import_gltf(const std::string& path, bool binary);
+std::string file_stem(const std::string& path);
+
+} // namespace tom::detail

@@ -1,0 +1,124 @@
+// OBJ, PLY, OFF and STL import through OpenMesh (its readers triangulate polygons as fans and
+// give non-manifold faces vertices of their own). OpenMesh reports problems on its omerr()
+// stream; that stream is captured here so the reasons reach the caller instead of stderr.
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "import_backends.h"
+#include "tom/errors.h"
+
+namespace tom::detail {
+
+namespace {
+
+struct Traits : OpenMesh::DefaultTraits {
+    typedef OpenMesh::Vec4f Color;
+};
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+
+// OpenMesh's streams and reader registry are global: one reader at a time.
+std::mutex& openmesh_mutex() {
+    static std::mutex m;
+    return m;
+}
+
+// Collapses OpenMesh's messages into "message (N times)" lines.
+std::vector<std::string> summarize(const std::string& text) {
+    std::map<std::string, int> counts;
+    std::vector<std::string> order;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty()) continue;
+        if (counts[line]++ == 0) order.push_back(line);
+    }
+    std::vector<std::string> out;
+    for (const std::string& l : order) out.push_back(counts[l] > 1 ? l + " (" + std::to_string(counts[l]) + " times)" : l);
+    return out;
+}
+
+} // namespace
+
+std::string file_stem(const std::string& path) {
+    const size_t slash = path.find_last_of('/');
+    std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+    const size_t dot = name.find_last_of('.');
+    return dot == std::string::npos || dot == 0 ? name : name.substr(0, dot);
+}
+
+ImportResult import_openmesh(const std::string& path, const std::string& extension) {
+    OmMesh om;
+    om.request_vertex_normals();
+    om.request_vertex_texcoords2D();
+    om.request_vertex_colors();
+    OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
+                                OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
+    std::ostringstream messages;
+    bool ok;
+    {
+        std::lock_guard<std::mutex> lock(openmesh_mutex());
+        static const bool detached = [] {
+            ::omerr().disconnect(std::cerr);
+            ::omlog().disable();
+            ::omout().disable();
+            return true;
+        }();
+        (void)detached;
+        ::omerr().connect(messages);
+        ok = OpenMesh::IO::read_mesh(om, path, opt);
+        ::omerr().flush();
+        ::omerr().disconnect(messages);
+    }
+    ImportResult result;
+    result.warnings = summarize(messages.str());
+    if (!ok) {
+        std::string reason = result.warnings.empty() ? "the " + extension + " reader rejected it" : result.warnings.front();
+        throw ImportError(path + ": cannot read as ." + extension + ": " + reason);
+    }
+    if (om.n_faces() == 0) throw ImportError(path + ": no triangles or polygons in the file");
+
+    Mesh mesh;
+    mesh.name = file_stem(path);
+    const size_t n = om.n_vertices();
+    mesh.positions.resize(n * 3);
+    for (auto vh : om.vertices()) {
+        const auto p = om.point(vh);
+        for (int k = 0; k < 3; ++k) mesh.positions[3 * size_t(vh.idx()) + k] = float(p[k]);
+    }
+    if (opt.check(OpenMesh::IO::Options::VertexNormal)) {
+        mesh.normals.resize(n * 3);
+        for (auto vh : om.vertices()) {
+            const auto q = om.normal(vh);
+            for (int k = 0; k < 3; ++k) mesh.normals[3 * size_t(vh.idx()) + k] = float(q[k]);
+        }
+    }
+    if (opt.check(OpenMesh::IO::Options::VertexTexCoord)) {
+        mesh.texcoords.resize(n * 2);
+        for (auto vh : om.vertices()) {
+            const auto t = om.texcoord2D(vh);
+            mesh.texcoords[2 * size_t(vh.idx())] = float(t[0]);
+            mesh.texcoords[2 * size_t(vh.idx()) + 1] = float(t[1]);
+        }
+    }
+    if (opt.check(OpenMesh::IO::Options::VertexColor)) {
+        mesh.colors.resize(n * 4);
+        for (auto vh : om.vertices()) {
+            const auto c = om.color(vh);
+            for (int k = 0; k < 4; ++k) mesh.colors[4 * size_t(vh.idx()) + k] = float(c[k]);
+            // files without alpha leave it 0 in a float colour: treat as opaque
+            if (!opt.check(OpenMesh::IO::Options::ColorAlpha)) mesh.colors[4 * size_t(vh.idx()) + 3] = 1.0f;
+        }
+    }
+    mesh.indices.reserve(om.n_faces() * 3);
+    for (auto fh : om.faces())
+        for (auto vh : om.fv_range(fh)) mesh.indices.push_back(uint32_t(vh.idx()));
+    result.meshes.push_back(std::move(mesh));
+    return result;
+}
+
+} // namespace tom::detail

@@ -1,0 +1,95 @@
+// tominfo: prints what a .tom file holds: header, sections, meshes, counts and sizes.
+
+#include <cstdio>
+
+#include <nlohmann/json.hpp>
+
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tool_common.h"
+
+int main(int argc, char** argv) {
+    std::string path;
+    bool json = false, sections = false, no_verify = false;
+    CLI::App app{"tominfo: show the header, meshes, counts and sizes of a .tom file"};
+    app.set_version_flag("--version", "tominfo 0.1.0");
+    app.add_option("file", path, "A .tom file")->required();
+    app.add_flag("--json", json, "Print one JSON object instead of text");
+    app.add_flag("--sections", sections, "Also list the section table");
+    app.add_flag("--no-verify", no_verify, "Skip the checksum pass (the structure is still validated)");
+    app.footer("Exit codes: 0 ok, 1 the file is unreadable or invalid (the reason is printed), 2 usage error.");
+    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
+    try {
+        tom::OpenOptions oo;
+        oo.verify_checksums = !no_verify;
+        const tom::File file = tom::File::open(path, oo);
+        nlohmann::ordered_json j;
+        j["file"] = path;
+        j["version"] = std::to_string(file.version_major()) + "." + std::to_string(file.version_minor());
+        j["bytes"] = file.file_bytes();
+        j["mesh_count"] = file.mesh_count();
+        uint64_t total_fv = 0;
+        j["meshes"] = nlohmann::json::array();
+        for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+            const tom::MeshView& m = file.mesh(i);
+            nlohmann::ordered_json mj;
+            mj["name"] = std::string(m.name);
+            mj["vertices"] = m.vertex_count;
+            mj["triangles"] = m.triangle_count;
+            mj["min_vertices"] = m.min_vertex_count;
+            mj["min_triangles"] = tom::active_triangle_count(m, m.min_vertex_count);
+            mj["index_bytes"] = m.index_size;
+            mj["material"] = m.material;
+            std::vector<std::string> attrs = {"position"};
+            if (m.normals) attrs.push_back("normal");
+            if (m.texcoords) attrs.push_back("texcoord0");
+            if (m.colors) attrs.push_back("color0");
+            mj["attributes"] = attrs;
+            mj["bounds_min"] = {m.bounds_min[0], m.bounds_min[1], m.bounds_min[2]};
+            mj["bounds_max"] = {m.bounds_max[0], m.bounds_max[1], m.bounds_max[2]};
+            uint64_t bytes = 0;
+            for (const tom::SectionInfo& s : file.sections())
+                if (s.mesh == i) bytes += s.bytes;
+            mj["bytes"] = bytes;
+            const uint64_t fv = tools::face_vertex_bytes(m.vertex_count, m.triangle_count);
+            total_fv += fv;
+            mj["face_vertex_bytes"] = fv;
+            j["meshes"].push_back(mj);
+        }
+        j["face_vertex_bytes"] = total_fv;
+        j["percent_of_face_vertex"] = total_fv ? 100.0 * double(file.file_bytes()) / double(total_fv) : 0.0;
+        if (sections || json) {
+            j["sections"] = nlohmann::json::array();
+            for (const tom::SectionInfo& s : file.sections())
+                j["sections"].push_back({{"type", std::string(s.type)}, {"mesh", s.mesh}, {"offset", s.offset}, {"bytes", s.bytes}});
+        }
+        if (json) {
+            std::printf("%s\n", j.dump(2).c_str());
+            return tools::exit_ok;
+        }
+        std::printf("%s: TOM %s, %s, %u mesh%s, %.1f%% of face-vertex (positions+normals, 32-bit indices)\n", path.c_str(),
+                    j["version"].get<std::string>().c_str(), tools::human_bytes(file.file_bytes()).c_str(), file.mesh_count(),
+                    file.mesh_count() == 1 ? "" : "es", j["percent_of_face_vertex"].get<double>());
+        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
+                    "attributes");
+        for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+            const auto& mj = j["meshes"][i];
+            std::string attrs;
+            for (const auto& a : mj["attributes"]) attrs += (attrs.empty() ? "" : ",") + a.get<std::string>();
+            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
+                        mj["triangles"].get<uint32_t>(), mj["min_vertices"].get<uint32_t>(), mj["min_triangles"].get<uint32_t>(),
+                        8 * mj["index_bytes"].get<uint32_t>(), attrs.c_str());
+        }
+        if (sections) {
+            std::printf("  sections:\n");
+            for (const tom::SectionInfo& s : file.sections())
+                std::printf("    %-4s mesh %-4u offset %10llu  %12llu bytes  crc %08x\n", s.type, s.mesh, static_cast<unsigned long long>(s.offset),
+                            static_cast<unsigned long long>(s.bytes), s.checksum);
+        }
+        return tools::exit_ok;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return tools::exit_failed;
+    }
+}

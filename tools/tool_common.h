@@ -1,0 +1,39 @@
+#pragma once
+// Helpers shared by the command-line tools: CLI11 exit handling, input discovery, formatting.
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace tools {
+
+/// Exit codes of every tool (also in each --help footer and the README).
+enum Exit : int { exit_ok = 0, exit_failed = 1, exit_usage = 2 };
+
+/// CLI11 parse with the project's exit codes: --help/--version print and give 0, any other
+/// parse error prints CLI11's message and gives exit_usage. Returns -1 when parsing succeeded.
+int parse(CLI::App& app, int argc, char** argv);
+
+/// One input file and the output path it maps to.
+struct Job {
+    std::string input;
+    std::string output;
+};
+
+/// Expands files and folders (recursively, by importable extension, sorted) into jobs whose
+/// outputs lie in `outdir`, with `suffix` as extension. Files under a folder keep their relative
+/// sub-folders; two inputs that would share an output name keep their source extension
+/// (a.obj -> a.obj.tom). Unreadable inputs are returned in `errors`.
+std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const std::string& outdir, const std::string& suffix,
+                           std::vector<std::string>& errors);
+
+std::string human_bytes(uint64_t bytes);
+bool is_terminal(int fd);
+
+/// Bytes of a mesh in face-vertex form with positions and normals (floats) and 32-bit indices:
+/// the reference of the paper's Table 4.
+inline uint64_t face_vertex_bytes(uint64_t vertices, uint64_t triangles) { return vertices * 24 + triangles * 12; }
+
+} // namespace tools
