@@ -1,1 +1,199 @@
-int main(){return 0;}
+// tombench: build and extraction throughput, measured against references in the same run:
+// meshopt_simplify to 1% for the build, memcpy of the same output bytes for extraction.
+// Wall times on a shared machine are noisy: every figure is the median of interleaved repeats,
+// and the ratios (not the absolute times) are what to compare.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+
+#include <meshoptimizer.h>
+#include <nlohmann/json.hpp>
+
+#include "tom/builder.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/generate.h"
+#include "tom/import.h"
+#include "tool_common.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+struct ExtractRow {
+    double fraction;
+    uint32_t vertices, triangles;
+    double extract_s, memcpy_s;
+};
+
+struct Row {
+    std::string mesh;
+    uint32_t vertices, triangles;
+    double build_s, meshopt_s;
+    uint32_t meshopt_triangles;
+    uint32_t index_bytes = 4;
+    std::vector<ExtractRow> extract;
+};
+
+Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
+    Row row;
+    row.mesh = mesh.name;
+    row.vertices = mesh.vertex_count();
+    row.triangles = mesh.triangle_count();
+    std::vector<double> build_times, meshopt_times;
+    tom::TomMesh tm;
+    std::vector<uint32_t> simplified(mesh.indices.size());
+    const size_t target = std::max<size_t>(3, mesh.indices.size() / 100 / 3 * 3);
+    for (int r = 0; r < repeats; ++r) {  // interleaved so both see the same machine state
+        auto t0 = Clock::now();
+        tm = tom::build(mesh, params);
+        build_times.push_back(seconds_since(t0));
+        t0 = Clock::now();
+        const size_t count = meshopt_simplify(simplified.data(), mesh.indices.data(), mesh.indices.size(), mesh.positions.data(),
+                                              mesh.vertex_count(), 12, target, 1.0f, 0, nullptr);
+        meshopt_times.push_back(seconds_since(t0));
+        row.meshopt_triangles = uint32_t(count / 3);
+    }
+    row.build_s = median(build_times);
+    row.meshopt_s = median(meshopt_times);
+
+    // measure the form an engine uses: the serialized file (16-bit indices where they fit), in place
+    const std::vector<uint8_t> bytes_image = tom::serialize({tm});
+    const tom::File file = tom::File::from_bytes(bytes_image.data(), bytes_image.size(), row.mesh);
+    const tom::MeshView& view = file.mesh(0);
+    row.index_bytes = view.index_size;
+    std::vector<uint32_t> out(size_t(tm.triangle_count()) * 3), src(out.size()), dst(out.size());
+    for (size_t i = 0; i < src.size(); ++i) src[i] = uint32_t(i * 2654435761u);
+    for (double fraction : {1.0, 0.5, 0.1, 0.01}) {
+        ExtractRow e;
+        e.fraction = fraction;
+        e.vertices = tom::vertex_count_for_fraction(view, fraction);
+        e.triangles = tom::active_triangle_count(view, e.vertices);
+        const size_t bytes = size_t(e.triangles) * 12;
+        // enough inner iterations for ~2 ms per sample
+        int inner = 1;
+        for (;;) {
+            const auto t0 = Clock::now();
+            for (int k = 0; k < inner; ++k) tom::extract(view, e.vertices, out.data(), out.size());
+            if (seconds_since(t0) > 2e-3 || inner > (1 << 20)) break;
+            inner *= 2;
+        }
+        std::vector<double> ext, cpy;
+        for (int r = 0; r < std::max(repeats, 5) * 3; ++r) {
+            auto t0 = Clock::now();
+            for (int k = 0; k < inner; ++k) {
+                tom::extract(view, e.vertices, out.data(), out.size());
+                asm volatile("" : : "r"(out.data()) : "memory");
+            }
+            ext.push_back(seconds_since(t0) / inner);
+            t0 = Clock::now();
+            for (int k = 0; k < inner; ++k) {
+                std::memcpy(dst.data(), src.data(), bytes);
+                asm volatile("" : : "r"(dst.data()) : "memory");
+            }
+            cpy.push_back(seconds_since(t0) / inner);
+        }
+        e.extract_s = median(ext);
+        e.memcpy_s = median(cpy);
+        row.extract.push_back(e);
+    }
+    return row;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::vector<std::string> inputs;
+    uint32_t generated = 0;
+    bool json = false;
+    int repeats = 5;
+    std::string predicate = "quadric", strategy = "passes";
+    CLI::App app{"tombench: TOM build and extraction throughput against meshopt_simplify and memcpy, measured in the same run"};
+    app.set_version_flag("--version", "tombench 0.1.0");
+    app.add_option("meshes", inputs, "Mesh files to measure");
+    app.add_option("--generated", generated, "Also measure a generated bumpy sphere of about this many triangles (e.g. 2000000)");
+    app.add_option("-r,--repeats", repeats, "Repeats per figure; medians are reported (default 5)")->check(CLI::Range(1, 1000));
+    app.add_option("--predicate", predicate, "quadric or memoryless")->check(CLI::IsMember({"quadric", "memoryless"}));
+    app.add_option("--strategy", strategy, "passes or heap")->check(CLI::IsMember({"passes", "heap"}));
+    app.add_flag("--json", json, "One JSON object per mesh (one per line) instead of the table");
+    app.footer("Exit codes: 0 ok, 1 a mesh could not be read, 2 usage error.\nExample: tombench data/meshes/bunny00.off --generated 2000000");
+    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
+    if (inputs.empty() && generated == 0) {
+        std::fprintf(stderr, "error: give mesh files or --generated N\n");
+        return tools::exit_usage;
+    }
+    tom::BuildParams params;
+    params.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
+    params.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
+    std::vector<tom::Mesh> meshes;
+    int status = tools::exit_ok;
+    for (const std::string& in : inputs) {
+        try {
+            tom::ImportResult r = tom::import_file(in);
+            for (tom::Mesh& m : r.meshes) {
+                tom::clean_mesh(m);
+                if (!m.indices.empty()) meshes.push_back(std::move(m));
+            }
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            status = tools::exit_failed;
+        }
+    }
+    if (generated) {
+        // 2 * s * (s - 1) triangles for s rings and segments
+        uint32_t s = 3;
+        while (2.0 * s * (s - 1) < generated) ++s;
+        tom::Mesh m = tom::make_sphere(s, s, 1.0f, 0.05f);
+        m.name = "generated-sphere-" + std::to_string(m.triangle_count());
+        tom::clean_mesh(m);
+        meshes.push_back(std::move(m));
+    }
+    if (!json) {
+        std::printf("build: %s/%s; meshopt = meshopt_simplify to 1%% of the triangles (reference); medians of %d\n", predicate.c_str(),
+                    strategy.c_str(), repeats);
+        std::printf("%-28s %10s %10s %10s %12s %8s | %s\n", "mesh", "triangles", "build ms", "meshopt ms", "build tri/s", "x meshopt",
+                    "extract: fraction triangles Mtri/s memcpy-ratio");
+    }
+    for (const tom::Mesh& m : meshes) {
+        const Row row = bench(m, params, repeats);
+        if (json) {
+            nlohmann::ordered_json j;
+            j["mesh"] = row.mesh;
+            j["vertices"] = row.vertices;
+            j["triangles"] = row.triangles;
+            j["predicate"] = predicate;
+            j["strategy"] = strategy;
+            j["build_ms"] = row.build_s * 1e3;
+            j["meshopt_ms"] = row.meshopt_s * 1e3;
+            j["meshopt_triangles"] = row.meshopt_triangles;
+            j["build_tris_per_s"] = row.triangles / row.build_s;
+            j["build_over_meshopt"] = row.build_s / row.meshopt_s;
+            j["stored_index_bytes"] = row.index_bytes;
+            j["extract"] = nlohmann::json::array();
+            for (const ExtractRow& e : row.extract)
+                j["extract"].push_back({{"fraction", e.fraction},
+                                        {"vertices", e.vertices},
+                                        {"triangles", e.triangles},
+                                        {"tris_per_s", e.triangles / e.extract_s},
+                                        {"memcpy_ratio", e.memcpy_s / e.extract_s}});
+            std::printf("%s\n", j.dump().c_str());
+        } else {
+            std::printf("%-28.28s %10u %10.2f %10.2f %12.3g %8.2f |", row.mesh.c_str(), row.triangles, row.build_s * 1e3, row.meshopt_s * 1e3,
+                        row.triangles / row.build_s, row.build_s / row.meshopt_s);
+            for (const ExtractRow& e : row.extract)
+                std::printf("  %g%%: %u %.0f %.2f", e.fraction * 100, e.triangles, e.triangles / e.extract_s / 1e6, e.memcpy_s / e.extract_s);
+            std::printf("\n");
+        }
+        std::fflush(stdout);
+    }
+    return status;
+}

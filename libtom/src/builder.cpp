@@ -154,52 +154,68 @@ struct Builder {
     template <class Adj>
     bool illegal(const Adj& adj, uint32_t v, uint32_t u) const {
         const Vec3 pv = pos[v], pu = pos[u];
+        constexpr size_t kMax = 64;  // neighbourhoods larger than this are left alone
+        uint32_t nv[kMax], nu[kMax], opposite[4];
+        uint32_t pairs_v[kMax][2], pairs_u[kMax][2];
+        size_t cv = 0, cu = 0, co = 0, pv_count = 0, pu_count = 0;
         bool bad = false;
-        uint32_t nv[64], nu[64], opposite[64];
-        size_t cv = 0, cu = 0, co = 0;
-        auto note = [](uint32_t* list, size_t& count, uint32_t w) {
+        auto note = [&](uint32_t* list, size_t& count, uint32_t w) {
             for (size_t i = 0; i < count; ++i)
                 if (list[i] == w) return;
-            if (count < 64) list[count++] = w;
+            if (count < kMax)
+                list[count++] = w;
+            else
+                bad = true;
         };
         adj.each(v, [&](uint32_t t) {
             if (bad) return;
-            uint32_t a, b;
-            others(t, v, a, b);
+            uint32_t a, c;
+            others(t, v, a, c);
             note(nv, cv, a);
-            note(nv, cv, b);
-            if (a == u || b == u) {
-                note(opposite, co, a == u ? b : a);
+            note(nv, cv, c);
+            if (a == u || c == u) {
+                if (co < 4) opposite[co++] = a == u ? c : a;
                 return;
             }
-            const Vec3 pa = pos[a], pb = pos[b];
-            const Vec3 n0 = cross(sub(pa, pv), sub(pb, pv));
-            const Vec3 n1 = cross(sub(pa, pu), sub(pb, pu));
+            if (pv_count < kMax) pairs_v[pv_count][0] = a, pairs_v[pv_count++][1] = c;
+            const Vec3 pa = pos[a], pc = pos[c];
+            const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
+            const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
             if (dot(n0, n1) <= 0.0f && dot(n0, n0) > 0.0f) bad = true;
         });
-        if (bad || cv >= 64) return true;  // cv == 64: a vertex of extreme valence, leave it
+        if (bad || co >= 4) return true;
         adj.each(u, [&](uint32_t t) {
             if (bad) return;
-            uint32_t a, b;
-            others(t, u, a, b);
+            uint32_t a, c;
+            others(t, u, a, c);
             note(nu, cu, a);
-            note(nu, cu, b);
-            if (a == v || b == v) return;
-            // does v have a triangle (v, a, b) or (v, b, a) that would become this one?
-            adj.each(v, [&](uint32_t s) {
-                if (!bad && contains(s, a) && contains(s, b)) bad = true;
-            });
+            note(nu, cu, c);
+            if (a != v && c != v && pu_count < kMax) pairs_u[pu_count][0] = a, pairs_u[pu_count++][1] = c;
         });
-        if (bad || cu >= 64) return true;
-        for (size_t i = 0; i < cv; ++i) {
-            const uint32_t w = nv[i];
-            if (w == u) continue;
-            bool shared = false, ok = false;
-            for (size_t j = 0; j < cu; ++j) shared |= nu[j] == w;
-            for (size_t j = 0; j < co; ++j) ok |= opposite[j] == w;
-            if (shared && !ok) return true;
-        }
+        if (bad) return true;
+        auto in = [](const uint32_t* list, size_t count, uint32_t w) {
+            for (size_t i = 0; i < count; ++i)
+                if (list[i] == w) return true;
+            return false;
+        };
+        for (size_t i = 0; i < cv; ++i)
+            if (nv[i] != u && in(nu, cu, nv[i]) && !in(opposite, co, nv[i])) return true;
+        // what passes the link test can still fold a tetrahedron flat: a rewritten triangle
+        // (u, a, b) with both a and b opposite would duplicate u's own (u, b, a)
+        if (co == 2)
+            for (size_t i = 0; i < pv_count; ++i) {
+                const uint32_t a = pairs_v[i][0], c = pairs_v[i][1];
+                if (!in(opposite, co, a) || !in(opposite, co, c)) continue;
+                for (size_t j = 0; j < pu_count; ++j)
+                    if ((pairs_u[j][0] == a && pairs_u[j][1] == c) || (pairs_u[j][0] == c && pairs_u[j][1] == a)) return true;
+            }
         return false;
+    }
+
+    // marks every vertex of x's live triangles
+    template <class Adj>
+    void mark_ring(const Adj& adj, uint32_t x, std::vector<uint8_t>& mark) const {
+        adj.each(x, [&](uint32_t t) { mark[idx[3 * t]] = mark[idx[3 * t + 1]] = mark[idx[3 * t + 2]] = 1; });
     }
 
     template <class Adj>
@@ -229,9 +245,11 @@ struct Builder {
         return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term;
     }
 
-    // Best legal substitution of v, or false when v has none.
+    // Best substitution of v, or false when v has none. With check_legal the best *legal* one
+    // (cheapest first through the oracle); without, the cheapest by cost alone, to be checked
+    // by the caller when it is about to be applied.
     template <class Adj>
-    bool best_target(const Adj& adj, uint32_t v, Candidate& best) {
+    bool best_target(const Adj& adj, uint32_t v, Candidate& best, bool check_legal = true) {
         if (kind[v] == kLocked || removed[v]) return false;
         scratch.clear();
         auto offer = [&](uint32_t u) {
@@ -261,6 +279,12 @@ struct Builder {
             }
         if (scratch.empty()) return false;
         for (Candidate& c : scratch) c.cost = cost(adj, v, c.u);
+        if (!check_legal) {
+            best = scratch[0];
+            for (const Candidate& c : scratch)
+                if (c.cost < best.cost || (c.cost == best.cost && c.u < best.u)) best = c;
+            return true;
+        }
         // check legality cheapest first; neighbourhoods are small
         std::sort(scratch.begin(), scratch.end(), [](const Candidate& a, const Candidate& b) {
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
@@ -534,33 +558,76 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
     for (uint32_t v = 0; v < b.n; ++v)
         if (b.kind[v] != kLocked) live_vertices.push_back(v);
     for (uint32_t t = 0; t < b.m; ++t) live_triangles.push_back(t);
+    // each vertex's best substitution is kept across passes and recomputed only when its
+    // neighbourhood changed (dirty)
+    std::vector<Candidate> best(b.n);
+    // Costs alone pick a vertex's candidate; the oracle runs when it is applied. A vertex whose
+    // cheapest target failed the oracle is evaluated with the oracle from then on (needs_oracle).
+    std::vector<uint8_t> has(b.n, 0), dirty(b.n, 1), needs_oracle(b.n, 0);
     std::vector<Candidate> candidates, tmp;
     std::vector<uint32_t> pass_mark(b.n, 0);
     uint32_t alive_count = b.n;
+    bool full_rescan_done = false;
     for (uint32_t pass = 1;; ++pass) {
         adj.rebuild(b, live_triangles);
         candidates.clear();
         for (uint32_t v : live_vertices) {
-            Candidate c;
-            if (b.best_target(adj, v, c)) candidates.push_back(c);
+            if (dirty[v]) {
+                has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0);
+                dirty[v] = 0;
+            }
+            if (has[v]) candidates.push_back(best[v]);
         }
-        if (candidates.empty()) break;
         sort_candidates(candidates, tmp);
-        ++stats.passes;
         size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
         size_t executed = 0;
-        for (int attempt = 0; attempt < 2 && executed == 0; ++attempt) {
+        for (int attempt = 0; attempt < 2 && executed == 0 && !candidates.empty(); ++attempt) {
             if (attempt == 1) quota = candidates.size();  // nothing went through: try them all
             for (const Candidate& c : candidates) {
                 if (executed >= quota) break;
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
-                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u)) continue;
+                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u)) {
+                    dirty[c.v] = 1;  // look again next pass, through the oracle
+                    needs_oracle[c.v] = 1;
+                    continue;
+                }
+                // costs that change: u's (its quadric grows) and those of v's neighbours, whose
+                // target v becomes u; legality elsewhere is re-checked when applied
+                if (b.predicate == Predicate::quadric) {
+                    // a neighbour w keeps its candidate unless that was v; it gains u as a target,
+                    // whose cost Q_w(p_u) is one evaluation
+                    const Vec3 pu = b.pos[c.u];
+                    adj.each(c.v, [&](uint32_t t) {
+                        for (int k = 0; k < 3; ++k) {
+                            const uint32_t w = b.idx[3 * t + k];
+                            if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) continue;
+                            if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {
+                                dirty[w] = 1;
+                                continue;
+                            }
+                            const float cw = float(evaluate(b.quadric[w], pu));
+                            if (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)) best[w] = {cw, w, c.u};
+                        }
+                    });
+                    dirty[c.u] = 1;
+                } else {
+                    b.mark_ring(adj, c.v, dirty);
+                }
                 b.apply(adj, c.v, c.u);
                 pass_mark[c.v] = pass_mark[c.u] = pass;
                 ++executed;
             }
         }
-        if (executed == 0) break;
+        if (executed == 0) {
+            // cached verdicts can be stale two rings away: one full re-evaluation before stopping
+            if (full_rescan_done) break;
+            full_rescan_done = true;
+            std::fill(dirty.begin(), dirty.end(), 1);
+            std::fill(needs_oracle.begin(), needs_oracle.end(), 1);
+            continue;
+        }
+        full_rescan_done = false;
+        ++stats.passes;
         alive_count -= uint32_t(executed);
         size_t keep = 0;
         for (uint32_t v : live_vertices)

@@ -9,9 +9,10 @@
 #include <algorithm>
 #include <cstring>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
 #endif
+
 
 namespace tom {
 
@@ -38,11 +39,44 @@ uint32_t count_active(const MeshView& m, uint32_t n) noexcept {
     if (n >= m.vertex_count) return m.triangle_count;
     const I* sub = static_cast<const I*>(m.substitute);
     const I* tri = static_cast<const I*>(m.triangles);
-    // alive(t, n) is true on a prefix of the triangles: binary search its end
-    uint32_t lo = 0, hi = m.triangle_count;
+    // alive(t, n) is true on a prefix of the triangles. Its end is close to n * T / N (about two
+    // triangles per vertex), so gallop from that guess, then binary search the bracket.
+    const uint32_t T = m.triangle_count;
+    if (T == 0) return 0;
+    auto is_alive = [&](uint32_t t) { return alive(sub, tri + 3 * size_t(t), n); };
+    uint32_t guess = uint32_t(uint64_t(n) * T / m.vertex_count);
+    guess = std::min(std::max(guess, 1u), T);
+    uint32_t lo, hi;  // invariant: every t < lo is alive, every t >= hi is not
+    if (is_alive(guess - 1)) {
+        lo = guess;
+        uint32_t stride = 1;
+        for (;;) {
+            if (lo >= T) return T;
+            const uint32_t probe = uint32_t(std::min<uint64_t>(uint64_t(lo) + stride, T)) - 1;
+            if (!is_alive(probe)) {
+                hi = probe;
+                break;
+            }
+            lo = probe + 1;
+            stride *= 2;
+        }
+    } else {
+        hi = guess - 1;
+        uint32_t stride = 1;
+        for (;;) {
+            if (hi == 0) return 0;
+            const uint32_t probe = hi > stride ? hi - stride : 0;
+            if (is_alive(probe)) {
+                lo = probe + 1;
+                break;
+            }
+            hi = probe;
+            stride *= 2;
+        }
+    }
     while (lo < hi) {
         const uint32_t mid = lo + (hi - lo) / 2;
-        if (alive(sub, tri + 3 * size_t(mid), n))
+        if (is_alive(mid))
             lo = mid + 1;
         else
             hi = mid;
@@ -50,57 +84,115 @@ uint32_t count_active(const MeshView& m, uint32_t n) noexcept {
     return lo;
 }
 
-// out[i] = walk(in[i]) for i < count
 template <class I, class O>
-void map_corners(const I* sub, const I* in, O* out, size_t count, uint32_t n) noexcept {
-    size_t i = 0;
-#if defined(__SSE2__)
-    if (sizeof(I) == 4 && sizeof(O) == 4) {
-        // compare 4 indices at a time against n (signed compare on biased values)
-        const __m128i bias = _mm_set1_epi32(int(0x80000000u));
-        const __m128i limit = _mm_set1_epi32(int(n ^ 0x80000000u));
-        for (; i + 4 <= count; i += 4) {
-            const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), v);
-            const __m128i ge = _mm_cmpgt_epi32(_mm_xor_si128(v, bias), _mm_sub_epi32(limit, _mm_set1_epi32(1)));
-            if (_mm_movemask_epi8(ge)) {
-                for (size_t k = i; k < i + 4; ++k) out[k] = O(walk(sub, uint32_t(in[k]), n));
-            }
-        }
-    } else if (sizeof(I) == 2 && sizeof(O) == 2) {
-        // 16-bit: unsigned compare by bias as well, 8 at a time
-        const __m128i bias = _mm_set1_epi16(int16_t(0x8000));
-        const __m128i limit = _mm_set1_epi16(int16_t(uint16_t(std::min<uint32_t>(n, 65535u) - 1) ^ 0x8000));
-        const bool all_fit = n > 65535u;  // every 16-bit index is < n
-        for (; i + 8 <= count; i += 8) {
-            const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
-            _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), v);
-            if (all_fit) continue;
-            const __m128i ge = _mm_cmpgt_epi16(_mm_xor_si128(v, bias), limit);
-            if (_mm_movemask_epi8(ge)) {
-                for (size_t k = i; k < i + 8; ++k) out[k] = O(walk(sub, uint32_t(in[k]), n));
-            }
-        }
-    }
-#endif
-    for (; i < count; ++i) out[i] = O(walk(sub, uint32_t(in[i]), n));
+void map_corners_scalar(const I* sub, const I* in, O* out, size_t count, uint32_t n) noexcept {
+    for (size_t i = 0; i < count; ++i) out[i] = O(walk(sub, uint32_t(in[i]), n));
 }
+
+#if defined(__x86_64__) || defined(__i386__)
+#define TOM_HAVE_AVX2_PATH 1
+// AVX2: 8 corners at a time; each round gathers substitute[v] for the lanes still >= n, until
+// no lane is. One unpredictable branch per 8 corners instead of one per corner, and the
+// gathers of independent lanes overlap their cache misses.
+template <class I>
+__attribute__((target("avx2"))) inline __m256i load8(const I* in) noexcept {
+    if (sizeof(I) == 4) return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in));
+    return _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in)));
+}
+
+template <class O>
+__attribute__((target("avx2"))) inline void store8(O* out, __m256i v) noexcept {
+    if (sizeof(O) == 4) {
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), v);
+    } else {
+        const __m128i lo = _mm256_castsi256_si128(v), hi = _mm256_extracti128_si256(v, 1);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out), _mm_packus_epi32(lo, hi));
+    }
+}
+
+template <class I>
+__attribute__((target("avx2"))) inline __m256i gather_substitutes(const I* sub, __m256i v, __m256i mask) noexcept {
+    if (sizeof(I) == 4) return _mm256_mask_i32gather_epi32(v, reinterpret_cast<const int*>(sub), v, mask, 4);
+    // 16-bit: read the 32-bit word ending at substitute[v] (its high half) so nothing past the
+    // array is touched; masked lanes have v >= n >= 1, so 2v - 2 >= 0
+    const __m256i offsets = _mm256_sub_epi32(_mm256_add_epi32(v, v), _mm256_set1_epi32(2));
+    const __m256i words = _mm256_mask_i32gather_epi32(_mm256_setzero_si256(), reinterpret_cast<const int*>(sub), offsets, mask, 1);
+    return _mm256_blendv_epi8(v, _mm256_srli_epi32(words, 16), mask);
+}
+
+template <class I, class O>
+__attribute__((target("avx2"))) void map_corners_avx2(const I* sub, const I* in, O* out, size_t count, uint32_t n) noexcept {
+    const __m256i limit = _mm256_set1_epi32(int(n));
+    size_t i = 0;
+    // 32 corners per round trip: four independent gathers in flight, one exit branch
+    for (; i + 32 <= count; i += 32) {
+        __m256i v0 = load8(in + i), v1 = load8(in + i + 8), v2 = load8(in + i + 16), v3 = load8(in + i + 24);
+        for (;;) {
+            const __m256i g0 = _mm256_cmpeq_epi32(_mm256_max_epu32(v0, limit), v0);  // v >= n, unsigned
+            const __m256i g1 = _mm256_cmpeq_epi32(_mm256_max_epu32(v1, limit), v1);
+            const __m256i g2 = _mm256_cmpeq_epi32(_mm256_max_epu32(v2, limit), v2);
+            const __m256i g3 = _mm256_cmpeq_epi32(_mm256_max_epu32(v3, limit), v3);
+            const __m256i any = _mm256_or_si256(_mm256_or_si256(g0, g1), _mm256_or_si256(g2, g3));
+            if (_mm256_testz_si256(any, any)) break;
+            v0 = gather_substitutes(sub, v0, g0);
+            v1 = gather_substitutes(sub, v1, g1);
+            v2 = gather_substitutes(sub, v2, g2);
+            v3 = gather_substitutes(sub, v3, g3);
+        }
+        store8(out + i, v0);
+        store8(out + i + 8, v1);
+        store8(out + i + 16, v2);
+        store8(out + i + 24, v3);
+    }
+    for (; i + 8 <= count; i += 8) {
+        __m256i v = load8(in + i);
+        for (;;) {
+            const __m256i ge = _mm256_cmpeq_epi32(_mm256_max_epu32(v, limit), v);
+            if (_mm256_testz_si256(ge, ge)) break;
+            v = gather_substitutes(sub, v, ge);
+        }
+        store8(out + i, v);
+    }
+    map_corners_scalar(sub, in + i, out + i, count - i, n);
+}
+
+#ifndef TOM_GATHER_BELOW
+#define TOM_GATHER_BELOW 8
+#endif
+
+bool cpu_has_avx2() noexcept {
+    static const bool has = __builtin_cpu_supports("avx2");
+    return has;
+}
+#endif
 
 template <class I, class O>
 Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t capacity) noexcept {
     Extracted r;
     r.vertex_count = clamp_resolution(m, vertex_count);
-    uint32_t tris = count_active<I>(m, r.vertex_count);
-    tris = uint32_t(std::min<size_t>(tris, capacity / 3));
-    r.triangle_count = tris;
+    const uint32_t n = r.vertex_count;
+    // the count costs O(log T) short walks: far less than checking every triangle for the end
+    r.triangle_count = uint32_t(std::min<size_t>(count_active<I>(m, n), capacity / 3));
+    const size_t corners = size_t(r.triangle_count) * 3;
     const I* sub = static_cast<const I*>(m.substitute);
     const I* in = static_cast<const I*>(m.triangles);
-    const size_t count = size_t(tris) * 3;
-    if (r.vertex_count == m.vertex_count && sizeof(I) == sizeof(O)) {
-        std::memcpy(dst, in, count * sizeof(O));  // full resolution: every chain is empty
+    if (n == m.vertex_count) {  // full resolution: every chain is empty
+        if (sizeof(I) == sizeof(O))
+            std::memcpy(dst, in, corners * sizeof(O));
+        else
+            for (size_t i = 0; i < corners; ++i) dst[i] = O(in[i]);
         return r;
     }
-    map_corners(sub, in, dst, count, r.vertex_count);
+#ifdef TOM_HAVE_AVX2_PATH
+    // where about half the corners need a step, a per-corner branch is a coin flip: gather
+    // instead. At coarse resolutions nearly every corner walks, the branch is predictable and
+    // the scalar walks of neighbouring corners overlap better than gather rounds do.
+    if (uint64_t(n) * TOM_GATHER_BELOW >= m.vertex_count && cpu_has_avx2()) {
+        map_corners_avx2(sub, in, dst, corners, n);
+        return r;
+    }
+#endif
+    map_corners_scalar(sub, in, dst, corners, n);
     return r;
 }
 

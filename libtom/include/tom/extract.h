@@ -28,8 +28,10 @@ uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_coun
 uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction) noexcept;
 
 /// Writes the index buffer at resolution `vertex_count` (clamped as above) into `destination`.
-/// destination must hold 3 * active_triangle_count(mesh, vertex_count) indices; at most
-/// `destination_capacity` indices (rounded down to whole triangles) are written.
+/// At most `destination_capacity` indices (rounded down to whole triangles) are written: a
+/// buffer of 3 * mesh.triangle_count indices always suffices, and so does one of
+/// 3 * active_triangle_count(mesh, vertex_count). The walk stops at the first inactive
+/// triangle, so no count has to be computed first.
 /// Every written index is < the returned vertex_count; no triangle is degenerate.
 /// The uint16_t form requires vertex_count <= 65536. Allocates nothing.
 Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint32_t* destination, size_t destination_capacity) noexcept;
