@@ -14,7 +14,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
+#include "gltf_schema.h"
 #include "import_backends.h"
 #include "tom/errors.h"
 
@@ -162,7 +165,7 @@ private:
 std::vector<uint32_t> to_triangle_list(const std::vector<uint32_t>& in, int mode) {
     std::vector<uint32_t> out;
     if (mode == TINYGLTF_MODE_TRIANGLES) {
-        out.assign(in.begin(), in.begin() + ptrdiff_t(in.size() / 3 * 3));
+        out = in;
     } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
         for (size_t i = 2; i < in.size(); ++i) {
             if (i % 2 == 0)
@@ -191,9 +194,19 @@ const char* mode_name(int mode) {
 ImportResult import_gltf(const std::string& path, bool binary) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
+    std::vector<uint8_t> bytes;
+    {
+        std::ifstream in(path, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
+    }
+    check_gltf_schema(bytes, binary, path);
     tinygltf::Model model;
     std::string err, warn;
-    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path) : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    const size_t slash = path.find_last_of('/');
+    const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+    const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), base_dir)
+                           : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()), unsigned(bytes.size()), base_dir);
     if (!ok) throw ImportError(path + ": cannot read glTF: " + one_line(err.empty() ? warn : err));
     ImportResult result;
     if (!warn.empty()) result.warnings.push_back(one_line(warn));
@@ -248,6 +261,9 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                 seq.resize(n);
                 for (size_t v = 0; v < n; ++v) seq[v] = uint32_t(v);
             }
+            if (mode == TINYGLTF_MODE_TRIANGLES && seq.size() % 3 != 0)
+                reader.fail(std::string("mode TRIANGLES needs a multiple of 3 ") + (prim.indices >= 0 ? "indices" : "vertices") + ", found " +
+                            std::to_string(seq.size()));
             mesh.indices = to_triangle_list(seq, mode);
             if (mesh.indices.empty()) reader.fail("has no complete triangle");
             for (size_t i = 0; i < mesh.positions.size(); ++i)

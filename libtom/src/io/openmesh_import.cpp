@@ -74,6 +74,13 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         ::omerr().flush();
         ::omerr().disconnect(messages);
     }
+    // STL holds positions (and face normals) only, but its reader leaves the requested vertex
+    // attribute flags set: never trust them for STL
+    if (extension == "stl") {
+        opt -= OpenMesh::IO::Options::VertexNormal;
+        opt -= OpenMesh::IO::Options::VertexTexCoord;
+        opt -= OpenMesh::IO::Options::VertexColor;
+    }
     ImportResult result;
     result.warnings = summarize(messages.str());
     if (!ok) {

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs every dependency of the project from Debian's packages (bookworm). Run as root.
+# Does nothing when everything is already installed.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libopenmesh-dev                      # OBJ/PLY/OFF/STL import
+  libtinygltf-dev nlohmann-json3-dev   # glTF import (tinygltf needs nlohmann json)
+  libdraco-dev                         # KHR_draco_mesh_compression
+  libcli11-dev                         # command lines
+  catch2                               # tests (v2)
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev   # Metro-style distances (AABB trees)
+  libmeshoptimizer-dev                 # benchmark reference only
+  libosmesa6-dev libegl-dev libgl-dev  # headless rendering (Mesa)
+  python3 python3-matplotlib           # plots
+  valgrind                             # instruction counts in benchmarks
+  libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+if [ "$(id -u)" -ne 0 ]; then
+  echo "install-deps: missing packages: ${missing[*]}" >&2
+  echo "install-deps: run as root (or: sudo $0)" >&2
+  exit 1
+fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
