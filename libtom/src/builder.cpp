@@ -124,7 +124,9 @@ struct Builder {
     std::vector<uint8_t> removed;
     std::vector<uint32_t> border_next, border_prev;
     std::vector<Quadric> quadric;
-    std::vector<uint32_t> pair_offsets, pair_data;  // non-edge pairs closer than the threshold
+    // non-edge pairs closer than the threshold, symmetric; a substitution v -> u moves v's pairs
+    // to u (Garland-Heckbert), so parts stay joinable after their first vertices are gone
+    std::vector<std::vector<uint32_t>> pairs;
     std::vector<uint32_t> removed_order, removed_target;
     std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
     std::vector<Candidate> scratch;    // candidate targets of one vertex
@@ -140,9 +142,11 @@ struct Builder {
     }
 
     // A border loop of three edges cannot lose a vertex (it would fold onto itself).
+    // A border vertex moves along its loop, or onto a pair partner (joining two parts).
     bool border_move_allowed(uint32_t v, uint32_t u) const {
         if (kind[v] != kBorder) return true;
-        if (u != border_next[v] && u != border_prev[v]) return false;
+        if (u != border_next[v] && u != border_prev[v])
+            return !pairs.empty() && std::find(pairs[v].begin(), pairs[v].end(), u) != pairs[v].end();
         return border_next[border_next[v]] != border_prev[v];
     }
 
@@ -270,9 +274,8 @@ struct Builder {
                 offer(b);
             });
         }
-        if (!pair_offsets.empty())
-            for (uint32_t k = pair_offsets[v]; k < pair_offsets[v + 1]; ++k) {
-                const uint32_t u = pair_data[k];
+        if (!pairs.empty())
+            for (const uint32_t u : pairs[v]) {
                 bool seen = false;
                 for (const Candidate& c : scratch) seen |= c.u == u;
                 if (!seen && u != v && !removed[u]) scratch.push_back({0.0f, v, u});
@@ -312,6 +315,16 @@ struct Builder {
             }
         });
         removed[v] = 1;
+        if (!pairs.empty()) {
+            for (const uint32_t w : pairs[v]) {
+                std::vector<uint32_t>& back = pairs[w];
+                back.erase(std::remove(back.begin(), back.end(), v), back.end());
+                if (w == u || removed[w]) continue;
+                if (std::find(back.begin(), back.end(), u) == back.end()) back.push_back(u);
+                if (std::find(pairs[u].begin(), pairs[u].end(), w) == pairs[u].end()) pairs[u].push_back(w);
+            }
+            pairs[v].clear();
+        }
         removed_order.push_back(v);
         removed_target.push_back(u);
         if (predicate == Predicate::quadric) add(quadric[u], quadric[v]);
@@ -525,8 +538,8 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
     for (uint32_t v = 0; v < b.n; ++v)
         cells[v] = {cell_key(coord(b.pos[v].x), coord(b.pos[v].y), coord(b.pos[v].z)), v};
     std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& c) { return a.key < c.key || (a.key == c.key && a.v < c.v); });
-    b.pair_offsets.assign(b.n + 1, 0);
-    std::vector<std::vector<uint32_t>> found(b.n);
+    std::vector<std::vector<uint32_t>>& found = b.pairs;
+    found.assign(b.n, {});
     const float t2 = t * t;
     for (uint32_t v = 0; v < b.n; ++v) {
         if (b.kind[v] == kLocked) continue;
@@ -546,10 +559,14 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
         std::sort(found[v].begin(), found[v].end());
         found[v].erase(std::unique(found[v].begin(), found[v].end()), found[v].end());
     }
-    for (uint32_t v = 0; v < b.n; ++v) b.pair_offsets[v + 1] = b.pair_offsets[v] + uint32_t(found[v].size());
-    b.pair_data.reserve(b.pair_offsets[b.n]);
-    for (uint32_t v = 0; v < b.n; ++v) b.pair_data.insert(b.pair_data.end(), found[v].begin(), found[v].end());
-    stats.pair_candidates = b.pair_offsets[b.n];
+    // symmetric: u is v's partner iff v is u's
+    for (uint32_t v = 0; v < b.n; ++v)
+        for (const uint32_t u : found[v])
+            if (std::find(found[u].begin(), found[u].end(), v) == found[u].end()) found[u].push_back(v);
+    for (uint32_t v = 0; v < b.n; ++v) {
+        std::sort(found[v].begin(), found[v].end());
+        stats.pair_candidates += uint32_t(found[v].size());
+    }
 }
 
 void run_passes(Builder& b, float fraction, BuildStats& stats) {

@@ -109,10 +109,23 @@ CleanStats clean_mesh(Mesh& mesh) {
     if (mesh.normals.empty()) {
         compute_normals(mesh);
     } else {
+        // given normals are normalised; zero ones are replaced by computed ones
+        bool missing = false;
         for (size_t v = 0; v < mesh.normals.size(); v += 3) {
             float* q = &mesh.normals[v];
             const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-            if (len > 0.0f) q[0] /= len, q[1] /= len, q[2] /= len;
+            if (len > 0.0f)
+                q[0] /= len, q[1] /= len, q[2] /= len;
+            else
+                missing = true;
+        }
+        if (missing) {
+            std::vector<float> given;
+            given.swap(mesh.normals);
+            compute_normals(mesh);
+            for (size_t v = 0; v < given.size(); v += 3)
+                if (given[v] != 0.0f || given[v + 1] != 0.0f || given[v + 2] != 0.0f)
+                    for (int k = 0; k < 3; ++k) mesh.normals[v + size_t(k)] = given[v + size_t(k)];
         }
     }
     return stats;

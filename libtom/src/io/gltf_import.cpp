@@ -200,14 +200,27 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
         if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
     }
-    check_gltf_schema(bytes, binary, path);
+    const nlohmann::json doc = check_gltf_schema(bytes, binary, path);
     tinygltf::Model model;
     std::string err, warn;
     const size_t slash = path.find_last_of('/');
     const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
     const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), base_dir)
                            : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()), unsigned(bytes.size()), base_dir);
-    if (!ok) throw ImportError(path + ": cannot read glTF: " + one_line(err.empty() ? warn : err));
+    if (!ok) {
+        std::string reason = one_line(err.empty() ? warn : err);
+        // tinygltf names only the accessor; say which primitive it belongs to
+        const size_t at = reason.find("accessor[");
+        if (at != std::string::npos) {
+            const int accessor = std::atoi(reason.c_str() + at + 9);
+            const std::string users = primitives_using_accessor(doc, accessor);
+            const bool draco = bytes.size() > 0 && std::string(bytes.begin(), bytes.end()).find("KHR_draco_mesh_compression") != std::string::npos;
+            if (!users.empty())
+                throw ImportError(path + ": " + users + ": accessor " + std::to_string(accessor) + " has no data" +
+                                  (draco ? " (its KHR_draco_mesh_compression data did not decode)" : "") + " [tinygltf: " + reason + "]");
+        }
+        throw ImportError(path + ": cannot read glTF: " + reason);
+    }
     ImportResult result;
     if (!warn.empty()) result.warnings.push_back(one_line(warn));
     for (const std::string& ext : model.extensionsRequired)

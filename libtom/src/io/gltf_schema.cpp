@@ -206,7 +206,7 @@ uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | 
 
 } // namespace
 
-void check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std::string& file) {
+nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std::string& file) {
     const uint8_t* json_begin = bytes.data();
     size_t json_size = bytes.size();
     if (binary) {
@@ -230,6 +230,28 @@ void check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std
     }
     static const RulePtr schema = gltf_schema();
     check(doc, *schema, "$", file);
+    return doc;
+}
+
+std::string primitives_using_accessor(const nlohmann::json& doc, int accessor) {
+    std::string out;
+    if (!doc.contains("meshes")) return out;
+    const json& meshes = doc["meshes"];
+    for (size_t m = 0; m < meshes.size(); ++m) {
+        const std::string name = meshes[m].value("name", "mesh" + std::to_string(m));
+        const json& prims = meshes[m]["primitives"];
+        for (size_t p = 0; p < prims.size(); ++p) {
+            std::vector<std::string> roles;
+            if (prims[p].contains("indices") && prims[p]["indices"] == accessor) roles.push_back("indices");
+            for (auto it = prims[p]["attributes"].begin(); it != prims[p]["attributes"].end(); ++it)
+                if (it.value() == accessor) roles.push_back(it.key());
+            if (roles.empty()) continue;
+            std::string r;
+            for (const std::string& x : roles) r += (r.empty() ? "" : ", ") + x;
+            out += (out.empty() ? "" : "; ") + std::string("mesh ") + std::to_string(m) + " '" + name + "' primitive " + std::to_string(p) + " (" + r + ")";
+        }
+    }
+    return out;
 }
 
 } // namespace tom::detail

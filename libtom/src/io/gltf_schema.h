@@ -5,10 +5,17 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 namespace tom::detail {
 
 /// \throw ImportError naming `file` and the JSON path of the first property of the wrong type,
 ///        a missing required property, or malformed GLB headers.
-void check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std::string& file);
+/// Returns the parsed document.
+nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std::string& file);
+
+/// "mesh M 'name' primitive P (ROLE)" for every primitive that uses accessor `accessor`
+/// (as an attribute or its indices), "; "-separated; empty if none does.
+std::string primitives_using_accessor(const nlohmann::json& doc, int accessor);
 
 } // namespace tom::detail

@@ -5,6 +5,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include <array>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -56,6 +57,7 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     om.request_vertex_normals();
     om.request_vertex_texcoords2D();
     om.request_vertex_colors();
+    om.request_vertex_status();  // marks the copies OpenMesh makes for non-manifold faces
     OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
                                 OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
     std::ostringstream messages;
@@ -89,6 +91,33 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     }
     if (om.n_faces() == 0) throw ImportError(path + ": no triangles or polygons in the file");
 
+    // OpenMesh gives a face it cannot add (non-manifold) vertices of its own, at the original's
+    // position but with uninitialised attributes: take them from the original vertex
+    {
+        std::map<std::array<float, 3>, OmMesh::VertexHandle> original;
+        for (auto vh : om.vertices())
+            if (!om.status(vh).fixed_nonmanifold()) {
+                const auto p = om.point(vh);
+                original.emplace(std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}, vh);
+            }
+        size_t copies = 0;
+        for (auto vh : om.vertices()) {
+            if (!om.status(vh).fixed_nonmanifold()) continue;
+            ++copies;
+            const auto p = om.point(vh);
+            auto it = original.find({float(p[0]), float(p[1]), float(p[2])});
+            if (it == original.end()) {
+                om.set_normal(vh, OmMesh::Normal(0, 0, 0));  // recomputed by clean_mesh
+                om.set_texcoord2D(vh, OmMesh::TexCoord2D(0, 0));
+                om.set_color(vh, OmMesh::Color(1, 1, 1, 1));
+                continue;
+            }
+            om.set_normal(vh, om.normal(it->second));
+            om.set_texcoord2D(vh, om.texcoord2D(it->second));
+            om.set_color(vh, om.color(it->second));
+        }
+        if (copies) result.warnings.push_back(std::to_string(copies) + " vertices duplicated for non-manifold faces");
+    }
     Mesh mesh;
     mesh.name = file_stem(path);
     const size_t n = om.n_vertices();

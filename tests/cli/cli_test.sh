@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Command-line contracts of tombuild, tominfo and tomextract:
+# exit codes (0 ok, 1 some inputs failed, 2 usage), a batch goes on past a bad input, outputs
+# are byte-identical whatever -j, a failed input leaves no file (no .tom, no temporary), and
+# tomextract writes readable OBJ/PLY levels.
+set -u
+tools="$1"; data="$2"
+work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
+fail=0; passed=0
+check() {  # check "description" command...
+  local what="$1"; shift
+  if "$@"; then passed=$((passed+1)); else echo "FAILED: $what"; fail=$((fail+1)); fi
+}
+expect_exit() {  # expect_exit CODE command...
+  local want="$1"; shift
+  "$@" >"$work/stdout" 2>"$work/stderr"; local got=$?
+  if [ "$got" -ne "$want" ]; then echo "exit $got, expected $want: $*"; cat "$work/stderr"; return 1; fi
+}
+
+[ -s "$data/meshes/bunny00.off" ] || { echo "samples missing: run scripts/fetch-samples.sh"; exit 1; }
+
+# a batch folder: good meshes, a broken glTF, a file with no triangles
+mkdir -p "$work/in/sub"
+cp "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$work/in/"
+cp "$data/assimp/OBJ/spider.obj" "$data/assimp/OBJ/spider.mtl" "$work/in/sub/"
+cp "$data/assimp/glTF2/IndexOutOfRange/IndexOutOfRange.gltf" "$data/assimp/glTF2/IndexOutOfRange/IndexOutOfRange.bin" "$work/in/sub/"
+cp "$data/assimp/OBJ/testpoints.obj" "$work/in/"
+
+check "usage error without -o exits 2" expect_exit 2 "$tools/tombuild" "$work/in"
+check "unknown option exits 2" expect_exit 2 "$tools/tombuild" "$work/in" -o "$work/o" --no-such-option
+check "bad predicate exits 2" expect_exit 2 "$tools/tombuild" "$work/in" -o "$work/o" --predicate nonsense
+check "--help exits 0" expect_exit 0 "$tools/tombuild" --help
+check "--help documents the exit codes" grep -q "Exit codes" "$work/stdout"
+check "--version exits 0" expect_exit 0 "$tools/tombuild" --version
+
+check "a batch with bad inputs exits 1" expect_exit 1 "$tools/tombuild" "$work/in" -o "$work/o1" -j 1
+check "the bad glTF is reported with its reason" grep -q "IndexOutOfRange.gltf.*out of range" "$work/stderr"
+check "the file without triangles is reported" grep -q "testpoints.obj" "$work/stderr"
+check "the good inputs were still converted" test -s "$work/o1/fandisk.tom" -a -s "$work/o1/cow.tom" -a -s "$work/o1/sub/spider.tom"
+check "no output for the failed inputs" test ! -e "$work/o1/sub/IndexOutOfRange.tom" -a ! -e "$work/o1/testpoints.tom"
+check "no temporary files left" test -z "$(find "$work/o1" -name '*.tmp*')"
+check "summary line counts" grep -q "3 of 5 inputs converted, 2 failed" "$work/stderr"
+
+check "-j 2 converts the same batch" expect_exit 1 "$tools/tombuild" "$work/in" -o "$work/o2" -j 2
+for f in fandisk.tom cow.tom sub/spider.tom; do
+  check "$f is byte-identical with -j 1 and -j 2" cmp -s "$work/o1/$f" "$work/o2/$f"
+done
+check "a good single input exits 0" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/o3" --strategy heap --predicate memoryless
+check "a missing input exits 1" expect_exit 1 "$tools/tombuild" "$work/nothing.off" -o "$work/o4"
+
+check "tominfo reads a file" expect_exit 0 "$tools/tominfo" "$work/o1/fandisk.tom"
+check "tominfo shows the counts" grep -q "6475" "$work/stdout"
+check "tominfo --json" expect_exit 0 "$tools/tominfo" "$work/o1/fandisk.tom" --json
+check "tominfo --json is JSON with the mesh" python3 -c "import json,sys; d=json.load(open('$work/stdout')); assert d['meshes'][0]['vertices']==6475, d"
+head -c 500 "$work/o1/fandisk.tom" > "$work/truncated.tom"
+check "tominfo on a truncated file exits 1" expect_exit 1 "$tools/tominfo" "$work/truncated.tom"
+check "with a message naming the file and rule" grep -q "truncated.tom: byte 16, file_bytes: file is truncated.*rule 5" "$work/stderr"
+
+check "tomextract 10% to OBJ" expect_exit 0 "$tools/tomextract" "$work/o1/fandisk.tom" --fraction 0.1 -o "$work/f10.obj"
+check "the OBJ has 10% of the triangles" test "$(grep -c '^f ' "$work/f10.obj")" -ge 1290 -a "$(grep -c '^f ' "$work/f10.obj")" -le 1300
+check "tomextract by triangle count to PLY" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --triangles 500 -o "$work/c.ply"
+check "the PLY header declares the faces" grep -a -q "element face 50[0-9]" "$work/c.ply"
+check "the extracted PLY converts back" expect_exit 0 "$tools/tombuild" "$work/c.ply" -o "$work/o5"
+check "tomextract without a resolution exits 2" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" -o "$work/x.obj"
+check "tomextract to an unknown type exits 1" expect_exit 1 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.5 -o "$work/x.xyz"
+
+echo "$passed passed, $fail failed"
+[ "$fail" -eq 0 ]

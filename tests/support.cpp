@@ -1,0 +1,293 @@
+#include "support.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <set>
+
+#include <catch2/catch.hpp>
+
+#include "tom/extract.h"
+#include "tom/generate.h"
+#include "tom/import.h"
+
+namespace test {
+
+std::string sample(const std::string& relative) {
+    const std::string path = std::string(TOM_DATA_DIR) + "/" + relative;
+    INFO("sample " << path << " is missing: run scripts/fetch-samples.sh");
+    REQUIRE(std::filesystem::exists(path));
+    return path;
+}
+
+namespace {
+
+NamedMesh named(std::string name, tom::Mesh mesh, bool closed, int euler = 0) {
+    tom::clean_mesh(mesh);
+    NamedMesh n;
+    n.name = std::move(name);
+    n.mesh = std::move(mesh);
+    n.closed_manifold = closed;
+    n.euler = euler;
+    return n;
+}
+
+void append(tom::Mesh& dst, const tom::Mesh& src, float dx) {
+    const uint32_t base = dst.vertex_count();
+    for (size_t i = 0; i < src.positions.size(); i += 3) dst.positions.insert(dst.positions.end(), {src.positions[i] + dx, src.positions[i + 1], src.positions[i + 2]});
+    for (uint32_t i : src.indices) dst.indices.push_back(i + base);
+}
+
+} // namespace
+
+std::vector<NamedMesh> generated_meshes() {
+    std::vector<NamedMesh> out;
+    out.push_back(named("sphere 12x16", tom::make_sphere(12, 16), true, 2));
+    out.push_back(named("bumpy sphere 40x40", tom::make_sphere(40, 40, 1.0f, 0.1f), true, 2));
+    out.push_back(named("torus 24x12", tom::make_torus(24, 12), true, 0));
+    out.push_back(named("grid 20x20 (border)", tom::make_grid(20, 20), false));
+    {
+        tom::Mesh two = tom::make_sphere(8, 10);
+        append(two, tom::make_torus(16, 8), 3.0f);
+        out.push_back(named("sphere + torus (two components)", two, true, 2));
+    }
+    {
+        // the grid cut in two along x = 0.5 with its seam vertices duplicated: the halves must
+        // stay stitched (coincident copies never separate)
+        tom::Mesh g = tom::make_grid(16, 16);
+        const uint32_t n = g.vertex_count();
+        for (uint32_t v = 0; v < n; ++v) g.positions.insert(g.positions.end(), {g.positions[3 * v], g.positions[3 * v + 1], g.positions[3 * v + 2]});
+        for (size_t t = 0; t < g.indices.size(); t += 3) {
+            float cx = 0;
+            for (int k = 0; k < 3; ++k) cx += g.positions[3 * g.indices[t + k]];
+            if (cx / 3 > 0.5f)
+                for (int k = 0; k < 3; ++k) g.indices[t + k] += n;  // right half uses the copies
+        }
+        out.push_back(named("grid with duplicated seam", g, false));
+    }
+    {
+        // three sheets sharing one edge (non-manifold), plus a bow-tie vertex
+        tom::Mesh f = tom::make_grid(6, 6);
+        tom::Mesh fan;
+        fan.positions = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1, 2, 0.5f, 0, 2, -0.5f, 0};
+        fan.indices = {0, 1, 2, 1, 0, 3, 0, 1, 4, 1, 5, 6};
+        append(f, fan, 2.0f);
+        out.push_back(named("non-manifold fan + bow-tie", f, false));
+    }
+    {
+        // degenerate input: repeated indices (dropped by clean_mesh), zero-area slivers,
+        // duplicate triangles
+        tom::Mesh d = tom::make_grid(10, 10);
+        d.indices.insert(d.indices.end(), {0, 0, 1, 5, 6, 6});
+        const size_t tris = d.indices.size() / 3;
+        d.indices.insert(d.indices.end(), d.indices.begin() + 3 * 10, d.indices.begin() + 3 * 14);  // duplicates
+        // an isolated zero-area sliver (three collinear vertices)
+        const uint32_t base = d.vertex_count();
+        d.positions.insert(d.positions.end(), {2, 0, 0, 3, 0, 0, 4, 0, 0});
+        d.indices.insert(d.indices.end(), {base, base + 1, base + 2});
+        (void)tris;
+        out.push_back(named("degenerate + duplicate triangles", d, false));
+    }
+    return out;
+}
+
+std::vector<NamedMesh> real_meshes() {
+    std::vector<NamedMesh> out;
+    auto load = [&](const std::string& rel, bool closed, int euler, int primitive = -1) {
+        tom::ImportResult r = tom::import_file(sample(rel));
+        REQUIRE(!r.meshes.empty());
+        size_t pick = 0;
+        if (primitive < 0)
+            pick = 0;
+        else
+            for (size_t i = 0; i < r.meshes.size(); ++i)
+                if (r.meshes[i].triangle_count() > r.meshes[pick].triangle_count()) pick = i;
+        out.push_back(named(rel, std::move(r.meshes[pick]), closed, euler));
+    };
+    load("meshes/bunny00.off", true, 2);
+    load("meshes/fandisk.off", true, 2);
+    load("meshes/cow.off", false, 0);
+    load("meshes/elephant.off", false, 0);
+    load("assimp/OBJ/WusonOBJ.obj", false, 0);
+    load("assimp/OBJ/spider.obj", false, 0);
+    load("assimp/STL/Spider_binary.stl", false, 0);
+    load("assimp/PLY/cube_binary.ply", false, 0);
+    load("assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb", false, 0, 1);
+    return out;
+}
+
+Topology topology(const float* positions, const uint32_t* indices, size_t triangle_count, bool weld) {
+    // vertex id: welded by exact position or as given
+    std::map<std::array<float, 3>, int> weld_id;
+    auto id = [&](uint32_t v) -> int64_t {
+        if (!weld) return v;
+        const std::array<float, 3> p = {positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]};
+        auto it = weld_id.emplace(p, int(weld_id.size())).first;
+        return it->second;
+    };
+    std::map<std::pair<int64_t, int64_t>, int> edges;
+    std::set<int64_t> verts;
+    for (size_t t = 0; t < triangle_count; ++t) {
+        int64_t c[3];
+        for (int k = 0; k < 3; ++k) c[k] = id(indices[3 * t + k]), verts.insert(c[k]);
+        for (int k = 0; k < 3; ++k) ++edges[{std::min(c[k], c[(k + 1) % 3]), std::max(c[k], c[(k + 1) % 3])}];
+    }
+    Topology topo;
+    topo.vertices = int(verts.size());
+    topo.edges = int(edges.size());
+    topo.faces = int(triangle_count);
+    for (const auto& [e, count] : edges) {
+        topo.border_edges += count == 1;
+        topo.nonmanifold_edges += count > 2;
+    }
+    return topo;
+}
+
+std::vector<uint32_t> brute_force_active(const tom::MeshView& m, uint32_t n) {
+    std::vector<uint32_t> out;
+    bool ended = false;
+    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+        uint32_t c[3];
+        for (int k = 0; k < 3; ++k) {
+            uint32_t v = m.corner(3 * t + k);
+            while (v >= n) v = m.substitute_at(v);
+            c[k] = v;
+        }
+        const bool alive = c[0] != c[1] && c[1] != c[2] && c[0] != c[2];
+        if (alive) {
+            INFO("triangle " << t << " is alive at resolution " << n << " after a dead one: not a prefix");
+            REQUIRE(!ended);
+            out.insert(out.end(), c, c + 3);
+        } else {
+            ended = true;
+        }
+    }
+    return out;
+}
+
+namespace {
+
+std::array<float, 3> normal_of(const float* p, uint32_t a, uint32_t b, uint32_t c) {
+    const float e1[3] = {p[3 * b] - p[3 * a], p[3 * b + 1] - p[3 * a + 1], p[3 * b + 2] - p[3 * a + 2]};
+    const float e2[3] = {p[3 * c] - p[3 * a], p[3 * c + 1] - p[3 * a + 1], p[3 * c + 2] - p[3 * a + 2]};
+    return {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+}
+
+float dot3(const std::array<float, 3>& a, const std::array<float, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+std::array<uint32_t, 3> rotated(uint32_t a, uint32_t b, uint32_t c) {
+    if (a <= b && a <= c) return {a, b, c};
+    if (b <= a && b <= c) return {b, c, a};
+    return {c, a, b};
+}
+
+} // namespace
+
+void check_invariants(const NamedMesh& input, const tom::TomMesh& built) {
+    INFO("mesh: " << input.name);
+    const tom::Mesh& in = input.mesh;
+    const tom::MeshView m = built.view();
+    const uint32_t N = m.vertex_count, s = m.min_vertex_count;
+    REQUIRE(N == in.vertex_count());
+    REQUIRE(m.triangle_count == in.triangle_count());
+    REQUIRE(s >= 1);
+    REQUIRE(s <= N);
+
+    // substitute[i] < i for removed vertices, survivors point to themselves
+    for (uint32_t i = 0; i < N; ++i) {
+        if (i < s)
+            REQUIRE(built.substitute[i] == i);
+        else
+            REQUIRE(built.substitute[i] < i);
+    }
+    // the vertex order is a permutation carrying every attribute along
+    std::vector<uint32_t> seen(N, 0);
+    for (uint32_t i = 0; i < N; ++i) {
+        const uint32_t o = built.original_index[i];
+        REQUIRE(o < N);
+        REQUIRE(seen[o]++ == 0);
+        for (int k = 0; k < 3; ++k) REQUIRE(built.positions[3 * i + k] == in.positions[3 * o + k]);
+        if (!in.normals.empty())
+            for (int k = 0; k < 3; ++k) REQUIRE(built.normals[3 * i + k] == in.normals[3 * o + k]);
+    }
+    // full resolution reproduces the input triangles (as a multiset, under the permutation)
+    {
+        std::multiset<std::array<uint32_t, 3>> a, b;
+        for (uint32_t t = 0; t < m.triangle_count; ++t) {
+            const uint32_t* c = &built.triangles[3 * t];
+            a.insert(rotated(built.original_index[c[0]], built.original_index[c[1]], built.original_index[c[2]]));
+            b.insert(rotated(in.indices[3 * t], in.indices[3 * t + 1], in.indices[3 * t + 2]));
+        }
+        REQUIRE(a == b);
+    }
+
+    // sampled resolutions: brute force against extraction
+    std::vector<uint32_t> resolutions = {s, N};
+    for (int k = 1; k < 12; ++k) resolutions.push_back(s + uint32_t(uint64_t(N - s) * k / 12));
+    resolutions.push_back(std::min(N, s + 1));
+    std::sort(resolutions.begin(), resolutions.end());
+    resolutions.erase(std::unique(resolutions.begin(), resolutions.end()), resolutions.end());
+    const Topology full_topo = topology(in.positions.data(), in.indices.data(), in.triangle_count(), true);
+    uint32_t previous_count = 0;
+    std::vector<uint32_t> buffer32(size_t(m.triangle_count) * 3 + 3, 0xDEADBEEF);
+    for (uint32_t n : resolutions) {
+        INFO("resolution " << n << " of " << N);
+        const std::vector<uint32_t> expect = brute_force_active(m, n);
+        const uint32_t count = uint32_t(expect.size() / 3);
+        REQUIRE(tom::active_triangle_count(m, n) == count);
+        REQUIRE(count >= previous_count);  // monotone in n
+        previous_count = count;
+        const tom::Extracted r = tom::extract(m, n, buffer32.data(), buffer32.size());
+        REQUIRE(r.vertex_count == n);
+        REQUIRE(r.triangle_count == count);
+        REQUIRE(std::equal(expect.begin(), expect.end(), buffer32.begin()));
+        REQUIRE(buffer32[expect.size()] == 0xDEADBEEF);  // nothing written past the triangles
+        for (size_t i = 0; i < expect.size(); i += 3) {
+            REQUIRE(expect[i] < n);
+            REQUIRE(expect[i + 1] < n);
+            REQUIRE(expect[i + 2] < n);
+        }
+        std::fill(buffer32.begin(), buffer32.end(), 0xDEADBEEF);
+        // no cracks: welding by position, the level has no more border edges than the input
+        const Topology topo = topology(built.positions.data(), expect.data(), count, true);
+        REQUIRE(topo.border_edges <= full_topo.border_edges);
+        if (input.closed_manifold) {
+            REQUIRE(topo.border_edges == 0);
+            REQUIRE(topo.nonmanifold_edges == 0);
+            REQUIRE(topo.euler() == input.euler);
+        }
+    }
+    REQUIRE(tom::active_triangle_count(m, N) == m.triangle_count);
+
+    // replay every substitution in order (N-1 down to s): none may flip a surviving triangle
+    std::vector<std::vector<uint32_t>> around(N);
+    std::vector<uint32_t> current(built.triangles);
+    std::vector<uint8_t> dead(m.triangle_count, 0);
+    for (uint32_t t = 0; t < m.triangle_count; ++t)
+        for (int k = 0; k < 3; ++k) around[current[3 * t + k]].push_back(t);
+    const float* p = built.positions.data();
+    size_t flips = 0;
+    for (uint32_t v = N; v-- > s;) {
+        const uint32_t u = built.substitute[v];
+        for (uint32_t t : around[v]) {
+            if (dead[t]) continue;
+            uint32_t* c = &current[3 * t];
+            if (c[0] == u || c[1] == u || c[2] == u) {
+                dead[t] = 1;
+                continue;
+            }
+            const auto before = normal_of(p, c[0], c[1], c[2]);
+            for (int k = 0; k < 3; ++k)
+                if (c[k] == v) c[k] = u;
+            const auto after = normal_of(p, c[0], c[1], c[2]);
+            if (dot3(before, before) > 0 && dot3(before, after) <= 0) ++flips;
+            around[u].push_back(t);
+        }
+    }
+    INFO("triangles flipped by a substitution");
+    REQUIRE(flips == 0);
+}
+
+} // namespace test

@@ -1,0 +1,136 @@
+// Builder invariants over generated and real meshes, for every strategy and predicate.
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tom/builder.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/generate.h"
+
+namespace {
+
+std::vector<tom::BuildParams> all_params() {
+    std::vector<tom::BuildParams> out;
+    for (tom::Strategy s : {tom::Strategy::passes, tom::Strategy::heap})
+        for (tom::Predicate p : {tom::Predicate::quadric, tom::Predicate::memoryless}) {
+            tom::BuildParams bp;
+            bp.strategy = s;
+            bp.predicate = p;
+            out.push_back(bp);
+        }
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("every invariant holds on generated meshes, all strategies and predicates", "[builder]") {
+    for (const test::NamedMesh& nm : test::generated_meshes())
+        for (const tom::BuildParams& bp : all_params()) {
+            INFO("strategy " << tom::to_string(bp.strategy) << ", predicate " << tom::to_string(bp.predicate));
+            const tom::TomMesh built = tom::build(nm.mesh, bp);
+            test::check_invariants(nm, built);
+        }
+}
+
+TEST_CASE("every invariant holds on the real sample meshes (default parameters)", "[builder][samples]") {
+    for (const test::NamedMesh& nm : test::real_meshes()) test::check_invariants(nm, tom::build(nm.mesh));
+}
+
+TEST_CASE("every invariant holds on the real sample meshes (heap, memoryless)", "[builder][samples]") {
+    tom::BuildParams bp;
+    bp.strategy = tom::Strategy::heap;
+    bp.predicate = tom::Predicate::memoryless;
+    for (const test::NamedMesh& nm : test::real_meshes()) test::check_invariants(nm, tom::build(nm.mesh, bp));
+}
+
+TEST_CASE("a closed genus-0 surface ends as a tetrahedron, a torus keeps its hole", "[builder]") {
+    for (const tom::BuildParams& bp : all_params()) {
+        INFO("strategy " << tom::to_string(bp.strategy) << ", predicate " << tom::to_string(bp.predicate));
+        for (const test::NamedMesh& nm : test::generated_meshes()) {
+            if (nm.name.rfind("sphere 12", 0) == 0) {
+                const tom::TomMesh t = tom::build(nm.mesh, bp);
+                CHECK(t.min_vertex_count == 4);
+                CHECK(tom::active_triangle_count(t.view(), 4) == 4);
+            }
+            if (nm.name.rfind("torus", 0) == 0) {
+                const tom::TomMesh t = tom::build(nm.mesh, bp);
+                // the smallest torus triangulation has 7 vertices and 14 triangles
+                CHECK(t.min_vertex_count >= 7);
+                CHECK(tom::active_triangle_count(t.view(), t.min_vertex_count) == 2 * t.min_vertex_count);
+            }
+        }
+    }
+}
+
+TEST_CASE("borders stay in place: a grid keeps its outline down to 5% of its triangles", "[builder]") {
+    const test::NamedMesh grid = test::generated_meshes()[3];
+    REQUIRE(grid.name.find("grid") != std::string::npos);
+    for (tom::Predicate p : {tom::Predicate::quadric, tom::Predicate::memoryless}) {
+        tom::BuildParams bp;
+        bp.predicate = p;
+        const tom::TomMesh t = tom::build(grid.mesh, bp);
+        INFO("predicate " << tom::to_string(p));
+        // the vertices used at 5% still span the unit square: the corners are still there
+        const uint32_t n = tom::vertex_count_for_fraction(t.view(), 0.05);
+        std::vector<uint32_t> idx(t.triangle_count() * 3);
+        const tom::Extracted r = tom::extract(t.view(), n, idx.data(), idx.size());
+        float lo[2] = {1e9f, 1e9f}, hi[2] = {-1e9f, -1e9f};
+        for (size_t i = 0; i < size_t(r.triangle_count) * 3; ++i)
+            for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], t.positions[3 * idx[i] + k]), hi[k] = std::max(hi[k], t.positions[3 * idx[i] + k]);
+        CHECK(lo[0] == 0.0f);
+        CHECK(lo[1] == 0.0f);
+        CHECK(hi[0] == 1.0f);
+        CHECK(hi[1] == 1.0f);
+        // and the coarsest level is far coarser than the input
+        CHECK(t.min_vertex_count < grid.mesh.vertex_count() / 20);
+    }
+}
+
+TEST_CASE("the pair threshold joins separate parts that edges alone cannot", "[builder]") {
+    // two grids side by side with a gap of 0.01: with edges only, each keeps at least its own
+    // corners; with a threshold above the gap, vertices of one substitute into the other
+    tom::Mesh a = tom::make_grid(8, 8, 0.0f), b = tom::make_grid(8, 8, 0.0f);
+    const uint32_t base = a.vertex_count();
+    for (size_t i = 0; i < b.positions.size(); i += 3) a.positions.insert(a.positions.end(), {b.positions[i] + 1.01f, b.positions[i + 1], b.positions[i + 2]});
+    for (uint32_t i : b.indices) a.indices.push_back(i + base);
+    tom::clean_mesh(a);
+    tom::BuildParams edges_only, pairs;
+    pairs.pair_threshold = 0.02f;
+    tom::BuildStats se, sp;
+    const tom::TomMesh te = tom::build(a, edges_only, &se), tp = tom::build(a, pairs, &sp);
+    CHECK(se.pair_candidates == 0);
+    CHECK(sp.pair_candidates > 0);
+    test::NamedMesh nm{"two grids 0.01 apart", a, false, 0};
+    test::check_invariants(nm, tp);
+    // some substitution crosses the gap: a vertex of one grid has its substitute in the other
+    bool crossed = false;
+    for (uint32_t i = tp.min_vertex_count; i < tp.vertex_count(); ++i) {
+        const bool left = tp.positions[3 * i] < 1.005f, target_left = tp.positions[3 * tp.substitute[i]] < 1.005f;
+        crossed |= left != target_left;
+    }
+    CHECK(crossed);
+}
+
+TEST_CASE("the same input gives byte-identical files", "[builder][determinism]") {
+    for (const tom::BuildParams& bp : all_params()) {
+        const tom::Mesh m = test::generated_meshes()[1].mesh;
+        CHECK(tom::serialize({tom::build(m, bp)}) == tom::serialize({tom::build(m, bp)}));
+    }
+}
+
+TEST_CASE("a single triangle and a lone quad build and extract", "[builder][edge]") {
+    tom::Mesh tri;
+    tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    tri.indices = {0, 1, 2};
+    tom::clean_mesh(tri);
+    const tom::TomMesh t = tom::build(tri);
+    CHECK(t.min_vertex_count == 3);
+    CHECK(tom::active_triangle_count(t.view(), 0) == 1);  // clamped to the coarsest level
+    tom::Mesh quad;
+    quad.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    quad.indices = {0, 1, 2, 0, 2, 3};
+    tom::clean_mesh(quad);
+    const tom::TomMesh q = tom::build(quad);
+    test::check_invariants({"quad", quad, false, 0}, q);
+}

@@ -1,0 +1,112 @@
+// Extraction: 16- and 32-bit outputs, capacity limits, resolution queries, chain statistics.
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tom/builder.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+
+namespace {
+
+struct Built {
+    test::NamedMesh input;
+    tom::TomMesh tom;
+    std::vector<uint8_t> bytes;  // serialized: 16-bit indices where they fit
+};
+
+Built bunny() {
+    Built b;
+    for (test::NamedMesh& nm : test::real_meshes())
+        if (nm.name.find("bunny00") != std::string::npos) b.input = std::move(nm);
+    REQUIRE(b.input.mesh.vertex_count() > 30000);
+    b.tom = tom::build(b.input.mesh);
+    b.bytes = tom::serialize({b.tom});
+    return b;
+}
+
+} // namespace
+
+TEST_CASE("16-bit and 32-bit storage and outputs agree with brute force at every sampled resolution", "[extract]") {
+    const Built b = bunny();
+    const tom::File file = tom::File::from_bytes(b.bytes.data(), b.bytes.size(), "bunny.tom");
+    const tom::MeshView& m16 = file.mesh(0);
+    REQUIRE(m16.index_size == 2);
+    const tom::MeshView m32 = b.tom.view();
+    std::vector<uint32_t> a(size_t(m32.triangle_count) * 3), c(a.size());
+    std::vector<uint16_t> d(a.size());
+    for (uint32_t n = m32.min_vertex_count; n <= m32.vertex_count; n += 997) {
+        INFO("resolution " << n);
+        const std::vector<uint32_t> expect = test::brute_force_active(m32, n);
+        const tom::Extracted r1 = tom::extract(m32, n, a.data(), a.size());
+        const tom::Extracted r2 = tom::extract(m16, n, c.data(), c.size());
+        const tom::Extracted r3 = tom::extract(m16, n, d.data(), d.size());
+        REQUIRE(r1.triangle_count * 3 == expect.size());
+        REQUIRE(r2.triangle_count == r1.triangle_count);
+        REQUIRE(r3.triangle_count == r1.triangle_count);
+        for (size_t i = 0; i < expect.size(); ++i) {
+            REQUIRE(a[i] == expect[i]);
+            REQUIRE(c[i] == expect[i]);
+            REQUIRE(d[i] == expect[i]);
+        }
+    }
+}
+
+TEST_CASE("extraction never writes past the capacity it is given", "[extract]") {
+    const Built b = bunny();
+    const tom::MeshView m = b.tom.view();
+    const uint32_t n = m.vertex_count / 3;
+    const uint32_t active = tom::active_triangle_count(m, n);
+    std::vector<uint32_t> buf(size_t(active) * 3 + 64, 0xFFFFFFFFu);
+    for (size_t cap : {size_t(0), size_t(2), size_t(3), size_t(100), size_t(active) * 3 - 1, size_t(active) * 3}) {
+        std::fill(buf.begin(), buf.end(), 0xFFFFFFFFu);
+        const tom::Extracted r = tom::extract(m, n, buf.data(), cap);
+        CHECK(r.triangle_count == std::min<size_t>(active, cap / 3));
+        for (size_t i = size_t(r.triangle_count) * 3; i < buf.size(); ++i) REQUIRE(buf[i] == 0xFFFFFFFFu);
+    }
+}
+
+TEST_CASE("resolution queries: clamping, smallest n for a triangle count, fractions", "[extract]") {
+    const Built b = bunny();
+    const tom::MeshView m = b.tom.view();
+    CHECK(tom::active_triangle_count(m, 0) == tom::active_triangle_count(m, m.min_vertex_count));
+    CHECK(tom::active_triangle_count(m, m.vertex_count + 10) == m.triangle_count);
+    for (uint32_t target : {1u, 4u, 100u, 1000u, 7541u, 37704u, 75000u, m.triangle_count}) {
+        const uint32_t n = tom::vertex_count_for_triangles(m, target);
+        INFO("target " << target << " -> n " << n);
+        CHECK(tom::active_triangle_count(m, n) >= std::min(target, m.triangle_count));
+        if (n > m.min_vertex_count) CHECK(tom::active_triangle_count(m, n - 1) < target);
+    }
+    for (double f : {0.5, 0.25, 0.1, 0.01, 0.005}) {
+        const uint32_t n = tom::vertex_count_for_fraction(m, f);
+        const double got = double(tom::active_triangle_count(m, n)) / m.triangle_count;
+        INFO("fraction " << f << " gives " << got);
+        CHECK(got >= f - 0.5 / m.triangle_count);
+        CHECK(got <= f + 3.0 / m.triangle_count);  // a substitution removes at most a few triangles
+    }
+    CHECK(tom::vertex_count_for_fraction(m, 1.0) == m.vertex_count);
+    CHECK(tom::vertex_count_for_fraction(m, 0.0) == m.min_vertex_count);
+}
+
+TEST_CASE("chain statistics: empty at full resolution, short and growing as resolution falls", "[extract][chains]") {
+    const Built b = bunny();
+    const tom::MeshView m = b.tom.view();
+    const tom::ChainStats full = tom::chain_stats(m, m.vertex_count);
+    CHECK(full.steps == 0);
+    CHECK(full.max_steps == 0);
+    CHECK(full.corners == uint64_t(m.triangle_count) * 3);
+    double previous = 0;
+    for (double f : {0.5, 0.25, 0.1, 0.01}) {
+        const uint32_t n = tom::vertex_count_for_fraction(m, f);
+        const tom::ChainStats s = tom::chain_stats(m, n);
+        uint64_t hist_total = 0, hist_steps = 0;
+        for (int k = 0; k < tom::ChainStats::histogram_bins; ++k) hist_total += s.histogram[k], hist_steps += uint64_t(k) * s.histogram[k];
+        CHECK(hist_total == s.corners);
+        if (s.max_steps < uint32_t(tom::ChainStats::histogram_bins)) CHECK(hist_steps == s.steps);
+        const double mean = double(s.steps) / double(s.corners);
+        INFO("fraction " << f << " mean steps " << mean << " max " << s.max_steps);
+        CHECK(mean >= previous);
+        CHECK(mean < 8.0);  // the paper: chains stay short
+        previous = mean;
+    }
+}

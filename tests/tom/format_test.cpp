@@ -1,0 +1,316 @@
+// The .tom format: round trips, and every validation rule of libtom/FORMAT.md rejecting a bad
+// file with its own message. The byte offsets used to corrupt files are the ones FORMAT.md
+// documents, written out here independently of the library's own constants.
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <random>
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tom/builder.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/generate.h"
+
+namespace {
+
+// FORMAT.md, "Header" and "Section table"
+constexpr size_t kHeaderBytes = 64, kEntryBytes = 32;
+constexpr size_t kVersionMajor = 8, kMeshCount = 24, kSectionCount = 28, kTableOffset = 32, kTableCrc = 40, kHeaderCrc = 44;
+constexpr size_t kEntryType = 0, kEntryOffset = 8, kEntryBytesField = 16, kEntryCrc = 24;
+
+uint32_t get32(const std::vector<uint8_t>& b, size_t at) {
+    uint32_t v;
+    std::memcpy(&v, &b[at], 4);
+    return v;
+}
+uint64_t get64(const std::vector<uint8_t>& b, size_t at) {
+    uint64_t v;
+    std::memcpy(&v, &b[at], 8);
+    return v;
+}
+void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(&b[at], &v, 4); }
+
+struct Section {
+    std::string type;
+    size_t entry;
+    uint64_t offset, bytes;
+};
+
+// the entries that lie inside the buffer and point inside it (a corrupted table may not)
+std::vector<Section> sections_of(const std::vector<uint8_t>& b) {
+    std::vector<Section> out;
+    if (b.size() < kHeaderBytes) return out;
+    const uint64_t table = get64(b, kTableOffset);
+    for (uint64_t i = 0; i < get32(b, kSectionCount); ++i) {
+        const uint64_t e = table + i * kEntryBytes;
+        if (table > b.size() || e + kEntryBytes > b.size()) break;
+        const uint64_t offset = get64(b, e + kEntryOffset), bytes = get64(b, e + kEntryBytesField);
+        if (offset > b.size() || bytes > b.size() - offset) continue;
+        out.push_back({std::string(reinterpret_cast<const char*>(&b[e + kEntryType]), 4), size_t(e), offset, bytes});
+    }
+    return out;
+}
+
+const Section& find(const std::vector<Section>& s, const std::string& type) {
+    for (const Section& x : s)
+        if (x.type == type) return x;
+    FAIL("no section " << type);
+    return s.front();
+}
+
+// recomputes every checksum, so a corruption reaches the structural rules behind them
+void fix_checksums(std::vector<uint8_t>& b) {
+    const uint64_t table = get64(b, kTableOffset);
+    const uint64_t count = get32(b, kSectionCount);
+    for (const Section& s : sections_of(b)) put32(b, s.entry + kEntryCrc, tom::crc32(&b[s.offset], s.bytes));
+    if (table <= b.size() && count * kEntryBytes <= b.size() - table) put32(b, kTableCrc, tom::crc32(&b[table], count * kEntryBytes));
+    put32(b, kHeaderCrc, tom::crc32(b.data(), kHeaderCrc));
+}
+
+int rule_of(const std::vector<uint8_t>& b) {
+    try {
+        tom::File::from_bytes(b.data(), b.size(), "corrupt.tom");
+    } catch (const tom::FormatError& e) {
+        CHECK(std::string(e.what()).find("corrupt.tom") == 0);  // the message names the file
+        return e.rule();
+    }
+    return 0;
+}
+
+std::string message_of(const std::vector<uint8_t>& b) {
+    try {
+        tom::File::from_bytes(b.data(), b.size(), "corrupt.tom");
+    } catch (const tom::FormatError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+tom::TomMesh small_mesh() {
+    tom::Mesh m = tom::make_sphere(6, 8);
+    m.name = "small sphere";
+    m.texcoords.assign(size_t(m.vertex_count()) * 2, 0.5f);
+    m.colors.assign(size_t(m.vertex_count()) * 4, 1.0f);
+    tom::clean_mesh(m);
+    tom::TomMesh t = tom::build(m);
+    t.metadata.push_back({"note", {1, 2, 3, 4, 5}});
+    t.metadata.push_back({"empty", {}});
+    return t;
+}
+
+} // namespace
+
+TEST_CASE("round trip: every stream, count, bound and metadata entry survives", "[format]") {
+    const tom::TomMesh a = small_mesh();
+    tom::Mesh big = tom::make_sphere(200, 200);  // > 65536 vertices: 32-bit indices
+    tom::clean_mesh(big);
+    const tom::TomMesh b = tom::build(big);
+    const std::vector<tom::TomMesh> meshes = {a, b};
+    const std::vector<uint8_t> bytes = tom::serialize(meshes);
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size());
+    REQUIRE(file.mesh_count() == 2);
+    for (uint32_t i = 0; i < 2; ++i) {
+        const tom::TomMesh& t = meshes[i];
+        const tom::MeshView& v = file.mesh(i);
+        INFO("mesh " << i);
+        CHECK(v.name == t.name);
+        CHECK(v.index_size == (t.vertex_count() <= 65536 ? 2u : 4u));
+        CHECK(v.vertex_count == t.vertex_count());
+        CHECK(v.triangle_count == t.triangle_count());
+        CHECK(v.min_vertex_count == t.min_vertex_count);
+        CHECK(std::memcmp(v.positions, t.positions.data(), t.positions.size() * 4) == 0);
+        CHECK(std::memcmp(v.normals, t.normals.data(), t.normals.size() * 4) == 0);
+        CHECK((v.texcoords != nullptr) == !t.texcoords.empty());
+        for (uint32_t k = 0; k < v.vertex_count; ++k) REQUIRE(v.substitute_at(k) == t.substitute[k]);
+        for (uint32_t k = 0; k < v.triangle_count * 3; ++k) REQUIRE(v.corner(k) == t.triangles[k]);
+        for (int k = 0; k < 3; ++k) CHECK(v.bounds_min[k] == t.bounds_min[k]);
+    }
+    const tom::MetadataValue note = tom::find_metadata(file.mesh(0), "note");
+    REQUIRE(note.found());
+    CHECK(std::vector<uint8_t>(note.data, note.data + note.bytes) == std::vector<uint8_t>{1, 2, 3, 4, 5});
+    CHECK(tom::find_metadata(file.mesh(0), "empty").found());
+    CHECK(!tom::find_metadata(file.mesh(0), "absent").found());
+    CHECK(!tom::find_metadata(file.mesh(1), "note").found());
+
+    // through the file system, mapped: the same bytes, and a second serialization is identical
+    const std::string path = (std::filesystem::temp_directory_path() / "tom_format_test.tom").string();
+    tom::write_file(path, meshes);
+    const tom::File mapped = tom::File::open(path);
+    CHECK(mapped.file_bytes() == bytes.size());
+    CHECK(tom::serialize(meshes) == bytes);
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    std::vector<uint8_t> disk(bytes.size());
+    REQUIRE(std::fread(disk.data(), 1, disk.size(), f) == disk.size());
+    std::fclose(f);
+    CHECK(disk == bytes);
+    std::filesystem::remove(path);
+}
+
+TEST_CASE("with positions, normals and 32-bit indices a mesh takes at most 109% of face-vertex", "[format][memory]") {
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        // the paper's case: about two triangles per vertex (the overhead is 4 bytes per vertex,
+        // 8.3% at T = 2V, up to 11% where every vertex is split by attributes, V = T)
+        if (nm.mesh.triangle_count() < 2000 || nm.mesh.triangle_count() < 1.8 * nm.mesh.vertex_count()) continue;
+        tom::TomMesh t = tom::build(nm.mesh);
+        t.texcoords.clear();
+        t.colors.clear();
+        tom::WriteOptions o;
+        o.index_size = tom::IndexSize::bits32;
+        const size_t bytes = tom::serialize({t}, o).size();
+        const size_t face_vertex = size_t(t.vertex_count()) * 24 + size_t(t.triangle_count()) * 12;
+        INFO(nm.name << ": " << bytes << " bytes, face-vertex " << face_vertex << " (" << 100.0 * bytes / face_vertex << "%)");
+        CHECK(bytes <= face_vertex * 109 / 100);
+    }
+}
+
+TEST_CASE("rule 1: shorter than the header", "[format][corrupt]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    for (size_t n = 0; n < kHeaderBytes; ++n) CHECK(rule_of(std::vector<uint8_t>(good.begin(), good.begin() + n)) == 1);
+}
+
+TEST_CASE("rule 2: bad magic; rule 3: unsupported version; rule 4: header checksum", "[format][corrupt]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    std::vector<uint8_t> b = good;
+    b[1] = 'X';
+    CHECK(rule_of(b) == 2);
+    CHECK(message_of(b).find("bad magic") != std::string::npos);
+    b = good;
+    put32(b, kVersionMajor, 2);
+    CHECK(rule_of(b) == 3);
+    CHECK(message_of(b).find("unsupported version 2.0") != std::string::npos);
+    b = good;
+    put32(b, kMeshCount, 7);  // without fixing the header checksum
+    CHECK(rule_of(b) == 4);
+}
+
+TEST_CASE("rule 5: truncation at every offset is detected", "[format][corrupt]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    for (size_t n = kHeaderBytes; n < good.size(); ++n) {
+        const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
+        INFO("truncated to " << n << " bytes");
+        REQUIRE(rule_of(cut) == 5);
+    }
+    std::vector<uint8_t> longer = good;
+    longer.push_back(0);
+    CHECK(rule_of(longer) == 5);
+    CHECK(rule_of(good) == 0);
+}
+
+TEST_CASE("rules 6 to 8: section table and section placement, content checksums", "[format][corrupt]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    std::vector<uint8_t> b = good;
+    put32(b, kSectionCount, 100000);
+    fix_checksums(b);
+    CHECK(rule_of(b) == 6);
+    b = good;
+    b[get64(b, kTableOffset) + 3] ^= 1;  // table byte, checksum not fixed
+    CHECK(rule_of(b) == 6);
+    b = good;
+    const std::vector<Section> secs = sections_of(good);
+    put32(b, secs[1].entry + kEntryOffset, uint32_t(secs[1].offset + 4));  // misaligned
+    fix_checksums(b);
+    CHECK(rule_of(b) == 7);
+    b = good;
+    put32(b, secs[1].entry + kEntryBytesField, uint32_t(good.size()));  // past the end
+    put32(b, kTableCrc, tom::crc32(&b[get64(b, kTableOffset)], secs.size() * kEntryBytes));
+    put32(b, kHeaderCrc, tom::crc32(b.data(), kHeaderCrc));
+    CHECK(rule_of(b) == 7);
+    for (const Section& s : secs) {
+        if (s.bytes == 0) continue;
+        b = good;
+        b[s.offset + s.bytes / 2] ^= 0x40;
+        INFO("section " << s.type);
+        CHECK(rule_of(b) == 8);
+        CHECK(message_of(b).find("(" + s.type + ")") != std::string::npos);
+    }
+}
+
+TEST_CASE("rules 9 to 15: structure behind valid checksums", "[format][corrupt]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    const std::vector<Section> secs = sections_of(good);
+    std::vector<uint8_t> b = good;
+    put32(b, find(secs, "SUBS").entry + 4, 9);  // SUBS belongs to mesh 9
+    fix_checksums(b);
+    CHECK(rule_of(b) == 9);
+    b = good;
+    std::memcpy(&b[find(secs, "TRIS").entry], "XXXX", 4);  // TRIS renamed: unknown, so TRIS is missing
+    fix_checksums(b);
+    CHECK(rule_of(b) == 9);
+    CHECK(message_of(b).find("required section TRIS is missing") != std::string::npos);
+    b = good;
+    put32(b, find(secs, "MESH").offset + 12, 3);  // index size 3
+    fix_checksums(b);
+    CHECK(rule_of(b) == 10);
+    b = good;
+    put32(b, find(secs, "MESH").offset + 0, get32(good, find(secs, "MESH").offset) + 1);  // one more vertex than streams hold
+    fix_checksums(b);
+    CHECK(rule_of(b) == 11);
+    b = good;
+    put32(b, find(secs, "MESH").offset + 8, 1000000);  // min_vertex_count > vertex_count
+    fix_checksums(b);
+    CHECK(rule_of(b) == 12);
+    const uint32_t nv = get32(good, find(secs, "MESH").offset);
+    b = good;
+    const Section& subs = find(secs, "SUBS");
+    uint16_t self = uint16_t(nv - 1);
+    std::memcpy(&b[subs.offset + 2 * (nv - 1)], &self, 2);  // substitute[i] == i for a removed vertex
+    fix_checksums(b);
+    CHECK(rule_of(b) == 13);
+    b = good;
+    const Section& tris = find(secs, "TRIS");
+    uint16_t out_of_range = uint16_t(nv);
+    std::memcpy(&b[tris.offset + 2], &out_of_range, 2);
+    fix_checksums(b);
+    CHECK(rule_of(b) == 14);
+    CHECK(message_of(b).find("index out of range") != std::string::npos);
+    b = good;
+    std::memcpy(&b[tris.offset + 2], &b[tris.offset], 2);  // repeated corner
+    fix_checksums(b);
+    CHECK(rule_of(b) == 14);
+    b = good;
+    put32(b, find(secs, "META").offset, 50);  // 50 entries announced
+    fix_checksums(b);
+    CHECK(rule_of(b) == 15);
+}
+
+TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    std::mt19937 rng(1234);
+    int rejected = 0, accepted = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        std::vector<uint8_t> b = good;
+        const int flips = 1 + int(rng() % 4);
+        for (int k = 0; k < flips; ++k) b[rng() % b.size()] ^= uint8_t(1u << (rng() % 8));
+        if (trial % 2) fix_checksums(b);  // half reach the structural rules
+        try {
+            const tom::File f = tom::File::from_bytes(b.data(), b.size(), "fuzz.tom");
+            ++accepted;
+            for (uint32_t i = 0; i < f.mesh_count(); ++i) {
+                const tom::MeshView& m = f.mesh(i);
+                std::vector<uint32_t> out(size_t(m.triangle_count) * 3);
+                for (uint32_t n : {0u, m.vertex_count / 2, m.vertex_count}) {
+                    const tom::Extracted r = tom::extract(m, n, out.data(), out.size());
+                    for (size_t c = 0; c < size_t(r.triangle_count) * 3; ++c) REQUIRE(out[c] < r.vertex_count);
+                }
+            }
+        } catch (const tom::FormatError&) {
+            ++rejected;
+        }
+    }
+    CHECK(rejected > 0);
+    CHECK(accepted + rejected == 4000);
+}
+
+TEST_CASE("a missing file is an I/O error naming it", "[format]") {
+    try {
+        tom::File::open("/nonexistent/dir/x.tom");
+        FAIL("no error");
+    } catch (const tom::IoError& e) {
+        CHECK(std::string(e.what()).find("/nonexistent/dir/x.tom") != std::string::npos);
+    }
+}
