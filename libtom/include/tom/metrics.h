@@ -1,0 +1,72 @@
+#pragma once
+// Metro-style geometric distance between two triangle surfaces (Cignoni, Rocchini, Scopigno,
+// "Metro: measuring error on simplified surfaces", 1998), computed with CGAL AABB trees.
+// Part of the tom::metrics library (target tom::metrics), which carries CGAL.
+//
+// Conventions, as Metro's: in each direction the samples are every vertex, then points along
+// every edge, then area-uniform random points on the faces, about `samples_per_face` times the
+// face count of the larger mesh in total; max, mean and RMS are over all samples of a
+// direction; Hausdorff is the larger of the two maxima. Relative figures divide by the
+// diagonal of the union bounding box of both meshes, each side moved out by 2% of its diagonal.
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+namespace tom {
+
+/// A triangle surface as flat arrays (nothing is copied or owned).
+struct Surface {
+    const float* positions = nullptr;  ///< xyz per vertex
+    uint32_t vertex_count = 0;
+    const uint32_t* indices = nullptr; ///< 3 per triangle, each < vertex_count
+    size_t triangle_count = 0;
+};
+
+struct DistanceParams {
+    double samples_per_face = 10.0;  ///< total samples per direction = this x faces of the larger mesh
+    uint64_t seed = 1;               ///< fixed seed: repeated runs give identical figures
+    bool vertex_samples = true;
+    bool edge_samples = true;
+    bool face_samples = true;
+    unsigned threads = 0;            ///< 0: every core
+};
+
+/// One direction: from the samples of one surface to the closest points of the other.
+struct OneSidedDistance {
+    double max = 0, mean = 0, rms = 0;  ///< object units
+    uint64_t samples = 0, vertex_samples = 0, edge_samples = 0, face_samples = 0;
+    double sampled_area = 0;            ///< area of the sampled surface
+};
+
+struct Distance {
+    OneSidedDistance forward;   ///< first surface (the original) -> second (the simplified)
+    OneSidedDistance backward;  ///< second -> first
+    double hausdorff = 0;       ///< max(forward.max, backward.max)
+    double diagonal = 0;        ///< the denominator of relative figures (see above)
+    double percent(double object_units) const noexcept { return diagonal > 0 ? 100.0 * object_units / diagonal : 0.0; }
+};
+
+/// Distance between two surfaces in both directions.
+/// \throw std::invalid_argument when a surface has no triangle or an index out of range.
+Distance metro_distance(const Surface& original, const Surface& simplified, const DistanceParams& params = {});
+
+/// The original side of many comparisons, prepared once: its AABB tree and its own samples,
+/// then compare() against any number of simplified versions (the levels of a report).
+class MetroReference {
+public:
+    /// `original` must outlive this object. \throw std::invalid_argument as metro_distance.
+    MetroReference(const Surface& original, const DistanceParams& params = {});
+    ~MetroReference();
+    MetroReference(MetroReference&&) noexcept;
+    MetroReference& operator=(MetroReference&&) noexcept;
+
+    /// The same figures metro_distance(original, simplified, params) gives.
+    Distance compare(const Surface& simplified) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace tom
