@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
@@ -111,6 +112,9 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
 
 } // namespace
 
+int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const std::string& predicate,
+        const std::string& strategy, const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
+
 int main(int argc, char** argv) {
     std::vector<std::string> inputs;
     uint32_t generated = 0;
@@ -125,12 +129,26 @@ int main(int argc, char** argv) {
     app.add_option("--predicate", predicate, "quadric or memoryless")->check(CLI::IsMember({"quadric", "memoryless"}));
     app.add_option("--strategy", strategy, "passes or heap")->check(CLI::IsMember({"passes", "heap"}));
     app.add_flag("--json", json, "One JSON object per mesh (one per line) instead of the table");
+    std::string meshopt_out;
+    std::vector<double> meshopt_levels = {10, 5, 2, 1};
+    app.add_option("--meshopt-out", meshopt_out, "Also write meshopt_simplify's result at --meshopt-levels as MESH-meshopt-P.obj here, for tomerr");
+    app.add_option("--meshopt-levels", meshopt_levels, "Levels in % of the triangles for --meshopt-out (default 10,5,2,1)")->delimiter(',');
     app.footer("Exit codes: 0 ok, 1 a mesh could not be read, 2 usage error.\nExample: tombench data/meshes/bunny00.off --generated 2000000");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
     if (inputs.empty() && generated == 0) {
         std::fprintf(stderr, "error: give mesh files or --generated N\n");
         return tools::exit_usage;
     }
+    try {
+        return run(inputs, generated, json, repeats, predicate, strategy, meshopt_out, meshopt_levels);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return tools::exit_failed;
+    }
+}
+
+int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const std::string& predicate,
+        const std::string& strategy, const std::string& meshopt_out, const std::vector<double>& meshopt_levels) {
     tom::BuildParams params;
     params.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
     params.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
@@ -162,6 +180,34 @@ int main(int argc, char** argv) {
                     strategy.c_str(), repeats);
         std::printf("%-28s %10s %10s %10s %12s %8s | %s\n", "mesh", "triangles", "build ms", "meshopt ms", "build tri/s", "x meshopt",
                     "extract: fraction triangles Mtri/s memcpy-ratio");
+    }
+    if (!meshopt_out.empty()) {
+        std::filesystem::create_directories(meshopt_out);
+        for (const tom::Mesh& m : meshes)
+            for (double pct : meshopt_levels) {
+                std::vector<uint32_t> out(m.indices.size());
+                const size_t target = std::max<size_t>(3, size_t(double(m.indices.size() / 3) * pct / 100.0 + 0.5) * 3);
+                float result_error = 0;
+                out.resize(meshopt_simplify(out.data(), m.indices.data(), m.indices.size(), m.positions.data(), m.vertex_count(), 12, target, 1.0f, 0,
+                                            &result_error));
+                std::string safe = m.name;
+                for (char& c : safe)
+                    if (c == '/' || c == ' ') c = '_';
+                char name[64];
+                std::snprintf(name, sizeof name, "-meshopt-%g.obj", pct);
+                const std::string path = (std::filesystem::path(meshopt_out) / (safe + name)).string();
+                std::FILE* f = std::fopen(path.c_str(), "w");
+                if (!f) {
+                    std::fprintf(stderr, "error: cannot write %s\n", path.c_str());
+                    return tools::exit_failed;
+                }
+                std::fprintf(f, "# meshopt_simplify of %s to %g%% of %u triangles: %zu triangles\n", m.name.c_str(), pct, m.triangle_count(), out.size() / 3);
+                for (uint32_t v = 0; v < m.vertex_count(); ++v)
+                    std::fprintf(f, "v %.9g %.9g %.9g\n", m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+                for (size_t t = 0; t < out.size(); t += 3) std::fprintf(f, "f %u %u %u\n", out[t] + 1, out[t + 1] + 1, out[t + 2] + 1);
+                std::fclose(f);
+                if (!json) std::printf("wrote %s (%zu triangles)\n", path.c_str(), out.size() / 3);
+            }
     }
     for (const tom::Mesh& m : meshes) {
         const Row row = bench(m, params, repeats);

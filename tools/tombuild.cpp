@@ -12,6 +12,8 @@
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/import.h"
+#include "tom/report.h"
+#include "report_output.h"
 #include "tool_common.h"
 
 namespace fs = std::filesystem;
@@ -25,34 +27,83 @@ struct Options {
     std::string predicate = "quadric";
     std::string strategy = "passes";
     float pair_threshold = 0.0f;
-    float pass_fraction = 0.2f;
+    float pass_fraction = 0.1f;
     std::string index_size = "auto";
     bool progress = false;
     bool quiet = false;
     int verbose = 0;
+    bool report = false;
+    std::string report_json_dir;
+    std::vector<double> levels_percent = {50, 25, 10, 5, 2, 1, 0.5};
+    double samples_per_face = 10.0;
+    uint64_t seed = 1;
+    bool no_error_curve = false;
+    uint32_t curve_points = 16;
 };
 
 struct Outcome {
     bool ok = false;
-    std::string text;  // what to print for this input (stdout if ok, stderr otherwise)
+    std::string text;         // what to print for this input (stdout if ok, stderr otherwise)
+    std::string summary_csv;  // rows of the batch summary, one per mesh (with --report-json)
 };
 
-Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParams& params, const tom::WriteOptions& wopt) {
+tom::ReportParams report_params(const Options& opt, unsigned threads) {
+    tom::ReportParams rp;
+    rp.levels.clear();
+    for (double p : opt.levels_percent) rp.levels.push_back(p / 100.0);
+    rp.distance.samples_per_face = opt.samples_per_face;
+    rp.distance.seed = opt.seed;
+    rp.distance.threads = threads;
+    rp.curve_points = opt.curve_points;
+    return rp;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParams& params, const tom::WriteOptions& wopt,
+                const tom::ReportParams& rparams, const std::string& report_path) {
     Outcome out;
     const auto start = std::chrono::steady_clock::now();
     try {
         tom::ImportResult imported = tom::import_file(job.input);
         if (imported.meshes.empty())
             throw tom::ImportError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
+        std::vector<tom::CleanStats> cleans;
+        for (tom::Mesh& mesh : imported.meshes) {
+            cleans.push_back(tom::clean_mesh(mesh));
+            if (mesh.indices.empty()) throw tom::ImportError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
+        }
+        const double import_seconds = seconds_since(start);
         std::vector<tom::TomMesh> built;
         uint64_t vertices = 0, triangles = 0, fv_bytes = 0;
-        std::string details;
-        for (tom::Mesh& mesh : imported.meshes) {
-            const tom::CleanStats clean = tom::clean_mesh(mesh);
-            if (mesh.indices.empty()) throw tom::ImportError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
+        std::string details, tables;
+        nlohmann::ordered_json json_meshes = nlohmann::json::array();
+        for (size_t mi = 0; mi < imported.meshes.size(); ++mi) {
+            const tom::Mesh& mesh = imported.meshes[mi];
+            const tom::CleanStats& clean = cleans[mi];
             tom::BuildStats stats;
+            const auto build_start = std::chrono::steady_clock::now();
             built.push_back(tom::build(mesh, params, &stats));
-            const tom::TomMesh& t = built.back();
+            const double build_seconds = seconds_since(build_start);
+            tom::TomMesh& t = built.back();
+            if (opt.report || !report_path.empty()) {
+                tools::ReportContext ctx;
+                ctx.file = job.input;
+                ctx.import_seconds = import_seconds;
+                ctx.build_seconds = build_seconds;
+                ctx.params = rparams;
+                const auto report_start = std::chrono::steady_clock::now();
+                const tom::MeshReport r = tom::make_report(mesh, t, rparams);
+                ctx.report_seconds = seconds_since(report_start);
+                if (!opt.no_error_curve) t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(r.curve)});
+                if (opt.report) tables += tools::report_table(r, ctx);
+                json_meshes.push_back(tools::report_json(r, ctx));
+                out.summary_csv += tools::summary_csv_row(r, ctx);
+            } else if (!opt.no_error_curve) {
+                t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(tom::measure_error_curve(mesh, t, rparams))});
+            }
             vertices += t.vertex_count();
             triangles += t.triangle_count();
             fv_bytes += tools::face_vertex_bytes(t.vertex_count(), t.triangle_count());
@@ -78,8 +129,22 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
                       job.input.c_str(), built.size(), built.size() == 1 ? "" : "es", static_cast<unsigned long long>(vertices),
                       static_cast<unsigned long long>(triangles), job.output.c_str(), tools::human_bytes(bytes.size()).c_str(),
                       fv_bytes ? 100.0 * double(bytes.size()) / double(fv_bytes) : 0.0, seconds);
-        out.text = line + details;
+        out.text = line + details + tables;
         for (const std::string& s : imported.skipped) out.text += "  skipped " + s + "\n";
+        if (!report_path.empty()) {
+            nlohmann::ordered_json doc;
+            doc["file"] = job.input;
+            doc["output"] = job.output;
+            doc["format"] = imported.format;
+            doc["predicate"] = tom::to_string(params.predicate);
+            doc["strategy"] = tom::to_string(params.strategy);
+            doc["conventions"] = tools::conventions_json(rparams);
+            doc["skipped"] = imported.skipped;
+            doc["meshes"] = json_meshes;
+            fs::create_directories(fs::path(report_path).parent_path(), ec);
+            const std::string text = doc.dump(2) + "\n";
+            tom::write_bytes_atomically(report_path, text.data(), text.size());
+        }
         if (opt.verbose > 0)
             for (const std::string& w : imported.warnings) out.text += "  warning: " + w + "\n";
         out.ok = true;
@@ -122,12 +187,28 @@ int main(int argc, char** argv) {
                    "Also substitute non-edge vertex pairs closer than this, in object units (default 0: edges only)")
         ->check(CLI::NonNegativeNumber)
         ->group("Simplification");
-    app.add_option("--pass-fraction", opt.pass_fraction, "passes: share of live vertices one pass may remove, (0,1] (default 0.2)")
+    app.add_option("--pass-fraction", opt.pass_fraction, "passes: share of live vertices one pass may remove, (0,1] (default 0.1)")
         ->check(CLI::Range(0.0001f, 1.0f))
         ->group("Simplification");
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
+    app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds)")->group("Output");
+    app.add_option("--curve-points", opt.curve_points, "Error-curve points per mesh, log-spaced in vertex count (default 16)")
+        ->check(CLI::Range(2u, 64u))
+        ->group("Output");
+    app.add_flag("--report", opt.report, "Print a report per mesh: Metro-style error, chains and extraction time per level, memory, k/N fit")
+        ->group("Reports");
+    app.add_option("--report-json", opt.report_json_dir, "Write one JSON report per input (tools/REPORT.md) and summary.csv into this folder")
+        ->group("Reports");
+    app.add_option("--levels", opt.levels_percent, "Report levels in % of the triangles (default 50,25,10,5,2,1,0.5)")
+        ->delimiter(',')
+        ->check(CLI::Range(0.0001, 100.0))
+        ->group("Reports");
+    app.add_option("--samples-per-face", opt.samples_per_face, "Metro sampling density: samples per face of the larger mesh per direction (default 10)")
+        ->check(CLI::Range(0.01, 1000.0))
+        ->group("Reports");
+    app.add_option("--seed", opt.seed, "Sampling seed; the same seed gives the same figures (default 1)")->group("Reports");
     app.footer("Exit codes: 0 every input converted, 1 some inputs failed (the others are still written), 2 usage error.\n"
                "Example: tombuild data/meshes/bunny00.off assets/ -o out/ -j 2");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
@@ -151,13 +232,23 @@ int main(int argc, char** argv) {
             return tools::exit_failed;
         }
         const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && jobs.size() > 1;
+        const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+        const tom::ReportParams rparams = report_params(opt, std::max(1u, hardware / std::max(1u, opt.jobs)));
+        std::vector<std::string> summary_rows(jobs.size());
+        auto report_path_of = [&](const tools::Job& job) -> std::string {
+            if (opt.report_json_dir.empty()) return "";
+            fs::path rel = fs::path(job.output).lexically_relative(opt.outdir);
+            rel.replace_extension(".json");
+            return (fs::path(opt.report_json_dir) / rel).string();
+        };
         std::atomic<size_t> next{0};
         size_t done = 0, failed = errors.size();
         std::mutex print_mutex;
         auto worker = [&] {
             for (size_t i; (i = next++) < jobs.size();) {
-                const Outcome r = convert(jobs[i], opt, params, wopt);
+                const Outcome r = convert(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]));
                 std::lock_guard<std::mutex> lock(print_mutex);
+                summary_rows[i] = r.summary_csv;
                 ++done;
                 if (!r.ok) ++failed;
                 if (show_progress) std::fprintf(stderr, "\r%*s\r", 60, "");
@@ -175,6 +266,14 @@ int main(int argc, char** argv) {
         worker();
         for (std::thread& t : pool) t.join();
         if (show_progress) std::fprintf(stderr, "\n");
+        if (!opt.report_json_dir.empty()) {
+            std::string csv = tools::summary_csv_header(rparams);
+            for (const std::string& rows : summary_rows) csv += rows;  // input order, whatever -j
+            fs::create_directories(opt.report_json_dir, ec);
+            const std::string path = (fs::path(opt.report_json_dir) / "summary.csv").string();
+            tom::write_bytes_atomically(path, csv.data(), csv.size());
+            if (!opt.quiet) std::printf("reports: %s (one JSON per input), %s\n", opt.report_json_dir.c_str(), path.c_str());
+        }
         if (!opt.quiet || failed)
             std::fprintf(failed ? stderr : stdout, "%zu of %zu inputs converted%s\n", jobs.size() + errors.size() - failed,
                          jobs.size() + errors.size(), failed ? (", " + std::to_string(failed) + " failed").c_str() : "");

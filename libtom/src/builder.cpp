@@ -37,9 +37,12 @@ inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a
 inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
 
-// Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22)
+// Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22). The error is divided by
+// the accumulated weight (area), as meshoptimizer does: a mean squared distance, which measured
+// lower Metro error on both bunny and fandisk than the area-weighted sum.
 struct Quadric {
     double a00, a01, a02, a11, a12, a22, b0, b1, b2, c;
+    double w;  // accumulated weight (area): the error is reported per unit weight
 };
 
 inline void add_plane(Quadric& q, double nx, double ny, double nz, double d, double w) {
@@ -47,18 +50,20 @@ inline void add_plane(Quadric& q, double nx, double ny, double nz, double d, dou
     q.a11 += w * ny * ny, q.a12 += w * ny * nz, q.a22 += w * nz * nz;
     q.b0 += w * nx * d, q.b1 += w * ny * d, q.b2 += w * nz * d;
     q.c += w * d * d;
+    q.w += w;
 }
 
 inline void add(Quadric& q, const Quadric& r) {
     q.a00 += r.a00, q.a01 += r.a01, q.a02 += r.a02, q.a11 += r.a11, q.a12 += r.a12, q.a22 += r.a22;
     q.b0 += r.b0, q.b1 += r.b1, q.b2 += r.b2, q.c += r.c;
+    q.w += r.w;
 }
 
 inline double evaluate(const Quadric& q, Vec3 p) {
     const double x = p.x, y = p.y, z = p.z;
     const double r = q.a00 * x * x + q.a11 * y * y + q.a22 * z * z + 2 * (q.a01 * x * y + q.a02 * x * z + q.a12 * y * z) +
                      2 * (q.b0 * x + q.b1 * y + q.b2 * z) + q.c;
-    return r > 0 ? r : 0;
+    return r > 0 && q.w > 0 ? r / q.w : 0;
 }
 
 enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2 };

@@ -13,7 +13,7 @@ namespace tom {
 
 /// The fairness predicate: the priority of a substitution v1 -> v2 (lower is better).
 enum class Predicate {
-    quadric,     ///< Garland-Heckbert quadric of v1 evaluated at v2 (error accumulates through merges)
+    quadric,     ///< Garland-Heckbert quadric of v1 evaluated at v2, per unit of accumulated area (error accumulates through merges)
     memoryless,  ///< the TOM paper's penalty: dVolume + |v1-v2| dArea + inversion + normal-angle term
 };
 
@@ -31,7 +31,7 @@ struct BuildParams {
     float pair_threshold = 0.0f;
     /// passes only: the share of the live vertices a pass may remove, in (0, 1].
     /// Smaller follows the greedy order more closely and takes more passes.
-    float pass_fraction = 0.2f;
+    float pass_fraction = 0.1f;
 };
 
 /// What the builder did, for reports.

@@ -25,6 +25,7 @@ struct Surface {
 
 struct DistanceParams {
     double samples_per_face = 10.0;  ///< total samples per direction = this x faces of the larger mesh
+    uint64_t max_samples = 0;        ///< cap on that total per direction (0: none)
     uint64_t seed = 1;               ///< fixed seed: repeated runs give identical figures
     bool vertex_samples = true;
     bool edge_samples = true;

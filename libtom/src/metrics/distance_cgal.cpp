@@ -329,7 +329,8 @@ double enlarged_union_diagonal(const Surface& a, const Surface& b) {
 }
 
 uint64_t sample_target(const Surface& a, const Surface& b, const DistanceParams& p) {
-    return uint64_t(std::llround(p.samples_per_face * double(std::max(a.triangle_count, b.triangle_count))));
+    const uint64_t n = uint64_t(std::llround(p.samples_per_face * double(std::max(a.triangle_count, b.triangle_count))));
+    return p.max_samples ? std::min(n, p.max_samples) : n;
 }
 
 } // namespace

@@ -1,0 +1,66 @@
+#pragma once
+// The per-mesh report of tombuild --report: Metro-style error, substitution chains and
+// extraction time per level, memory like the TOM paper's Table 4, the D = k / N fit, and the
+// error curve stored in the .tom. Part of tom::metrics.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tom/builder.h"
+#include "tom/error_curve.h"
+#include "tom/extract.h"
+#include "tom/mesh.h"
+#include "tom/metrics.h"
+
+namespace tom {
+
+struct ReportParams {
+    std::vector<double> levels = {0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005};  ///< fractions of the triangles
+    DistanceParams distance;                 ///< Metro's defaults: 10 samples per face, seed 1
+    uint32_t curve_points = 16;              ///< error-curve points, log-spaced in vertex count (2..64)
+    uint64_t curve_samples = 8192;           ///< area-uniform face samples per direction for each curve point
+};
+
+struct LevelReport {
+    double fraction = 0;
+    uint32_t vertices = 0, triangles = 0;
+    double extract_seconds = 0;  ///< median of repeated extractions into a preallocated buffer
+    Distance error;              ///< object units; error.percent() for Metro's relative figures
+    ChainStats chain;
+    double mean_steps = 0;       ///< substitution steps per corner emitted
+    double overhead = 0;         ///< extra distinct vertices walked over vertices sent (n): the paper's Fig. 6
+};
+
+struct MemoryReport {
+    // all with positions and normals as f32 and 32-bit indices, as the paper's Table 4
+    uint64_t face_vertex_bytes = 0;  ///< 24 V + 12 T
+    uint64_t tom_bytes = 0;          ///< the .tom image of the mesh in that form (headers included)
+    uint64_t lod_bytes = 0;          ///< six discrete levels 100/50/25/12/6/3% as face-vertex meshes
+    uint64_t pm_bytes = 0;           ///< progressive mesh, coarsest mesh resident (estimate, see report schema)
+    uint64_t pm_max_bytes = 0;       ///< progressive mesh, fully refined mesh resident (estimate)
+};
+
+struct FitReport {
+    KFit mean;  ///< D_mean = k / N (relative to the diagonal)
+    KFit max;   ///< D_max = k / N
+};
+
+struct MeshReport {
+    std::string name;
+    uint32_t vertices = 0, triangles = 0;
+    double bbox_diagonal = 0;  ///< denominator of every percentage (enlarged union box, see metrics.h)
+    MemoryReport memory;
+    FitReport fit;
+    std::vector<LevelReport> levels;
+    ErrorCurve curve;
+};
+
+/// Measures `built` against `original` (the cleaned input it was built from).
+/// \throw std::invalid_argument when the meshes do not correspond (counts differ).
+MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportParams& params = {});
+
+/// Measures only the error curve (cheaper density) and the k fits, for the .tom metadata.
+ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params = {});
+
+} // namespace tom

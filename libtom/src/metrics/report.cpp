@@ -1,0 +1,197 @@
+// Report of one built mesh: levels with Metro-style error, chains, extraction time; memory as
+// the TOM paper's Table 4; Pasman & Jansen's D = k / N fit; the error curve for the .tom.
+
+#include "tom/report.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "tom/format.h"
+
+namespace tom {
+
+namespace {
+
+struct Level {
+    uint32_t n = 0;
+    std::vector<uint32_t> indices;
+    Extracted e;
+};
+
+Level extract_level(const TomMesh& t, uint32_t n) {
+    Level l;
+    l.n = n;
+    l.indices.resize(size_t(t.triangle_count()) * 3);
+    l.e = extract(t.view(), n, l.indices.data(), l.indices.size());
+    l.indices.resize(size_t(l.e.triangle_count) * 3);
+    return l;
+}
+
+Surface surface_of(const Mesh& m) { return {m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count()}; }
+
+double median_extract_seconds(const MeshView& v, uint32_t n, std::vector<uint32_t>& buffer) {
+    using Clock = std::chrono::steady_clock;
+    std::vector<double> times;
+    int inner = 1;
+    for (;;) {  // enough repeats for ~1 ms per sample
+        const auto t0 = Clock::now();
+        for (int k = 0; k < inner; ++k) extract(v, n, buffer.data(), buffer.size());
+        if (std::chrono::duration<double>(Clock::now() - t0).count() > 1e-3 || inner >= (1 << 16)) break;
+        inner *= 2;
+    }
+    for (int r = 0; r < 7; ++r) {
+        const auto t0 = Clock::now();
+        for (int k = 0; k < inner; ++k) extract(v, n, buffer.data(), buffer.size());
+        times.push_back(std::chrono::duration<double>(Clock::now() - t0).count() / inner);
+    }
+    std::sort(times.begin(), times.end());
+    return times[times.size() / 2];
+}
+
+double overhead_distinct(const MeshView& v, uint32_t n) {
+    // distinct vertices >= n walked through, over the n vertices sent
+    std::vector<uint8_t> seen(v.vertex_count, 0);
+    uint64_t extra = 0;
+    const uint32_t tris = active_triangle_count(v, n);
+    for (uint32_t c = 0; c < tris * 3; ++c) {
+        uint32_t x = v.corner(c);
+        while (x >= n) {
+            if (!seen[x]) seen[x] = 1, ++extra;
+            x = v.substitute_at(x);
+        }
+    }
+    return n ? double(extra) / double(n) : 0.0;
+}
+
+uint64_t face_vertex(uint64_t v, uint64_t t) { return v * 24 + t * 12; }
+
+MemoryReport memory_of(const TomMesh& built) {
+    MemoryReport m;
+    const MeshView v = built.view();
+    m.face_vertex_bytes = face_vertex(v.vertex_count, v.triangle_count);
+    TomMesh stripped = built;  // the paper's form: positions and normals, 32-bit indices
+    stripped.texcoords.clear();
+    stripped.colors.clear();
+    stripped.metadata.clear();
+    if (stripped.normals.empty()) stripped.normals.assign(stripped.positions.size(), 0.0f);
+    WriteOptions o;
+    o.index_size = IndexSize::bits32;
+    m.tom_bytes = serialize({stripped}, o).size();
+    for (double f : {1.0, 0.5, 0.25, 0.12, 0.06, 0.03}) {
+        const uint32_t n = vertex_count_for_fraction(v, f);
+        m.lod_bytes += face_vertex(n, active_triangle_count(v, n));
+    }
+    // progressive mesh (Hoppe 1996/1998), memory-resident: per vertex split a record of the new
+    // vertex (position + normal, 24 B) and its connectivity (split vertex, two neighbours, 12 B);
+    // plus the resident mesh with face adjacency (per face 3 vertex and 3 neighbour indices,
+    // 24 B; per vertex 24 B): coarsest mesh resident (min) or full resolution (max)
+    const uint64_t splits = v.vertex_count - v.min_vertex_count;
+    const uint64_t records = splits * 36;
+    const uint32_t base_tris = active_triangle_count(v, v.min_vertex_count);
+    m.pm_bytes = records + uint64_t(v.min_vertex_count) * 24 + uint64_t(base_tris) * 24;
+    m.pm_max_bytes = records + uint64_t(v.vertex_count) * 24 + uint64_t(v.triangle_count) * 24;
+    return m;
+}
+
+void check(const Mesh& original, const TomMesh& built) {
+    if (original.vertex_count() != built.vertex_count() || original.triangle_count() != built.triangle_count())
+        throw std::invalid_argument("report: the built mesh does not come from this original (counts differ)");
+    if (original.triangle_count() == 0) throw std::invalid_argument("report: the mesh has no triangle");
+}
+
+ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportParams& params, const MetroReference& reference) {
+    ErrorCurve c;
+    const MeshView v = built.view();
+    const uint32_t lo = std::max<uint32_t>(v.min_vertex_count, std::min<uint32_t>(4, v.vertex_count));
+    const uint32_t hi = v.vertex_count;
+    const uint32_t count = std::max<uint32_t>(2, std::min<uint32_t>(64, params.curve_points));
+    std::vector<uint32_t> ns;
+    for (uint32_t i = 0; i < count; ++i) {
+        const double t = count == 1 ? 1.0 : double(i) / double(count - 1);
+        const uint32_t n = uint32_t(std::lround(std::exp(std::log(double(lo)) + t * (std::log(double(hi)) - std::log(double(lo))))));
+        if (ns.empty() || n > ns.back()) ns.push_back(std::min(n, hi));
+    }
+    std::vector<double> tris, means, maxes;
+    for (uint32_t n : ns) {
+        const Level l = extract_level(built, n);
+        ErrorCurvePoint p;
+        p.vertices = n;
+        p.triangles = l.e.triangle_count;
+        if (l.e.triangle_count > 0) {
+            const Distance d = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
+            p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
+            p.max = float(d.hausdorff / d.diagonal);
+            c.diagonal = float(d.diagonal);
+            if (n < hi) {  // full resolution has no error to fit
+                tris.push_back(p.triangles);
+                means.push_back(p.mean);
+                maxes.push_back(p.max);
+            }
+        }
+        c.points.push_back(p);
+    }
+    c.k_mean = float(fit_k_over_n(tris, means).k);
+    c.k_max = float(fit_k_over_n(tris, maxes).k);
+    (void)original;
+    return c;
+}
+
+} // namespace
+
+// The curve is a runtime estimate: a fixed budget of area-uniform face samples per direction,
+// so its cost does not grow with the mesh.
+static DistanceParams curve_distance_params(const ReportParams& params) {
+    DistanceParams dp = params.distance;
+    dp.vertex_samples = false;
+    dp.edge_samples = false;
+    dp.samples_per_face = 1e9;
+    dp.max_samples = params.curve_samples;
+    return dp;
+}
+
+ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params) {
+    check(original, built);
+    const MetroReference reference(surface_of(original), curve_distance_params(params));
+    return curve_with(original, built, params, reference);
+}
+
+MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportParams& params) {
+    check(original, built);
+    MeshReport r;
+    r.name = built.name;
+    r.vertices = built.vertex_count();
+    r.triangles = built.triangle_count();
+    r.memory = memory_of(built);
+    const MeshView v = built.view();
+    const MetroReference reference(surface_of(original), params.distance);
+    std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
+    std::vector<double> tris, means, maxes;
+    for (double f : params.levels) {
+        LevelReport lr;
+        lr.fraction = f;
+        const uint32_t n = vertex_count_for_fraction(v, f);
+        const Level l = extract_level(built, n);
+        lr.vertices = n;
+        lr.triangles = l.e.triangle_count;
+        lr.extract_seconds = median_extract_seconds(v, n, buffer);
+        lr.chain = chain_stats(v, n);
+        lr.mean_steps = lr.chain.corners ? double(lr.chain.steps) / double(lr.chain.corners) : 0.0;
+        lr.overhead = overhead_distinct(v, n);
+        if (l.e.triangle_count > 0) {
+            lr.error = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
+            r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
+            tris.push_back(lr.triangles);
+            means.push_back(std::max(lr.error.forward.mean, lr.error.backward.mean) / lr.error.diagonal);
+            maxes.push_back(lr.error.hausdorff / lr.error.diagonal);
+        }
+        r.levels.push_back(lr);
+    }
+    r.fit.mean = fit_k_over_n(tris, means);
+    r.fit.max = fit_k_over_n(tris, maxes);
+    r.curve = measure_error_curve(original, built, params);
+    return r;
+}
+
+} // namespace tom

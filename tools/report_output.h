@@ -1,0 +1,31 @@
+#pragma once
+// Report output shared by the tools: the JSON contract (tools/REPORT.md), the readable table,
+// and the rows of the batch summary CSV.
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tom/report.h"
+
+namespace tools {
+
+struct ReportContext {
+    std::string file;            ///< the input file
+    double import_seconds = 0;   ///< reading and cleaning the file (all its meshes)
+    double build_seconds = 0;    ///< tom::build for this mesh
+    double report_seconds = 0;   ///< make_report for this mesh
+    tom::ReportParams params;
+};
+
+/// One mesh's report as the documented JSON object.
+nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext& ctx);
+/// The conventions every report states (sampling, denominators, units).
+nlohmann::ordered_json conventions_json(const tom::ReportParams& params);
+/// A readable table: levels, memory, fit.
+std::string report_table(const tom::MeshReport& r, const ReportContext& ctx);
+/// The header and one row of the batch summary CSV.
+std::string summary_csv_header(const tom::ReportParams& params);
+std::string summary_csv_row(const tom::MeshReport& r, const ReportContext& ctx);
+
+} // namespace tools
