@@ -350,43 +350,19 @@ struct Builder {
     }
 };
 
-// Triangles around each vertex as compressed rows, rebuilt from the live triangles.
-struct CsrAdjacency {
-    std::vector<uint32_t> offsets, data;
-    const Builder* b = nullptr;
-    void rebuild(const Builder& builder, const std::vector<uint32_t>& live_triangles) {
-        b = &builder;
-        offsets.assign(builder.n + 1, 0);
-        for (uint32_t t : live_triangles)
-            for (int k = 0; k < 3; ++k) ++offsets[builder.idx[3 * t + k] + 1];
-        for (uint32_t v = 0; v < builder.n; ++v) offsets[v + 1] += offsets[v];
-        data.resize(offsets[builder.n]);
-        std::vector<uint32_t>& fill = scratch;
-        fill.assign(offsets.begin(), offsets.end() - 1);
-        for (uint32_t t : live_triangles)
-            for (int k = 0; k < 3; ++k) data[fill[builder.idx[3 * t + k]]++] = t;
-    }
-    template <class F>
-    void each(uint32_t v, F&& f) const {
-        for (uint32_t k = offsets[v]; k < offsets[v + 1]; ++k) {
-            const uint32_t t = data[k];
-            if (!b->dead[t]) f(t);
-        }
-    }
-    std::vector<uint32_t> scratch;
-};
-
 // Triangles around each vertex as singly linked corner lists that substitutions splice together.
 struct ListAdjacency {
-    std::vector<uint32_t> first, next;  // first corner of a vertex; next corner of the same vertex
+    std::vector<uint32_t> first, last, next;  // first and last corner of a vertex; next corner of the same vertex
     Builder* b = nullptr;
     void build(Builder& builder) {
         b = &builder;
         first.assign(builder.n, kNone);
+        last.assign(builder.n, kNone);
         next.assign(size_t(builder.m) * 3, kNone);
         for (uint32_t c = uint32_t(next.size()); c-- > 0;) {
             const uint32_t v = builder.idx[c];
             next[c] = first[v];
+            if (first[v] == kNone) last[v] = c;
             first[v] = c;
         }
     }
@@ -398,20 +374,24 @@ struct ListAdjacency {
     // drops the corners of dead triangles from v's list
     void compact(uint32_t v) {
         uint32_t* link = &first[v];
+        uint32_t tail = kNone;
         while (*link != kNone) {
-            if (b->dead[*link / 3])
+            if (b->dead[*link / 3]) {
                 *link = next[*link];
-            else
+            } else {
+                tail = *link;
                 link = &next[*link];
+            }
         }
+        last[v] = tail;
     }
-    // moves v's corners to u's list (after v's triangles were rewritten to u)
+    // moves v's corners to the front of u's list (after v's triangles were rewritten to u), O(1)
     void splice(uint32_t v, uint32_t u) {
-        uint32_t* link = &first[v];
-        while (*link != kNone) link = &next[*link];
-        *link = first[u];
+        if (first[v] == kNone) return;
+        next[last[v]] = first[u];
+        if (first[u] == kNone) last[u] = last[v];
         first[u] = first[v];
-        first[v] = kNone;
+        first[v] = last[v] = kNone;
     }
 };
 
@@ -469,22 +449,31 @@ void classify(Builder& b, BuildStats& stats) {
         else
             b.kind[v] = kLocked;
     }
-    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart
-    std::vector<uint32_t> order(n);
-    for (uint32_t v = 0; v < n; ++v) order[v] = v;
-    auto less = [&](uint32_t a, uint32_t c) {
-        const Vec3 p = b.pos[a], q = b.pos[c];
-        if (p.x != q.x) return p.x < q.x;
-        if (p.y != q.y) return p.y < q.y;
-        if (p.z != q.z) return p.z < q.z;
-        return a < c;
-    };
-    std::sort(order.begin(), order.end(), less);
-    for (uint32_t i = 0; i + 1 < n; ++i) {
-        const Vec3 p = b.pos[order[i]], q = b.pos[order[i + 1]];
-        if (p.x == q.x && p.y == q.y && p.z == q.z) {
-            b.kind[order[i]] = kLocked;
-            b.kind[order[i + 1]] = kLocked;
+    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart:
+    // an open-addressing table of exact position bits finds them
+    {
+        size_t cap = 16;
+        while (cap < size_t(n) * 2) cap *= 2;
+        std::vector<uint32_t> table(cap, kNone);
+        auto same = [&](uint32_t a, uint32_t c) { return std::memcmp(&b.pos[a], &b.pos[c], sizeof(Vec3)) == 0; };
+        for (uint32_t v = 0; v < n; ++v) {
+            uint32_t bits[3];
+            std::memcpy(bits, &b.pos[v], 12);
+            uint64_t h = (uint64_t(bits[0]) * 73856093u) ^ (uint64_t(bits[1]) * 19349663u) ^ (uint64_t(bits[2]) * 83492791u);
+            h ^= h >> 29;
+            h *= 0xbf58476d1ce4e5b9ULL;
+            h ^= h >> 32;
+            for (size_t i = size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+                if (table[i] == kNone) {
+                    table[i] = v;
+                    break;
+                }
+                if (same(table[i], v)) {
+                    b.kind[table[i]] = kLocked;
+                    b.kind[v] = kLocked;
+                    break;
+                }
+            }
         }
     }
     // a border vertex whose loop neighbour is locked keeps its pointers; pointers of locked
@@ -574,37 +563,70 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
     }
 }
 
+// Sorts the cheapest `keep` (at least) candidates to the front: one histogram on the top bits
+// finds the bucket where the count reaches `keep`, and only the candidates up to it are radix
+// sorted. The rest follow in their original order. Stable, deterministic.
+void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest) {
+    if (keep >= items.size()) {
+        sort_candidates(items, tmp);
+        return;
+    }
+    uint32_t hist[2048] = {};
+    auto bucket = [](const Candidate& c) {
+        uint32_t bits;
+        std::memcpy(&bits, &c.cost, 4);
+        return bits >> 21;  // non-negative floats: the top 11 bits below the sign order them coarsely
+    };
+    for (const Candidate& c : items) ++hist[bucket(c)];
+    uint32_t limit = 0;
+    for (size_t sum = 0; limit < 2048; ++limit) {
+        sum += hist[limit];
+        if (sum >= keep) break;
+    }
+    tmp.clear();
+    rest.clear();
+    for (const Candidate& c : items) (bucket(c) <= limit ? tmp : rest).push_back(c);
+    items.swap(tmp);
+    sort_candidates(items, tmp);
+    items.insert(items.end(), rest.begin(), rest.end());
+}
+
 void run_passes(Builder& b, float fraction, BuildStats& stats) {
-    CsrAdjacency adj;
-    std::vector<uint32_t> live_vertices, live_triangles;
+    // adjacency as corner lists that substitutions splice: nothing is rebuilt between passes
+    ListAdjacency adj;
+    adj.build(b);
+    std::vector<uint32_t> live_vertices;
     for (uint32_t v = 0; v < b.n; ++v)
         if (b.kind[v] != kLocked) live_vertices.push_back(v);
-    for (uint32_t t = 0; t < b.m; ++t) live_triangles.push_back(t);
     // each vertex's best substitution is kept across passes and recomputed only when its
     // neighbourhood changed (dirty)
     std::vector<Candidate> best(b.n);
     // Costs alone pick a vertex's candidate; the oracle runs when it is applied. A vertex whose
     // cheapest target failed the oracle is evaluated with the oracle from then on (needs_oracle).
     std::vector<uint8_t> has(b.n, 0), dirty(b.n, 1), needs_oracle(b.n, 0);
-    std::vector<Candidate> candidates, tmp;
+    std::vector<Candidate> candidates, tmp, rest;
     std::vector<uint32_t> pass_mark(b.n, 0);
     uint32_t alive_count = b.n;
     bool full_rescan_done = false;
     for (uint32_t pass = 1;; ++pass) {
-        adj.rebuild(b, live_triangles);
         candidates.clear();
         for (uint32_t v : live_vertices) {
             if (dirty[v]) {
+                adj.compact(v);
                 has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0);
                 dirty[v] = 0;
             }
             if (has[v]) candidates.push_back(best[v]);
         }
-        sort_candidates(candidates, tmp);
         size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
+        // independence rejects many candidates: the cheapest 4 x quota are enough to fill a pass
+        sort_cheapest(candidates, quota * 4, tmp, rest);
         size_t executed = 0;
         for (int attempt = 0; attempt < 2 && executed == 0 && !candidates.empty(); ++attempt) {
-            if (attempt == 1) quota = candidates.size();  // nothing went through: try them all
+            if (attempt == 1) {  // nothing went through: try them all, in order
+                sort_candidates(candidates, tmp);
+                quota = candidates.size();
+            }
             for (const Candidate& c : candidates) {
                 if (executed >= quota) break;
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
@@ -636,6 +658,7 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                     b.mark_ring(adj, c.v, dirty);
                 }
                 b.apply(adj, c.v, c.u);
+                adj.splice(c.v, c.u);
                 pass_mark[c.v] = pass_mark[c.u] = pass;
                 ++executed;
             }
@@ -655,10 +678,6 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
         for (uint32_t v : live_vertices)
             if (!b.removed[v]) live_vertices[keep++] = v;
         live_vertices.resize(keep);
-        keep = 0;
-        for (uint32_t t : live_triangles)
-            if (!b.dead[t]) live_triangles[keep++] = t;
-        live_triangles.resize(keep);
     }
 }
 
