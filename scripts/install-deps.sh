@@ -13,7 +13,7 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev   # Metro-style distances (AABB trees)
   libmeshoptimizer-dev                 # benchmark reference only
   libosmesa6-dev libegl-dev libgl-dev  # headless rendering (Mesa)
-  python3 python3-matplotlib           # plots
+  python3 python3-matplotlib python3-jsonschema   # plots; report schema check in the tests
   valgrind                             # instruction counts in benchmarks
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
 )

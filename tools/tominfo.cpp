@@ -1,9 +1,11 @@
 // tominfo: prints what a .tom file holds: header, sections, meshes, counts and sizes.
 
 #include <cstdio>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
+#include "tom/error_curve.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
@@ -17,6 +19,8 @@ int main(int argc, char** argv) {
     app.add_option("file", path, "A .tom file")->required();
     app.add_flag("--json", json, "Print one JSON object instead of text");
     app.add_flag("--sections", sections, "Also list the section table");
+    bool show_curve = false;
+    app.add_flag("--curve", show_curve, "Also print each mesh's stored error curve");
     app.add_flag("--no-verify", no_verify, "Skip the checksum pass (the structure is still validated)");
     app.footer("Exit codes: 0 ok, 1 the file is unreadable or invalid (the reason is printed), 2 usage error.");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
@@ -55,6 +59,18 @@ int main(int argc, char** argv) {
             const uint64_t fv = tools::face_vertex_bytes(m.vertex_count, m.triangle_count);
             total_fv += fv;
             mj["face_vertex_bytes"] = fv;
+            if (const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m)) {
+                nlohmann::ordered_json cj;
+                cj["diagonal"] = curve->diagonal;
+                cj["k_mean"] = curve->k_mean;
+                cj["k_max"] = curve->k_max;
+                cj["points"] = nlohmann::json::array();
+                for (const tom::ErrorCurvePoint& p : curve->points)
+                    cj["points"].push_back({{"vertices", p.vertices}, {"triangles", p.triangles}, {"mean_percent", 100.0 * p.mean}, {"max_percent", 100.0 * p.max}});
+                mj["error_curve"] = cj;
+            } else {
+                mj["error_curve"] = nullptr;
+            }
             j["meshes"].push_back(mj);
         }
         j["face_vertex_bytes"] = total_fv;
@@ -71,15 +87,31 @@ int main(int argc, char** argv) {
         std::printf("%s: TOM %s, %s, %u mesh%s, %.1f%% of face-vertex (positions+normals, 32-bit indices)\n", path.c_str(),
                     j["version"].get<std::string>().c_str(), tools::human_bytes(file.file_bytes()).c_str(), file.mesh_count(),
                     file.mesh_count() == 1 ? "" : "es", j["percent_of_face_vertex"].get<double>());
-        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
-                    "attributes");
+        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s %8s %8s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
+                    "k_mean", "k_max", "attributes");
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const auto& mj = j["meshes"][i];
             std::string attrs;
             for (const auto& a : mj["attributes"]) attrs += (attrs.empty() ? "" : ",") + a.get<std::string>();
-            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
+            const bool has_curve = !mj["error_curve"].is_null();
+            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
                         mj["triangles"].get<uint32_t>(), mj["min_vertices"].get<uint32_t>(), mj["min_triangles"].get<uint32_t>(),
-                        8 * mj["index_bytes"].get<uint32_t>(), attrs.c_str());
+                        8 * mj["index_bytes"].get<uint32_t>(),
+                        has_curve ? std::to_string(mj["error_curve"]["k_mean"].get<double>()).substr(0, 7).c_str() : "-",
+                        has_curve ? std::to_string(mj["error_curve"]["k_max"].get<double>()).substr(0, 7).c_str() : "-", attrs.c_str());
+        }
+        for (uint32_t i = 0; show_curve && i < file.mesh_count(); ++i) {
+            const auto& cj = j["meshes"][i]["error_curve"];
+            if (cj.is_null()) {
+                std::printf("  mesh %u: no error curve stored\n", i);
+                continue;
+            }
+            std::printf("  mesh %u error curve (%% of the diagonal %.6g): k_mean %.4g, k_max %.4g (D = k/N, N triangles)\n", i, cj["diagonal"].get<double>(),
+                        cj["k_mean"].get<double>(), cj["k_max"].get<double>());
+            std::printf("    %10s %10s %10s %10s\n", "vertices", "triangles", "mean %", "max %");
+            for (const auto& p : cj["points"])
+                std::printf("    %10u %10u %10.5f %10.4f\n", p["vertices"].get<uint32_t>(), p["triangles"].get<uint32_t>(), p["mean_percent"].get<double>(),
+                            p["max_percent"].get<double>());
         }
         if (sections) {
             std::printf("  sections:\n");

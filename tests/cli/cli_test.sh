@@ -4,7 +4,7 @@
 # are byte-identical whatever -j, a failed input leaves no file (no .tom, no temporary), and
 # tomextract writes readable OBJ/PLY levels.
 set -u
-tools="$1"; data="$2"
+tools="$1"; data="$2"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 fail=0; passed=0
 check() {  # check "description" command...
@@ -63,6 +63,46 @@ check "the PLY header declares the faces" grep -a -q "element face 50[0-9]" "$wo
 check "the extracted PLY converts back" expect_exit 0 "$tools/tombuild" "$work/c.ply" -o "$work/o5"
 check "tomextract without a resolution exits 2" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" -o "$work/x.obj"
 check "tomextract to an unknown type exits 1" expect_exit 1 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.5 -o "$work/x.xyz"
+
+# reports: the table, one JSON per input valid against the schema, the batch summary, plots
+check "tombuild --report --report-json" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" -o "$work/r" --report --report-json "$work/r/reports" --levels 50,10,2
+check "the report table has the levels" grep -q "^   10.0%" "$work/stdout"
+check "the report table states the conventions" grep -q "samples/face of the larger mesh" "$work/stdout"
+check "one JSON per input" test -s "$work/r/reports/fandisk.json" -a -s "$work/r/reports/cow.json"
+check "the JSON reports follow tools/report.schema.json" /usr/bin/python3 -c "
+import json, jsonschema, sys
+schema = json.load(open('$src/tools/report.schema.json'))
+for f in sys.argv[1:]:
+    doc = json.load(open(f))
+    jsonschema.validate(doc, schema)
+    assert [l['fraction'] for l in doc['meshes'][0]['levels']] == [0.5, 0.1, 0.02], doc['meshes'][0]['levels']
+" "$work/r/reports/fandisk.json" "$work/r/reports/cow.json"
+check "summary.csv has a header and a row per mesh" test "$(wc -l < "$work/r/reports/summary.csv")" -eq 3
+check "summary.csv columns" grep -q "^file,mesh,vertices,triangles,build_seconds,report_seconds,tom_percent,k_mean,k_max,triangles_50,hausdorff_50,mean_50" "$work/r/reports/summary.csv"
+check "plots are drawn" "$src/scripts/plot-report.py" "$work/r/reports/fandisk.json" "$work/r/reports/cow.json" -o "$work/plots"
+for f in fandisk-error.svg fandisk-chains.svg cow-error.svg cow-chains.svg; do
+  check "plot $f is an SVG with content" grep -q "<svg" "$work/plots/$f"
+done
+check "the stored error curve is shown by tominfo --curve" expect_exit 0 "$tools/tominfo" "$work/r/fandisk.tom" --curve
+check "tominfo prints the curve and k" grep -q "error curve (% of the diagonal" "$work/stdout"
+check "--no-error-curve stores none" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/nc" --no-error-curve
+check "tominfo says so" bash -c "'$tools/tominfo' '$work/nc/fandisk.tom' --curve | grep -q 'no error curve stored'"
+
+# tomerr: the same yardstick for any two files
+check "tomerr of a mesh and itself" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$data/meshes/fandisk.off" --json
+check "is 0" /usr/bin/python3 -c "import json; d=json.load(open('$work/stdout')); assert d['hausdorff'] < 1e-6 and d['forward']['samples'] >= 129000, d"
+check "tomerr against a .tom level" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/r/fandisk.tom" --fraction 0.1 --json
+check "matches the report's figure for that level" /usr/bin/python3 -c "
+import json
+d = json.load(open('$work/stdout')); r = json.load(open('$work/r/reports/fandisk.json'))
+level = [l for l in r['meshes'][0]['levels'] if l['fraction'] == 0.1][0]
+assert d['simplified_triangles'] == level['triangles'], (d['simplified_triangles'], level['triangles'])
+assert abs(d['hausdorff'] - level['error']['hausdorff']) < 1e-9 and abs(d['mean'] - level['error']['mean']) < 1e-9, (d, level['error'])
+"
+check "tomerr text output" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/f10.obj"
+check "names both directions and Hausdorff" grep -q "Hausdorff distance" "$work/stdout"
+check "tomerr with a missing file exits 1" expect_exit 1 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/missing.obj"
+check "tomerr without arguments exits 2" expect_exit 2 "$tools/tomerr"
 
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -119,16 +119,16 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
         ErrorCurvePoint p;
         p.vertices = n;
         p.triangles = l.e.triangle_count;
-        if (l.e.triangle_count > 0) {
+        if (n == hi) {
+            // full resolution is the original itself: its error is 0 by definition
+        } else if (l.e.triangle_count > 0) {
             const Distance d = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
             p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
             p.max = float(d.hausdorff / d.diagonal);
             c.diagonal = float(d.diagonal);
-            if (n < hi) {  // full resolution has no error to fit
-                tris.push_back(p.triangles);
-                means.push_back(p.mean);
-                maxes.push_back(p.max);
-            }
+            tris.push_back(p.triangles);
+            means.push_back(p.mean);
+            maxes.push_back(p.max);
         }
         c.points.push_back(p);
     }

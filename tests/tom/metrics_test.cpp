@@ -1,0 +1,214 @@
+// Metro-style distance against cases with known answers, the k/N fit, the stored error curve,
+// and the report over a real mesh.
+
+#include <cmath>
+#include <random>
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tom/error_curve.h"
+#include "tom/format.h"
+#include "tom/generate.h"
+#include "tom/metrics.h"
+#include "tom/report.h"
+
+namespace {
+
+tom::Surface surface(const tom::Mesh& m) { return {m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count()}; }
+
+// An icosahedron with vertices on the sphere of radius r, and the same with each face cut into
+// f x f triangles whose vertices are pushed out onto the sphere (a geodesic sphere).
+tom::Mesh icosphere(int f, double r) {
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    const double base[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    const int faces[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                              {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8}, {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    tom::Mesh m;
+    for (const auto& face : faces) {
+        const uint32_t first = m.vertex_count();
+        // grid points a + i/f (b - a) + j/f (c - a), projected to the sphere (f = 1: the icosahedron)
+        for (int i = 0; i <= f; ++i)
+            for (int j = 0; i + j <= f; ++j) {
+                double p[3];
+                for (int k = 0; k < 3; ++k)
+                    p[k] = base[face[0]][k] + (base[face[1]][k] - base[face[0]][k]) * i / f + (base[face[2]][k] - base[face[0]][k]) * j / f;
+                const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+                for (int k = 0; k < 3; ++k) m.positions.push_back(float(p[k] / len * r));
+            }
+        auto id = [&](int i, int j) { return first + uint32_t(i * (f + 1) - i * (i - 1) / 2 + j); };
+        for (int i = 0; i < f; ++i)
+            for (int j = 0; i + j < f; ++j) {
+                m.indices.insert(m.indices.end(), {id(i, j), id(i + 1, j), id(i, j + 1)});
+                if (i + j + 1 < f) m.indices.insert(m.indices.end(), {id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+            }
+    }
+    return m;
+}
+
+} // namespace
+
+TEST_CASE("a mesh against itself is at distance 0 in both directions", "[metrics]") {
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        INFO(nm.name);
+        const tom::Distance d = tom::metro_distance(surface(nm.mesh), surface(nm.mesh));
+        CHECK(d.hausdorff <= 1e-6 * d.diagonal);
+        CHECK(d.forward.mean <= 1e-7 * d.diagonal);
+        CHECK(d.backward.mean <= 1e-7 * d.diagonal);
+        CHECK(d.forward.samples >= uint64_t(9.5 * nm.mesh.triangle_count()));  // Metro's budget: 10 per face
+    }
+}
+
+TEST_CASE("a translated copy is at the translation, in both directions", "[metrics]") {
+    // a flat grid moved along its normal by h: every sample is exactly h away
+    tom::Mesh a = tom::make_grid(30, 30, 0.0f);
+    tom::Mesh b = a;
+    const float h = 0.0125f;
+    for (size_t i = 2; i < b.positions.size(); i += 3) b.positions[i] += h;
+    const tom::Distance d = tom::metro_distance(surface(a), surface(b));
+    CHECK(d.forward.max == Approx(h).epsilon(1e-4));
+    CHECK(d.forward.mean == Approx(h).epsilon(1e-4));
+    CHECK(d.backward.rms == Approx(h).epsilon(1e-4));
+    CHECK(d.hausdorff == Approx(h).epsilon(1e-4));
+    // a closed surface moved sideways: distances are at most the shift, the max reaches it
+    // (within sampling tolerance) where the surface faces the motion
+    tom::Mesh s = test::generated_meshes()[0].mesh, s2 = s;
+    const float dx = 0.01f;
+    for (size_t i = 0; i < s2.positions.size(); i += 3) s2.positions[i] += dx;
+    const tom::Distance e = tom::metro_distance(surface(s), surface(s2));
+    CHECK(e.forward.max <= dx * 1.0001);
+    CHECK(e.forward.max >= dx * 0.9);
+    CHECK(e.backward.max <= dx * 1.0001);
+    CHECK(e.backward.max >= dx * 0.9);
+    CHECK(e.forward.mean < e.forward.max);
+}
+
+TEST_CASE("a sphere against its inscribed icosahedron: the known maximum distance", "[metrics]") {
+    // the sphere's farthest points from the icosahedron lie above the face centres, at
+    // R - inradius = R (1 - sqrt((5 + 2 sqrt 5) / 15)); a geodesic sphere of frequency 3 has a
+    // vertex exactly there, so vertex sampling finds it
+    const double R = 2.0;
+    const double expected = R * (1.0 - std::sqrt((5.0 + 2.0 * std::sqrt(5.0)) / 15.0));
+    const tom::Mesh sphere = icosphere(12, R), ico = icosphere(1, R);
+    const tom::Distance d = tom::metro_distance(surface(sphere), surface(ico));
+    INFO("expected " << expected << ", forward max " << d.forward.max << ", backward max " << d.backward.max);
+    CHECK(d.forward.max == Approx(expected).epsilon(1e-5));
+    CHECK(d.hausdorff == Approx(expected).epsilon(1e-5));
+    CHECK(d.backward.max <= expected * 1.0001);  // the icosahedron lies inside the sphere's polyhedron
+    CHECK(d.forward.mean < d.forward.max);
+    // percentages: of the enlarged union box (both meshes span [-R, R]^3 up to 1e-6)
+    CHECK(d.diagonal == Approx(std::sqrt(3.0) * (2 * R + 2 * 0.02 * 2 * R * std::sqrt(3.0))).epsilon(1e-5));
+}
+
+TEST_CASE("figures are repeatable: same seed and any thread count give identical results", "[metrics]") {
+    const test::NamedMesh bunny = test::real_meshes()[0];
+    const tom::TomMesh t = tom::build(bunny.mesh);
+    std::vector<uint32_t> idx(t.triangle_count() * 3);
+    const uint32_t n = tom::vertex_count_for_fraction(t.view(), 0.05);
+    const tom::Extracted e = tom::extract(t.view(), n, idx.data(), idx.size());
+    const tom::Surface level{t.positions.data(), n, idx.data(), e.triangle_count};
+    tom::DistanceParams one, two, other_seed;
+    one.threads = 1;
+    two.threads = 2;
+    other_seed.seed = 7;
+    const tom::Distance a = tom::metro_distance(surface(bunny.mesh), level, one), b = tom::metro_distance(surface(bunny.mesh), level, two);
+    CHECK(a.forward.mean == b.forward.mean);
+    CHECK(a.backward.rms == b.backward.rms);
+    CHECK(a.hausdorff == b.hausdorff);
+    const tom::Distance c = tom::metro_distance(surface(bunny.mesh), level, other_seed);
+    CHECK(c.forward.mean != a.forward.mean);                            // other samples...
+    CHECK(c.forward.mean == Approx(a.forward.mean).epsilon(0.02));      // ...the same figure within sampling noise
+}
+
+TEST_CASE("the k/N fit recovers k from synthetic k/N data", "[metrics][fit]") {
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    for (double k : {0.3, 1.0, 12.5}) {
+        std::vector<double> n, d;
+        for (double tris : {100.0, 300.0, 1000.0, 3000.0, 10000.0, 30000.0}) {
+            n.push_back(tris);
+            d.push_back(k / tris * std::exp(noise(rng)));
+        }
+        const tom::KFit f = tom::fit_k_over_n(n, d);
+        INFO("k " << k << " fitted " << f.k << " slope " << f.slope);
+        CHECK(f.k == Approx(k).epsilon(0.05));
+        CHECK(f.slope == Approx(-1.0).epsilon(0.1));
+        CHECK(f.rms_log10 < 0.05);
+        CHECK(f.used == 6);
+    }
+    CHECK(tom::fit_k_over_n({10, 0}, {0.0, 1.0}).used == 0);  // zero errors and counts are ignored
+}
+
+TEST_CASE("the stored error curve survives the file round trip and answers estimates", "[metrics][curve]") {
+    const test::NamedMesh fandisk = test::real_meshes()[1];
+    tom::TomMesh t = tom::build(fandisk.mesh);
+    const tom::ErrorCurve curve = tom::measure_error_curve(fandisk.mesh, t);
+    REQUIRE(curve.points.size() >= 8);
+    CHECK(curve.points.back().vertices == t.vertex_count());
+    CHECK(curve.points.back().mean == 0.0f);  // full resolution
+    for (size_t i = 1; i < curve.points.size(); ++i) CHECK(curve.points[i].vertices > curve.points[i - 1].vertices);
+    CHECK(curve.points.front().mean > curve.points[curve.points.size() / 2].mean);  // coarser is worse
+    CHECK(curve.k_mean > 0);
+    CHECK(curve.k_max > curve.k_mean);
+    t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(curve)});
+    const std::vector<uint8_t> bytes = tom::serialize({t});
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size());
+    const std::optional<tom::ErrorCurve> back = tom::read_error_curve(file.mesh(0));
+    REQUIRE(back.has_value());
+    CHECK(back->diagonal == curve.diagonal);
+    CHECK(back->k_mean == curve.k_mean);
+    CHECK(back->k_max == curve.k_max);
+    REQUIRE(back->points.size() == curve.points.size());
+    for (size_t i = 0; i < curve.points.size(); ++i) {
+        CHECK(back->points[i].vertices == curve.points[i].vertices);
+        CHECK(back->points[i].triangles == curve.points[i].triangles);
+        CHECK(back->points[i].mean == curve.points[i].mean);
+        CHECK(back->points[i].max == curve.points[i].max);
+    }
+    // estimates: exact at stored points, between neighbours inside, k/N-like outside
+    const tom::ErrorCurvePoint& mid = curve.points[curve.points.size() / 2];
+    CHECK(tom::estimate_error(*back, mid.triangles) == Approx(mid.mean));
+    const tom::ErrorCurvePoint& p0 = curve.points[3];
+    const tom::ErrorCurvePoint& p1 = curve.points[4];
+    const double between = tom::estimate_error(*back, std::sqrt(double(p0.triangles) * p1.triangles));
+    CHECK(between <= std::max(p0.mean, p1.mean) * 1.0001);
+    CHECK(between >= std::min(p0.mean, p1.mean) * 0.9999);
+    CHECK(tom::estimate_error(*back, 1.0) >= curve.points.front().mean);
+    // a mesh without a curve, and a malformed value, read as absent
+    const std::vector<uint8_t> plain = tom::serialize({tom::build(fandisk.mesh)});
+    CHECK(!tom::read_error_curve(tom::File::from_bytes(plain.data(), plain.size()).mesh(0)).has_value());
+    tom::TomMesh bad = tom::build(fandisk.mesh);
+    bad.metadata.push_back({tom::error_curve_key, {1, 0, 0, 0, 200, 0, 0, 0}});
+    const std::vector<uint8_t> bad_bytes = tom::serialize({bad});
+    CHECK(!tom::read_error_curve(tom::File::from_bytes(bad_bytes.data(), bad_bytes.size()).mesh(0)).has_value());
+}
+
+TEST_CASE("a report on a real mesh: levels, error growth, memory like Table 4, fit near Pasman's", "[metrics][report]") {
+    const test::NamedMesh fandisk = test::real_meshes()[1];
+    const tom::TomMesh t = tom::build(fandisk.mesh);
+    const tom::MeshReport r = tom::make_report(fandisk.mesh, t);
+    REQUIRE(r.levels.size() == 7);
+    double previous_mean = 0;
+    for (const tom::LevelReport& l : r.levels) {
+        INFO("level " << l.fraction);
+        CHECK(std::abs(double(l.triangles) - l.fraction * t.triangle_count()) <= 3.0);
+        const double mean = std::max(l.error.forward.mean, l.error.backward.mean);
+        CHECK(mean > previous_mean);  // coarser levels are farther from the original
+        previous_mean = mean;
+        CHECK(l.error.hausdorff >= mean);
+        CHECK(l.error.forward.samples >= uint64_t(9.5 * t.triangle_count()));
+        CHECK(l.chain.corners == uint64_t(l.triangles) * 3);
+        CHECK(l.extract_seconds > 0);
+    }
+    CHECK(r.levels.back().mean_steps > r.levels.front().mean_steps);
+    const double fv = double(r.memory.face_vertex_bytes);
+    CHECK(r.memory.tom_bytes / fv < 1.09);  // the paper: 108%
+    CHECK(r.memory.tom_bytes / fv > 1.0);
+    CHECK(r.memory.lod_bytes / fv > 1.9);   // 100+50+25+12+6+3 = 196%
+    CHECK(r.memory.lod_bytes / fv < 2.0);
+    CHECK(r.memory.pm_max_bytes > r.memory.pm_bytes);
+    CHECK(r.fit.mean.k > 0);
+    CHECK(r.fit.max.k > r.fit.mean.k);
+    CHECK(r.bbox_diagonal > 0);
+}
