@@ -1,0 +1,201 @@
+// Selection of one frame's resolutions: the common frame (over-budget policy, hysteresis,
+// certificates) around the five selectors.
+//
+// References: T. Funkhouser, C. Sequin. Adaptive display algorithm for interactive frame rates
+// during visualization of complex virtual environments. SIGGRAPH 1993. E. Gobbetti, E. Bouvier.
+// Time-critical multiresolution scene rendering. IEEE Visualization 1999.
+
+#include "tcr/select.h"
+
+#include <algorithm>
+#include <limits>
+
+#include "solver.h"
+
+namespace tcr {
+
+using namespace detail;
+
+const char* selector_name(SelectorKind k) noexcept {
+    switch (k) {
+    case SelectorKind::static_size: return "static";
+    case SelectorKind::stress: return "stress";
+    case SelectorKind::greedy: return "greedy";
+    case SelectorKind::barrier: return "barrier";
+    case SelectorKind::exact: return "exact";
+    }
+    return "?";
+}
+
+bool parse_selector(const std::string& name, SelectorKind& out) noexcept {
+    for (SelectorKind k : {SelectorKind::static_size, SelectorKind::stress, SelectorKind::greedy, SelectorKind::barrier, SelectorKind::exact})
+        if (name == selector_name(k)) {
+            out = k;
+            return true;
+        }
+    return false;
+}
+
+void Problem::resize(size_t n) {
+    for (std::vector<double>* v : {&importance, &error, &per_tri_ms, &setup_ms, &lo, &hi, &previous}) v->resize(n);
+}
+
+double Problem::benefit(size_t i, double n) const noexcept { return importance[i] - error[i] * pow_neg(n, m); }
+
+double update_stress(double stress, double measured_ms, double target_ms, double a, double load_min, double load_max) noexcept {
+    if (!(target_ms > 0) || !(measured_ms > 0)) return stress;
+    const double load = measured_ms / target_ms;
+    if (load < load_min) return std::max(1e-6, stress * (1.0 - a));
+    if (load > load_max) return std::min(1e6, stress * (1.0 + a));
+    return stress;
+}
+
+namespace detail {
+
+double variable_budget(const Problem& p, const std::vector<uint8_t>& drawn) noexcept {
+    double b = p.budget_ms;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (drawn[i]) b -= p.setup_ms[i];
+    return b;
+}
+
+void evaluate(const Problem& p, Plan& plan) noexcept {
+    plan.cost_ms = 0;
+    plan.benefit = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (plan.drawn[i]) {
+            plan.cost_ms += p.cost(i, plan.triangles[i]);
+            plan.benefit += p.benefit(i, plan.triangles[i]);
+        }
+    plan.feasible = plan.cost_ms <= p.budget_ms * (1 + 1e-12) + 1e-12;
+}
+
+void certify(const Problem& p, Plan& plan, double lambda) noexcept {
+    plan.upper_bound = dual_bound(p, plan.drawn, lambda);
+    const double denom = std::max(std::abs(plan.upper_bound), 1e-300);
+    plan.gap = std::max(0.0, (plan.upper_bound - plan.benefit) / denom);
+}
+
+} // namespace detail
+
+double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda) noexcept {
+    // g(l) = sum_i max_{lo<=n<=hi} [b_i(n) - l c_i(n)] + l budget: an upper bound for l >= 0
+    lambda = std::max(0.0, lambda);
+    double g = lambda * p.budget_ms;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!drawn[i]) continue;
+        double n;
+        if (p.error[i] <= 0)
+            n = lambda > 0 ? p.lo[i] : p.hi[i];
+        else if (lambda <= 0)
+            n = p.hi[i];
+        else
+            n = clamp(closed_form_coefficient(p, i) * root_m1(1.0 / lambda, p.m), p.lo[i], p.hi[i]);
+        g += p.benefit(i, n) - lambda * p.cost(i, n);
+    }
+    return g;
+}
+
+bool fit_to_budget(const Problem& p, Plan& plan) noexcept {
+    double lo_cost = 0, extra = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (plan.drawn[i]) {
+            lo_cost += p.cost(i, p.lo[i]);
+            extra += p.per_tri_ms[i] * (plan.triangles[i] - p.lo[i]);
+        }
+    if (lo_cost > p.budget_ms) return false;
+    if (lo_cost + extra <= p.budget_ms) return true;
+    const double theta = (p.budget_ms - lo_cost) / extra * (1.0 - 1e-12);
+    for (size_t i = 0; i < p.size(); ++i)
+        if (plan.drawn[i]) plan.triangles[i] = p.lo[i] + theta * (plan.triangles[i] - p.lo[i]);
+    return true;
+}
+
+namespace {
+
+// Leaves out the objects of least importance per ms at minimum until the minima fit.
+void drop_least_valuable(const Problem& p, Plan& plan) {
+    std::vector<uint32_t>& order = plan.work_index;
+    order.resize(p.size());
+    double total = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+        order[i] = uint32_t(i);
+        total += p.cost(i, p.lo[i]);
+    }
+    std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
+        const double vx = p.importance[x] / std::max(1e-300, p.cost(x, p.lo[x])), vy = p.importance[y] / std::max(1e-300, p.cost(y, p.lo[y]));
+        return vx < vy || (vx == vy && x < y);
+    });
+    for (uint32_t i : order) {
+        if (total <= p.budget_ms) break;
+        plan.drawn[i] = 0;
+        total -= p.cost(i, p.lo[i]);
+    }
+}
+
+// Keeps the previous resolution where the change would be smaller than the dead band; undoes
+// the snaps that cost the most if the plan no longer fits.
+void apply_hysteresis(const Problem& p, double band, Plan& plan) {
+    std::vector<uint32_t>& snapped = plan.work_index;
+    snapped.clear();
+    double cost = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!plan.drawn[i]) continue;
+        const double prev = p.previous[i];
+        if (prev >= p.lo[i] && prev <= p.hi[i] && prev > 0 && std::abs(plan.triangles[i] - prev) < band * prev && plan.triangles[i] != prev) {
+            plan.work_a[i] = plan.triangles[i];  // remember the solver's value
+            plan.triangles[i] = prev;
+            snapped.push_back(uint32_t(i));
+        }
+        cost += p.cost(i, plan.triangles[i]);
+    }
+    if (cost <= p.budget_ms) return;
+    std::sort(snapped.begin(), snapped.end(), [&](uint32_t x, uint32_t y) {
+        const double dx = p.per_tri_ms[x] * (plan.triangles[x] - plan.work_a[x]), dy = p.per_tri_ms[y] * (plan.triangles[y] - plan.work_a[y]);
+        return dx > dy || (dx == dy && x < y);
+    });
+    for (uint32_t i : snapped) {
+        if (cost <= p.budget_ms) break;
+        cost -= p.per_tri_ms[i] * (plan.triangles[i] - plan.work_a[i]);
+        plan.triangles[i] = plan.work_a[i];
+    }
+}
+
+} // namespace
+
+void select(SelectorKind kind, const Problem& p, const SelectParams& params, Plan& plan) {
+    const size_t n = p.size();
+    plan.triangles.resize(n);
+    plan.drawn.assign(n, 1);
+    plan.work_a.resize(n);
+    plan.work_b.resize(n);
+    plan.work_c.resize(n);
+    plan.upper_bound = std::numeric_limits<double>::quiet_NaN();
+    plan.gap = std::numeric_limits<double>::quiet_NaN();
+    plan.iterations = 0;
+    plan.deadline_hit = false;
+    double lo_cost = 0;
+    for (size_t i = 0; i < n; ++i) lo_cost += p.cost(i, p.lo[i]);
+    if (lo_cost > p.budget_ms) {
+        if (params.policy == OverBudgetPolicy::keep_minimum) {
+            for (size_t i = 0; i < n; ++i) plan.triangles[i] = p.lo[i];
+            evaluate(p, plan);
+            return;
+        }
+        drop_least_valuable(p, plan);
+    }
+    for (size_t i = 0; i < n; ++i) plan.triangles[i] = p.lo[i];
+    switch (kind) {
+    case SelectorKind::exact: solve_exact(p, params, plan); break;
+    case SelectorKind::barrier: solve_barrier(p, params, plan); break;
+    case SelectorKind::greedy: solve_greedy(p, params, plan); break;
+    case SelectorKind::static_size: solve_size_heuristic(p, params, 1.0, plan); break;
+    case SelectorKind::stress: solve_size_heuristic(p, params, params.stress, plan); break;
+    }
+    if (params.hysteresis > 0) apply_hysteresis(p, params.hysteresis, plan);
+    evaluate(p, plan);
+    // the certificate holds for any plan with these drawn objects: recompute the gap for the final one
+    if (!std::isnan(plan.upper_bound)) plan.gap = std::max(0.0, (plan.upper_bound - plan.benefit) / std::max(std::abs(plan.upper_bound), 1e-300));
+}
+
+} // namespace tcr

@@ -1,0 +1,221 @@
+// The runtime over real TOM meshes: culling and coverage against hand-computed cases, budgets
+// held, error-bounded mode, extraction of the chosen levels, no allocation per frame.
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tcr/runtime.h"
+#include "tcr/view.h"
+#include "tom/error_curve.h"
+#include "tom/format.h"
+#include "tom/generate.h"
+#include "tom/report.h"
+
+// every allocation of this test binary is counted, to check that warm frames allocate nothing
+static std::atomic<size_t> g_allocations{0};
+void* operator new(size_t n) {
+    ++g_allocations;
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
+
+namespace {
+
+tcr::Camera camera_at(float z, uint32_t w = 800, uint32_t h = 600, float fov_deg = 60) {
+    tcr::Camera c;
+    const float eye[3] = {0, 0, z}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+    tcr::look_at(eye, target, up, c.view);
+    tcr::perspective(fov_deg * 3.14159265f / 180, float(w) / float(h), 0.1f, 1000.0f, c.projection);
+    c.viewport_width = w;
+    c.viewport_height = h;
+    return c;
+}
+
+} // namespace
+
+TEST_CASE("culling and coverage: hand-computed cases", "[tcr][view]") {
+    // a 2x2x2 cube at the origin seen from z = 10 with a 90-degree vertical field of view on a
+    // 1000x1000 viewport: its front face (z = 1) spans x/z_eye = 1/9 of the half-screen, its
+    // back face 1/11; the screen rectangle is the front face's: 2 * 500 / 9 pixels wide
+    const tcr::Camera cam = camera_at(10, 1000, 1000, 90);
+    const tcr::Box cube{{-1, -1, -1}, {1, 1, 1}};
+    float model[16];
+    tcr::identity(model);
+    const tcr::Projection p = tcr::project_box(cam, model, cube);
+    REQUIRE(p.visible);
+    const double side = 2 * 500.0 / 9.0;
+    CHECK(p.coverage_px == Approx(side * side).epsilon(1e-4));
+    CHECK(p.size_px == Approx(side * std::sqrt(2.0)).epsilon(1e-4));
+    CHECK(p.center_x == Approx(500));
+    CHECK(p.center_y == Approx(500));
+    CHECK(p.focus == Approx(1.0));
+    CHECK(p.distance == Approx(10));
+    // moved right by 5: rectangle from (5-1)/9 to (5+1)/9 of the half-width right of the centre
+    tcr::translation_scale(5, 0, 0, 1, model);
+    const tcr::Projection q = tcr::project_box(cam, model, cube);
+    REQUIRE(q.visible);
+    // x from the back face's left edge (4/11 of the half-width) to the front face's right edge (6/9)
+    CHECK(q.center_x == Approx(500 + 500 * (4.0 / 11.0 + 6.0 / 9.0) / 2).epsilon(1e-4));
+    CHECK(q.focus < 1.0f);
+    CHECK(q.focus == Approx(1.0 - 0.5 * (q.center_x - 500) / (500 * std::sqrt(2.0))).epsilon(1e-4));
+    // behind the camera, beside the frustum, beyond the far plane: culled
+    const float away[3][3] = {{0, 0, 20}, {100, 0, 0}, {0, 0, -2000}};
+    for (const auto& t : away) {
+        tcr::translation_scale(t[0], t[1], t[2], 1, model);
+        CHECK(!tcr::project_box(cam, model, cube).visible);
+    }
+    // straddling the eye plane: the whole viewport
+    tcr::translation_scale(0, 0, 10, 1, model);
+    const tcr::Projection r = tcr::project_box(cam, model, cube);
+    CHECK(r.visible);
+    CHECK(r.coverage_px == Approx(1000.0 * 1000.0));
+    // partly off screen: clipped to the viewport
+    tcr::translation_scale(9, 0, 0, 1, model);
+    const tcr::Projection s = tcr::project_box(cam, model, cube);
+    REQUIRE(s.visible);
+    // x from 8/11 of the half-width to past the right edge (clipped), y as the front face
+    CHECK(s.coverage_px == Approx((1000 - 500 * (1 + 8.0 / 11.0)) * side).epsilon(1e-4));
+    CHECK(tcr::motion_factor(0) == 1.0f);
+    CHECK(tcr::motion_factor(32) == Approx(0.5));
+}
+
+namespace {
+
+struct SceneFixture {
+    std::vector<uint8_t> bytes;
+    tom::File file;
+    static std::vector<uint8_t> make() {
+        // the bunny with its error curve, as tombuild writes it
+        const test::NamedMesh bunny = test::real_meshes()[0];
+        tom::TomMesh t = tom::build(bunny.mesh);
+        t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(tom::measure_error_curve(bunny.mesh, t))});
+        tom::Mesh sphere = tom::make_sphere(60, 60);
+        tom::clean_mesh(sphere);
+        return tom::serialize({t, tom::build(sphere)});  // the sphere has no curve
+    }
+    SceneFixture() : bytes(make()), file(tom::File::from_bytes(bytes.data(), bytes.size())) {}
+};
+
+tcr::CostModel model() {
+    tcr::CostModel m;
+    m.t_init_ms = 0.5;
+    m.t_final_ms = 0.5;
+    m.t_setup_ms = 0.02;
+    m.t_tri_ms = 2e-5;
+    m.t_vert_ms = 1e-5;
+    m.t_pix_ms = 1e-6;
+    m.safety_ms = 0.5;
+    return m;
+}
+
+void fill_scene(tcr::Runtime& rt, const tom::File& file, int count) {
+    for (int i = 0; i < count; ++i) {
+        float t[16];
+        const float x = float((i % 10) - 5) * 0.4f, y = float((i / 10) % 10 - 5) * 0.4f, z = -float(i / 100) * 0.5f;
+        tcr::translation_scale(x, y, z, 1.5f, t);
+        rt.add_object(file.mesh(uint32_t(i % 2)), t, 1.0f + float(i % 3));
+    }
+}
+
+} // namespace
+
+TEST_CASE("every selector holds the budget on a real scene, and levels extract as chosen", "[tcr][runtime]") {
+    SceneFixture fx;
+    for (tcr::SelectorKind k : {tcr::SelectorKind::static_size, tcr::SelectorKind::stress, tcr::SelectorKind::greedy, tcr::SelectorKind::barrier,
+                                tcr::SelectorKind::exact}) {
+        tcr::Runtime rt(model(), k);
+        fill_scene(rt, fx.file, 200);
+        std::vector<uint32_t> buffer(80000 * 3);
+        for (int frame = 0; frame < 12; ++frame) {
+            tcr::FrameParams f;
+            f.camera = camera_at(3.0f + 0.3f * frame);
+            f.budget_ms = 6.0;
+            f.previous_frame_ms = frame ? rt.last_frame().predicted_ms * 1.1 : 0;
+            f.triangles_per_pixel = 2.0;
+            const tcr::FrameReport& r = rt.plan_frame(f);
+            INFO(tcr::selector_name(k) << " frame " << frame << " predicted " << r.predicted_ms << " visible " << r.visible);
+            REQUIRE(r.visible > 0);
+            CHECK(r.feasible);
+            CHECK(r.predicted_ms <= f.budget_ms * (1 + 1e-9));
+            CHECK(r.triangles < r.visible_triangles);  // full detail would not fit
+            if (k == tcr::SelectorKind::exact || k == tcr::SelectorKind::barrier) CHECK(r.gap <= 1e-3);
+            uint64_t drawn_tris = 0;
+            for (uint32_t id = 0; id < rt.object_count(); ++id) {
+                const tcr::ObjectResult& o = rt.object(id);
+                if (!o.drawn) continue;
+                const tom::Extracted e = rt.indices(id, buffer.data(), buffer.size());
+                REQUIRE(e.triangle_count == o.triangles);
+                REQUIRE(e.vertex_count == o.vertices);
+                for (size_t c = 0; c < size_t(e.triangle_count) * 3; ++c) REQUIRE(buffer[c] < e.vertex_count);
+                drawn_tris += o.triangles;
+            }
+            CHECK(drawn_tris == r.triangles);
+        }
+    }
+}
+
+TEST_CASE("error-bounded mode: every object at the smallest resolution within the bound", "[tcr][runtime][error]") {
+    SceneFixture fx;
+    tcr::Runtime rt(model(), tcr::SelectorKind::exact);
+    fill_scene(rt, fx.file, 20);
+    tcr::FrameParams f;
+    f.camera = camera_at(4.0f);
+    f.error_bounded = true;
+    f.budget_ms = 1e9;
+    for (double bound : {4.0, 1.0, 0.25}) {
+        f.max_error_px = bound;
+        const tcr::FrameReport& r = rt.plan_frame(f);
+        REQUIRE(r.drawn == r.visible);
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& o = rt.object(id);
+            if (!o.drawn) continue;
+            const double need = rt.triangles_for_error(id, bound);
+            INFO("object " << id << " bound " << bound << " needs " << need << " got " << o.triangles);
+            CHECK(o.triangles <= std::ceil(need) + 2);        // no more than needed (a step of the TOM)
+            CHECK(o.triangles >= std::min<double>(need, 1e9) * 0.98 - 4);  // and not fewer
+        }
+    }
+    // tighter bounds cost more triangles
+    f.max_error_px = 4.0;
+    const uint64_t loose = rt.plan_frame(f).triangles;
+    f.max_error_px = 0.25;
+    const uint64_t tight = rt.plan_frame(f).triangles;
+    CHECK(tight > loose);
+    // in budget mode the bound caps every object: a generous budget stops at the bound
+    f.error_bounded = false;
+    f.budget_ms = 1e6;
+    f.max_error_px = 4.0;
+    const tcr::FrameReport capped = rt.plan_frame(f);  // a copy: the next frame overwrites the report
+    CHECK(capped.max_error_px <= 4.0 * 1.3);
+    f.max_error_px = 0;
+    CHECK(rt.plan_frame(f).triangles > capped.triangles);
+}
+
+TEST_CASE("a warm runtime allocates nothing per frame", "[tcr][runtime][alloc]") {
+    SceneFixture fx;
+    for (tcr::SelectorKind k : {tcr::SelectorKind::greedy, tcr::SelectorKind::barrier, tcr::SelectorKind::exact, tcr::SelectorKind::static_size}) {
+        tcr::Runtime rt(model(), k);
+        fill_scene(rt, fx.file, 300);
+        tcr::FrameParams f;
+        f.budget_ms = 5.0;
+        f.hysteresis = 0.05;
+        for (int warm = 0; warm < 3; ++warm) {
+            f.camera = camera_at(6.0f);
+            rt.plan_frame(f);
+        }
+        const size_t before = g_allocations.load();
+        for (int frame = 0; frame < 10; ++frame) {
+            f.camera = camera_at(6.0f + 0.01f * frame);
+            rt.plan_frame(f);
+        }
+        INFO(tcr::selector_name(k));
+        CHECK(g_allocations.load() == before);
+    }
+}
