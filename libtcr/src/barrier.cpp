@@ -55,7 +55,7 @@ void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan) {
         return;
     }
     // strictly feasible start: the previous frame's choice pulled into the box, then toward lo
-    // until the budget keeps a quarter of its slack
+    // until 2% of the budget slack is free (the previous optimum sits on the budget)
     double cost = 0, extra = 0;
     for (size_t i = 0; i < N; ++i) {
         if (!is_free(i)) continue;
@@ -65,7 +65,7 @@ void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan) {
         cost += p.per_tri_ms[i] * x[i];
         extra += p.per_tri_ms[i] * (x[i] - p.lo[i]);
     }
-    const double target = lo_cost + 0.75 * (budget - lo_cost);
+    const double target = lo_cost + 0.98 * (budget - lo_cost);
     if (cost > target) {
         const double theta = (target - lo_cost) / extra;
         for (size_t i = 0; i < N; ++i)
@@ -77,22 +77,25 @@ void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan) {
             if (is_free(i)) c += p.per_tri_ms[i] * v[i];
         return budget - c;
     };
-    auto phi = [&](const std::vector<double>& v, double t) {
-        const double slack = slack_of(v);
-        if (!(slack > 0)) return std::numeric_limits<double>::infinity();
-        double f = -std::log(slack);
-        for (size_t i = 0; i < N; ++i) {
-            if (!is_free(i)) continue;
-            if (!(v[i] > p.lo[i] && v[i] < p.hi[i])) return std::numeric_limits<double>::infinity();
-            f += t * p.error[i] * pow_neg(v[i], m) - std::log(v[i] - p.lo[i]) - std::log(p.hi[i] - v[i]);
-        }
-        return f;
-    };
-    // initial t balances the objective's gradient against the barrier's
-    double error_sum = 0;
-    for (size_t i = 0; i < N; ++i)
-        if (is_free(i)) error_sum += p.error[i] * pow_neg(x[i], m);
-    double t = (2.0 * free_count + 1.0) / std::max(error_sum, 1e-300);
+    // initial t from the start's own duality gap: the barrier's suboptimality bound (2N+1)/t is
+    // matched to g(l) - f(x0), with l the median marginal benefit per ms of the free objects (at
+    // the optimum they are all equal). A warm start near the optimum begins near the path's end.
+    double t;
+    {
+        evaluate(p, plan);
+        std::vector<double>& ratio = trial;
+        size_t count = 0;
+        for (size_t i = 0; i < N; ++i)
+            if (is_free(i)) ratio[count++] = m * p.error[i] * pow_neg(x[i], m) / x[i] / p.per_tri_ms[i];
+        std::nth_element(ratio.begin(), ratio.begin() + ptrdiff_t(count / 2), ratio.begin() + ptrdiff_t(count));
+        const double lambda0 = count ? ratio[count / 2] : 0.0;
+        const double gap0 = dual_bound(p, plan.drawn, lambda0) - plan.benefit;
+        double error_sum = 0;
+        for (size_t i = 0; i < N; ++i)
+            if (is_free(i)) error_sum += p.error[i] * pow_neg(x[i], m);
+        const double scale = gap0 > 0 ? gap0 : std::max(error_sum, 1e-300);
+        t = (2.0 * free_count + 1.0) / std::max(scale, 1e-300 * error_sum + 1e-300);
+    }
     const double growth = 20.0;
     double best_lambda = 0;
     for (int outer = 0; outer < 60; ++outer) {
@@ -129,23 +132,38 @@ void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan) {
             if (cost_change > 0) step_max = std::min(step_max, slack / cost_change);
             ++plan.iterations;
             if (decrement / 2 <= 1e-9) break;
-            // backtracking line search inside the domain
-            double alpha = std::min(1.0, 0.99 * step_max);
-            const double f0 = phi(x, t);
-            bool moved = false;
-            for (int ls = 0; ls < 40; ++ls) {
+            // line search on the directional derivative: phi is convex along the Newton
+            // direction, so a step whose derivative is still <= 0 has decreased it; past the
+            // minimum, a secant on the derivative steps back. Divisions only, no logarithms.
+            auto derivative = [&](double alpha) {
+                double c = 0;
                 for (size_t i = 0; i < N; ++i)
-                    if (is_free(i)) trial[i] = x[i] + alpha * dx[i];
-                    else trial[i] = x[i];
-                if (phi(trial, t) <= f0 - 0.25 * alpha * decrement) {
-                    moved = true;
-                    break;
+                    if (is_free(i)) c += p.per_tri_ms[i] * (x[i] + alpha * dx[i]);
+                const double s_new = budget - c;
+                if (!(s_new > 0)) return std::numeric_limits<double>::infinity();
+                double d = 0;
+                for (size_t i = 0; i < N; ++i) {
+                    if (!is_free(i)) continue;
+                    const double v = x[i] + alpha * dx[i];
+                    const double l = v - p.lo[i], h = p.hi[i] - v;
+                    if (!(l > 0 && h > 0)) return std::numeric_limits<double>::infinity();
+                    const double g = -t * m * p.error[i] * pow_neg(v, m) / v + p.per_tri_ms[i] / s_new - 1.0 / l + 1.0 / h;
+                    d += g * dx[i];
                 }
-                alpha *= 0.5;
+                return d;
+            };
+            const double d0 = -decrement;  // derivative at alpha = 0
+            double alpha = std::min(1.0, 0.99 * step_max);
+            for (int ls = 0; ls < 30; ++ls) {
+                const double d = derivative(alpha);
+                if (d <= 0.5 * std::abs(d0) || ls == 29) break;  // at or before the line's minimum (or just past it)
+                if (std::isinf(d))
+                    alpha *= 0.5;
+                else
+                    alpha *= std::max(0.1, std::min(0.9, -d0 / (d - d0)));  // secant toward the derivative's zero
             }
-            if (!moved) break;
             for (size_t i = 0; i < N; ++i)
-                if (is_free(i)) x[i] = trial[i];
+                if (is_free(i)) x[i] += alpha * dx[i];
             if (deadline.expired()) break;
         }
         // the multiplier estimate of the budget constraint: l = 1 / (t slack)
