@@ -135,6 +135,15 @@ struct Builder {
     std::vector<uint32_t> removed_order, removed_target;
     std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
     std::vector<Candidate> scratch;    // candidate targets of one vertex
+    mutable std::vector<uint32_t> stamp;  // per vertex: the visit that last saw it (deduplication in O(1))
+    mutable uint32_t visit = 0;
+    uint32_t next_visit() const {
+        if (++visit == 0) {  // wrapped: clear and start again
+            std::fill(stamp.begin(), stamp.end(), 0u);
+            visit = 1;
+        }
+        return visit;
+    }
 
     bool contains(uint32_t t, uint32_t v) const {
         return idx[3 * t] == v || idx[3 * t + 1] == v || idx[3 * t + 2] == v;
@@ -163,62 +172,49 @@ struct Builder {
     template <class Adj>
     bool illegal(const Adj& adj, uint32_t v, uint32_t u) const {
         const Vec3 pv = pos[v], pu = pos[u];
-        constexpr size_t kMax = 64;  // neighbourhoods larger than this are left alone
-        uint32_t nv[kMax], nu[kMax], opposite[4];
-        uint32_t pairs_v[kMax][2], pairs_u[kMax][2];
-        size_t cv = 0, cu = 0, co = 0, pv_count = 0, pu_count = 0;
+        uint32_t opposite[4];
+        size_t co = 0;
         bool bad = false;
-        auto note = [&](uint32_t* list, size_t& count, uint32_t w) {
-            for (size_t i = 0; i < count; ++i)
-                if (list[i] == w) return;
-            if (count < kMax)
-                list[count++] = w;
-            else
-                bad = true;
-        };
+        // v's neighbours get this visit's stamp; flips are checked on the way
+        const uint32_t mark = next_visit();
         adj.each(v, [&](uint32_t t) {
             if (bad) return;
             uint32_t a, c;
             others(t, v, a, c);
-            note(nv, cv, a);
-            note(nv, cv, c);
+            stamp[a] = mark;
+            stamp[c] = mark;
             if (a == u || c == u) {
                 if (co < 4) opposite[co++] = a == u ? c : a;
+                else bad = true;
                 return;
             }
-            if (pv_count < kMax) pairs_v[pv_count][0] = a, pairs_v[pv_count++][1] = c;
             const Vec3 pa = pos[a], pc = pos[c];
             const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
             const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
             if (dot(n0, n1) <= 0.0f && dot(n0, n0) > 0.0f) bad = true;
         });
-        if (bad || co >= 4) return true;
+        if (bad) return true;
+        auto is_opposite = [&](uint32_t w) {
+            for (size_t i = 0; i < co; ++i)
+                if (opposite[i] == w) return true;
+            return false;
+        };
+        // link condition: a neighbour of both that is not opposite the edge would merge two edges
         adj.each(u, [&](uint32_t t) {
             if (bad) return;
             uint32_t a, c;
             others(t, u, a, c);
-            note(nu, cu, a);
-            note(nu, cu, c);
-            if (a != v && c != v && pu_count < kMax) pairs_u[pu_count][0] = a, pairs_u[pu_count++][1] = c;
-        });
-        if (bad) return true;
-        auto in = [](const uint32_t* list, size_t count, uint32_t w) {
-            for (size_t i = 0; i < count; ++i)
-                if (list[i] == w) return true;
-            return false;
-        };
-        for (size_t i = 0; i < cv; ++i)
-            if (nv[i] != u && in(nu, cu, nv[i]) && !in(opposite, co, nv[i])) return true;
-        // what passes the link test can still fold a tetrahedron flat: a rewritten triangle
-        // (u, a, b) with both a and b opposite would duplicate u's own (u, b, a)
-        if (co == 2)
-            for (size_t i = 0; i < pv_count; ++i) {
-                const uint32_t a = pairs_v[i][0], c = pairs_v[i][1];
-                if (!in(opposite, co, a) || !in(opposite, co, c)) continue;
-                for (size_t j = 0; j < pu_count; ++j)
-                    if ((pairs_u[j][0] == a && pairs_u[j][1] == c) || (pairs_u[j][0] == c && pairs_u[j][1] == a)) return true;
+            if (a != v && stamp[a] == mark && !is_opposite(a)) bad = true;
+            if (c != v && stamp[c] == mark && !is_opposite(c)) bad = true;
+            // a tetrahedron folds flat: u's triangle (u, a, c) with both a and c opposite would be
+            // duplicated by v's (v, a, c) rewritten to u
+            if (!bad && co == 2 && a != v && c != v && is_opposite(a) && is_opposite(c)) {
+                adj.each(v, [&](uint32_t s2) {
+                    if (!bad && !contains(s2, u) && contains(s2, a) && contains(s2, c)) bad = true;
+                });
             }
-        return false;
+        });
+        return bad;
     }
 
     // marks every vertex of x's live triangles
@@ -261,10 +257,11 @@ struct Builder {
     bool best_target(const Adj& adj, uint32_t v, Candidate& best, bool check_legal = true) {
         if (kind[v] == kLocked || removed[v]) return false;
         scratch.clear();
+        const uint32_t seen = next_visit();
+        stamp[v] = seen;
         auto offer = [&](uint32_t u) {
-            if (u == v || removed[u]) return;
-            for (const Candidate& c : scratch)
-                if (c.u == u) return;
+            if (stamp[u] == seen || removed[u]) return;
+            stamp[u] = seen;
             if (!border_move_allowed(v, u)) return;
             scratch.push_back({0.0f, v, u});
         };
@@ -280,11 +277,11 @@ struct Builder {
             });
         }
         if (!pairs.empty())
-            for (const uint32_t u : pairs[v]) {
-                bool seen = false;
-                for (const Candidate& c : scratch) seen |= c.u == u;
-                if (!seen && u != v && !removed[u]) scratch.push_back({0.0f, v, u});
-            }
+            for (const uint32_t u : pairs[v])
+                if (stamp[u] != seen && !removed[u]) {
+                    stamp[u] = seen;
+                    scratch.push_back({0.0f, v, u});
+                }
         if (scratch.empty()) return false;
         for (Candidate& c : scratch) c.cost = cost(adj, v, c.u);
         if (!check_legal) {
@@ -641,9 +638,12 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                     // a neighbour w keeps its candidate unless that was v; it gains u as a target,
                     // whose cost Q_w(p_u) is one evaluation
                     const Vec3 pu = b.pos[c.u];
+                    const uint32_t seen = b.next_visit();
                     adj.each(c.v, [&](uint32_t t) {
                         for (int k = 0; k < 3; ++k) {
                             const uint32_t w = b.idx[3 * t + k];
+                            if (b.stamp[w] == seen) continue;
+                            b.stamp[w] = seen;
                             if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) continue;
                             if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {
                                 dirty[w] = 1;
@@ -787,6 +787,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     b.idx = mesh.indices;
     b.dead.assign(b.m, 0);
     b.removed.assign(b.n, 0);
+    b.stamp.assign(b.n, 0);
     b.death_step.assign(b.m, kNone);
     b.removed_order.reserve(b.n);
     b.removed_target.reserve(b.n);
