@@ -185,9 +185,11 @@ Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t 
     }
 #ifdef TOM_HAVE_AVX2_PATH
     // where about half the corners need a step, a per-corner branch is a coin flip: gather
-    // instead. At coarse resolutions nearly every corner walks, the branch is predictable and
-    // the scalar walks of neighbouring corners overlap better than gather rounds do.
-    if (uint64_t(n) * TOM_GATHER_BELOW >= m.vertex_count && cpu_has_avx2()) {
+    // instead. At coarse resolutions nearly every corner walks and the branch is predictable:
+    // scalar walks of neighbouring corners overlap better than gather rounds, as long as the
+    // substitute array is in cache; beyond it (about L2), the gathers' many loads in flight win.
+    const bool large = uint64_t(m.vertex_count) * sizeof(I) > (512u << 10);
+    if ((large || uint64_t(n) * TOM_GATHER_BELOW >= m.vertex_count) && cpu_has_avx2()) {
         map_corners_avx2(sub, in, dst, corners, n);
         return r;
     }
