@@ -12,7 +12,7 @@ packages=(
   catch2                               # tests (v2)
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev libeigen3-dev   # Metro-style distances (AABB trees)
   libmeshoptimizer-dev                 # benchmark reference only
-  libosmesa6-dev libegl-dev libgl-dev  # headless rendering (Mesa)
+  libosmesa6-dev libegl-dev libgl-dev libstb-dev  # headless rendering (Mesa), PNG screenshots
   python3 python3-matplotlib python3-jsonschema   # plots; report schema check in the tests
   valgrind                             # instruction counts in benchmarks
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)

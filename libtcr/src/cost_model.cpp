@@ -157,6 +157,7 @@ CostModel read_cost_model(const std::string& path) {
         else if (key == "t_vert_ms") m.t_vert_ms = value;
         else if (key == "t_pix_ms") m.t_pix_ms = value;
         else if (key == "safety_ms") m.safety_ms = value;
+        else if (key == "noise_rel") m.noise_rel = value;
         else throw std::runtime_error(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
     }
     return m;
@@ -169,7 +170,7 @@ void write_cost_model(const std::string& path, const CostModel& m, const std::st
     if (!comment.empty()) out << "# " << comment << "\n";
     out.precision(9);
     out << "t_init_ms " << m.t_init_ms << "\nt_final_ms " << m.t_final_ms << "\nt_setup_ms " << m.t_setup_ms << "\nt_tri_ms " << m.t_tri_ms
-        << "\nt_vert_ms " << m.t_vert_ms << "\nt_pix_ms " << m.t_pix_ms << "\nsafety_ms " << m.safety_ms << "\n";
+        << "\nt_vert_ms " << m.t_vert_ms << "\nt_pix_ms " << m.t_pix_ms << "\nsafety_ms " << m.safety_ms << "\nnoise_rel " << m.noise_rel << "\n";
     if (!out) throw std::runtime_error("cannot write calibration file '" + path + "'");
 }
 

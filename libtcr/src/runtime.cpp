@@ -169,7 +169,14 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     problem_.resize(n);
     coverage_.resize(n);
     problem_.m = params.m;
-    problem_.budget_ms = params.budget_ms - model_.frame_fixed_ms();
+    // model correction from the last frame's measurement (objects' part only)
+    if (params.correct_model && params.previous_frame_ms > 0 && last_predicted_ms_ > model_.frame_fixed_ms()) {
+        const double ratio = (params.previous_frame_ms - model_.frame_fixed_ms() + model_.safety_ms) / (last_predicted_ms_ - model_.frame_fixed_ms());
+        if (std::isfinite(ratio) && ratio > 0) correction_ = std::min(2.0, std::max(0.5, 0.7 * correction_ + 0.3 * ratio));
+    }
+    if (!params.correct_model) correction_ = 1.0;
+    report_.correction = correction_;
+    problem_.budget_ms = (params.budget_ms - model_.frame_fixed_ms()) / correction_;
     for (size_t k = 0; k < n; ++k) {
         const uint32_t id = visible_ids_[k];
         const Object& o = objects_[id];
@@ -227,7 +234,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         if (!r.drawn) continue;
         r.vertices = resolution_for(o, plan_.triangles[k]);
         r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-        r.predicted_ms = model_.object_ms(r.triangles, r.vertices, r.coverage_px);
+        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px);
         r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
         predicted += r.predicted_ms;
     }
@@ -242,7 +249,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
             const Object& o = objects_[visible_ids_[k]];
             r.vertices = resolution_for(o, std::max(problem_.lo[k], r.triangles * factor));
             r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-            r.predicted_ms = model_.object_ms(r.triangles, r.vertices, r.coverage_px);
+            r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px);
             r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
             predicted += r.predicted_ms;
         }
@@ -256,6 +263,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     }
     report_.visible = uint32_t(n);
     report_.predicted_ms = predicted;
+    last_predicted_ms_ = predicted;
     report_.benefit = plan_.benefit;
     report_.upper_bound = plan_.upper_bound;
     report_.gap = plan_.gap;

@@ -17,6 +17,7 @@ struct CostModel {
     double t_vert_ms = 0.0;   ///< per vertex
     double t_pix_ms = 0.0;    ///< per covered pixel
     double safety_ms = 0.0;   ///< allowance for the system's own noise
+    double noise_rel = 0.0;   ///< measured relative standard deviation of identical frames (informational; 0 unknown)
 
     /// Time of one object: t_setup + max(geometry, fill).
     double object_ms(double triangles, double vertices, double pixels) const noexcept {
@@ -56,7 +57,7 @@ CalibrationResult fit_cost_model(const std::vector<CostSample>& samples);
 
 /// Reads and writes the calibration file (format documented in libtcr/CALIBRATION.md):
 /// text lines "key value" with keys t_init_ms, t_final_ms, t_setup_ms, t_tri_ms, t_vert_ms,
-/// t_pix_ms, safety_ms; '#' starts a comment. \throw std::runtime_error naming file and line.
+/// t_pix_ms, safety_ms, noise_rel; '#' starts a comment. \throw std::runtime_error naming file and line.
 CostModel read_cost_model(const std::string& path);
 void write_cost_model(const std::string& path, const CostModel& model, const std::string& comment = "");
 

@@ -13,7 +13,10 @@
 // Benefit (Funkhouser & Sequin; Gobbetti & Bouvier): importance = coverage (pixels) x focus x
 // weight (x motion); accuracy(n) = 1 - e(n), e(n) = c n^-m x size_px the projected error in
 // pixels, c fitted to the mesh's stored error curve for the exponent m (the relative error
-// D(n) = c n^-m), or `fixed_c` when the file has none. Cost: the calibrated CostModel.
+// D(n) = c n^-m), or `fixed_c` when the file has none. Cost: the calibrated CostModel, its
+// objects' part scaled by a correction that follows the measured time of previous frames
+// (an exponential average of measured / predicted, within [0.5, 2]), so slow drifts of the
+// renderer (fill growing as objects come close, a busier machine) do not break the budget.
 
 #include <cstdint>
 #include <vector>
@@ -29,7 +32,8 @@ namespace tcr {
 struct FrameParams {
     Camera camera;
     double budget_ms = 16.0;         ///< the whole frame
-    double previous_frame_ms = 0;    ///< measured time of the last frame (stress selector); 0 if unknown
+    double previous_frame_ms = 0;    ///< measured time of the last frame (stress selector, model correction); 0 if unknown
+    bool correct_model = true;       ///< scale the objects' predicted cost by the recent measured / predicted ratio
     double deadline_ms = 0;          ///< optimiser deadline (barrier, exact); 0 for none
     double m = 1.0;                  ///< accuracy exponent: 0.5, 1 or 2
     double hysteresis = 0.0;         ///< relative dead band against the previous frame's choice
@@ -64,6 +68,7 @@ struct FrameReport {
     uint64_t triangles = 0, visible_triangles = 0;  ///< drawn at the chosen resolutions; the visible ones at full
     double cull_ms = 0, optimize_ms = 0;
     double stress = 1.0;        ///< the stress selector's factor after this frame's update
+    double correction = 1.0;    ///< the model correction applied to the objects' cost this frame
     bool feasible = true;
     bool deadline_hit = false;
     uint32_t iterations = 0;
@@ -125,6 +130,8 @@ private:
     Plan plan_;
     FrameReport report_;
     double stress_ = 1.0;
+    double correction_ = 1.0;   // EMA of measured / predicted for the objects' part of the frame
+    double last_predicted_ms_ = 0;
     double last_fixed_c_ = 1.0;
     Camera last_camera_{};
 };

@@ -1,0 +1,578 @@
+// tcrwalk: the reference integration of libtom and libtcr. Renders a scene of TOM objects
+// headless (Mesa's llvmpipe through OSMesa) along a path with Funkhouser's hard viewpoints,
+// under each selector, and measures whether the frame budget holds.
+//
+// Frame = plan (cull, measure, optimise: libtcr) + extract (libtom index buffers) + render (one
+// indexed draw per object, glFinish). Following Gobbetti & Bouvier, the non-rendering part is
+// measured and the renderer gets the rest of the budget.
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <numeric>
+#include <random>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "renderer.h"
+#include "scene.h"
+#include "tcr/model.h"
+#include "tcr/runtime.h"
+#include "tcr/view.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// The scene with its meshes mapped and each instance's transform.
+struct World {
+    walk::Scene scene;
+    std::vector<tom::File> files;
+    std::vector<const tom::MeshView*> meshes;
+    std::vector<std::array<float, 16>> transforms;
+    uint64_t full_triangles = 0;
+};
+
+World load_world(const std::string& scene_path) {
+    World w;
+    w.scene = walk::read_scene(scene_path);
+    const fs::path dir = fs::path(scene_path).parent_path();
+    for (const std::string& m : w.scene.meshes) {
+        const fs::path p = fs::path(m).is_absolute() ? fs::path(m) : dir / m;
+        w.files.push_back(tom::File::open(p.string()));
+        if (w.files.back().mesh_count() == 0) throw tom::Error(p.string() + ": no mesh");
+    }
+    for (const tom::File& f : w.files) w.meshes.push_back(&f.mesh(0));
+    for (const walk::Instance& i : w.scene.instances) {
+        const tom::MeshView& m = *w.meshes[i.mesh];
+        double d2 = 0;
+        float c[3];
+        for (int k = 0; k < 3; ++k) {
+            d2 += double(m.bounds_max[k] - m.bounds_min[k]) * (m.bounds_max[k] - m.bounds_min[k]);
+            c[k] = 0.5f * (m.bounds_min[k] + m.bounds_max[k]);
+        }
+        const float s = float(i.size / std::max(1e-9, std::sqrt(d2)));
+        const float a = i.yaw_deg * 3.14159265f / 180.0f, ca = std::cos(a), sa = std::sin(a);
+        // T(x,y,z) R_y(yaw) S(s) T(-centre), column-major
+        std::array<float, 16> t{};
+        t[0] = s * ca, t[2] = -s * sa, t[5] = s, t[8] = s * sa, t[10] = s * ca, t[15] = 1;
+        t[12] = i.x - (t[0] * c[0] + t[4] * c[1] + t[8] * c[2]);
+        t[13] = i.y - (t[1] * c[0] + t[5] * c[1] + t[9] * c[2]);
+        t[14] = i.z - (t[2] * c[0] + t[6] * c[1] + t[10] * c[2]);
+        w.transforms.push_back(t);
+        w.full_triangles += m.triangle_count;
+    }
+    return w;
+}
+
+tcr::Camera camera_for(uint32_t f, uint32_t frames, uint32_t width, uint32_t height) {
+    const walk::CameraPose pose = walk::path_pose(f, frames);
+    tcr::Camera c;
+    const float up[3] = {0, 1, 0};
+    tcr::look_at(pose.eye, pose.target, up, c.view);
+    tcr::perspective(60.0f * 3.14159265f / 180.0f, float(width) / float(height), 0.05f, 200.0f, c.projection);
+    c.viewport_width = width;
+    c.viewport_height = height;
+    return c;
+}
+
+struct Row {
+    uint32_t frame, visible_objects, drawn_objects;
+    uint64_t visible_triangles, drawn_triangles;
+    double predicted_ms, measured_ms, render_ms, cull_ms, optimize_ms, extract_ms, benefit, gap;
+};
+
+struct Summary {
+    std::string selector;
+    uint32_t frames = 0;
+    double budget_ms = 0;
+    double mean = 0, max = 0, std = 0, compute_mean = 0, compute_max = 0, over = 0, prediction_error = 0, drawn = 0, visible = 0, gap = NAN;
+};
+
+Summary summarize(const std::string& selector, double budget, const std::vector<Row>& rows) {
+    Summary s;
+    s.selector = selector;
+    s.frames = uint32_t(rows.size());
+    s.budget_ms = budget;
+    double gap_sum = 0;
+    int gaps = 0, predicted = 0;
+    for (const Row& r : rows) {
+        s.mean += r.measured_ms / rows.size();
+        s.max = std::max(s.max, r.measured_ms);
+        const double compute = r.cull_ms + r.optimize_ms;
+        s.compute_mean += compute / rows.size();
+        s.compute_max = std::max(s.compute_max, compute);
+        s.over += (r.measured_ms > 1.1 * budget) ? 1.0 / rows.size() : 0.0;
+        s.drawn += double(r.drawn_triangles) / rows.size();
+        s.visible += double(r.visible_triangles) / rows.size();
+        if (r.predicted_ms > 0) {
+            s.prediction_error += std::abs(r.predicted_ms - r.measured_ms) / r.measured_ms;
+            ++predicted;
+        }
+        if (!std::isnan(r.gap)) gap_sum += r.gap, ++gaps;
+    }
+    for (const Row& r : rows) s.std += (r.measured_ms - s.mean) * (r.measured_ms - s.mean) / rows.size();
+    s.std = std::sqrt(s.std);
+    s.prediction_error = predicted ? s.prediction_error / predicted : NAN;
+    if (gaps) s.gap = gap_sum / gaps;
+    return s;
+}
+
+// Hue from red (coarse) through green to blue (full resolution), for the LOD view.
+void lod_color(double fraction, float out[3]) {
+    const double t = std::min(1.0, std::max(0.0, std::log10(std::max(fraction, 1e-3)) / 3.0 + 1.0));  // 0.1% .. 100%
+    out[0] = float(std::max(0.0, 1.0 - 2.0 * t));
+    out[1] = float(1.0 - std::abs(2.0 * t - 1.0));
+    out[2] = float(std::max(0.0, 2.0 * t - 1.0));
+}
+
+struct Options {
+    std::string scene, calibration, out;
+    std::vector<std::string> selectors;
+    double budget_ms = 40;
+    uint32_t frames = 300;
+    bool simulate = false, json = false;
+    uint32_t width = 640, height = 480;
+    double optimize_share = 0.1;  // the optimiser's deadline, as a share of the budget
+    double hysteresis = 0.05;
+    double noise = 1.0;           // simulated: noise in standard deviations of the calibrated noise (clamped to +-2)
+    double safety_sigma = 0.5;    // safety allowance in standard deviations of the renderer's noise
+    uint64_t seed = 1;
+};
+
+// Grows `v` to hold at least `n` elements, by doubling, and touches the new memory once, so no
+// frame pays page faults for its index array.
+void ensure(std::vector<uint32_t>& v, size_t n) {
+    if (v.size() >= n) return;
+    v.resize(std::max(n, v.size() * 2), 0u);
+}
+
+Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
+            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows) {
+    const bool none = selector == "none";
+    tcr::SelectorKind kind = tcr::SelectorKind::exact;
+    if (!none) tcr::parse_selector(selector, kind);
+    tcr::CostModel model = calibrated;
+    // the allowance for the renderer's noise at this budget: `safety_sigma` standard deviations
+    model.safety_ms = std::max(model.safety_ms, o.safety_sigma * model.noise_rel * o.budget_ms);
+    tcr::Runtime rt(model, kind);
+    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+    std::vector<uint32_t> indices;
+    std::vector<walk::Renderer::Draw> draws;
+    std::vector<float> colors;
+    uint32_t shots[3];
+    walk::viewpoints(o.frames, shots);
+    std::mt19937_64 noise_rng(o.seed);
+    std::normal_distribution<double> noise(0.0, o.noise);  // clamped below
+    double overhead_ms = 0, previous_render_ms = 0, extract_ms_per_triangle = 0;
+    std::array<double, 8> recent_cpu{};
+    rows.clear();
+    {  // warm up at the path's start (not counted): learn the planning time and the extraction
+        // cost per triangle, which joins the model's per-triangle cost (the CPU's share of a triangle)
+        const tcr::Camera cam = camera_for(0, o.frames, o.width, o.height);
+        double extract_per_triangle = 0;
+        for (size_t k = 0; k < 4; ++k) {
+            tcr::FrameParams fp;
+            fp.camera = cam;
+            fp.budget_ms = none ? 1e12 : 4 * o.budget_ms;  // a generous plan: many triangles to time
+            const tcr::FrameReport& r = rt.plan_frame(fp);
+            recent_cpu[k] = r.cull_ms + r.optimize_ms;
+            ensure(indices, size_t(r.triangles) * 3);
+            draws.clear();
+            size_t at = 0;
+            const auto extract_start = Clock::now();
+            for (uint32_t id = 0; id < rt.object_count(); ++id) {
+                if (!rt.object(id).drawn) continue;
+                const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
+                draws.push_back({mesh_handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {0.8f, 0.8f, 0.8f}});
+                at += size_t(e.triangle_count) * 3;
+            }
+            if (k > 0 && r.triangles > 0) extract_per_triangle = std::max(extract_per_triangle, ms_since(extract_start) / double(r.triangles));
+            if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at);
+        }
+        if (!none) {
+            extract_ms_per_triangle = 1.25 * extract_per_triangle;
+            model.t_tri_ms += extract_ms_per_triangle;
+            rt.set_cost_model(model);
+        }
+        overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end()));
+    }
+    for (uint32_t f = 0; f < o.frames; ++f) {
+        const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
+        const auto frame_start = Clock::now();
+        Row row{};
+        row.frame = f;
+        row.gap = NAN;
+        // plan: libtcr chooses the resolutions (for "none": every visible object at full detail)
+        tcr::FrameParams fp;
+        fp.camera = cam;
+        fp.budget_ms = std::max(0.1 * o.budget_ms, o.budget_ms - overhead_ms);  // the renderer's share
+        fp.previous_frame_ms = previous_render_ms;
+        fp.deadline_ms = o.optimize_share * o.budget_ms;
+        fp.hysteresis = o.hysteresis;
+        if (none) {
+            fp.budget_ms = 1e12;
+            fp.max_error_px = 0;
+        }
+        const tcr::FrameReport& r = rt.plan_frame(fp);
+        row.cull_ms = r.cull_ms;
+        row.optimize_ms = r.optimize_ms;
+        row.visible_objects = r.visible;
+        row.drawn_objects = r.drawn;
+        row.visible_triangles = r.visible_triangles;
+        row.drawn_triangles = r.triangles;
+        row.predicted_ms = none ? r.predicted_ms : r.predicted_ms;
+        row.benefit = r.benefit;
+        row.gap = r.gap;
+        // extract: each drawn object's level into the frame's index array
+        const auto extract_start = Clock::now();
+        draws.clear();
+        colors.clear();
+        ensure(indices, size_t(r.triangles) * 3);
+        size_t at = 0;
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& obj = rt.object(id);
+            if (!obj.drawn) continue;
+            const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
+            walk::Renderer::Draw d{};
+            d.mesh = mesh_handles[w.scene.instances[id].mesh];
+            d.model = w.transforms[id].data();
+            d.first = at;
+            d.index_count = e.triangle_count * 3;
+            d.color[0] = 0.85f, d.color[1] = 0.78f, d.color[2] = 0.62f;
+            draws.push_back(d);
+            at += d.index_count;
+        }
+        row.extract_ms = ms_since(extract_start);
+        // render, or simulate its time from the calibrated model
+        double render_ms;
+        if (renderer) {
+            const auto render_start = Clock::now();
+            renderer->render(cam.view, cam.projection, draws, indices, at);
+            render_ms = ms_since(render_start);
+        } else {
+            // the calibrated model's time plus noise; the safety allowance is, by definition,
+            // the bound of the system's noise: |noise| <= safety_ms
+            // simulated: the model's time for extraction and rendering, plus noise within the
+            // safety allowance (which is, by definition, the bound of the system's noise)
+            // relative noise as calibrated, never past the safety margin
+            const double expected = r.predicted_ms - model.safety_ms;
+            const double e = std::max(-2.0, std::min(2.0, noise(noise_rng))) * std::max(model.noise_rel, 0.01);
+            render_ms = std::max(0.0, std::min(r.predicted_ms, expected * (1.0 + e)));
+        }
+        // measured: everything but the renderer; simulated: culling and optimisation (extraction
+        // is in the simulated time)
+        const double cpu_ms = renderer ? ms_since(frame_start) - render_ms : r.cull_ms + r.optimize_ms;
+        row.render_ms = render_ms;
+        row.measured_ms = cpu_ms + render_ms;
+        // the runtime's prediction covers extraction and rendering; the frame adds cull and
+        // optimise. The safety allowance is a margin, not part of the prediction.
+        row.predicted_ms = r.predicted_ms - model.safety_ms + r.cull_ms + r.optimize_ms;
+        // the next frame's culling and optimisation is estimated by the largest of the last
+        // eight (extraction is in the model's per-triangle cost)
+        recent_cpu[f % recent_cpu.size()] = r.cull_ms + r.optimize_ms;
+        // twice the recent maximum, and at least 2% of the budget: planning times jitter
+        overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end()));
+        previous_render_ms = renderer ? render_ms + row.extract_ms : render_ms;  // what the runtime predicts: extraction and rendering
+        rows.push_back(row);
+        // screenshots at A, B and C: the frame as drawn, then each object coloured by its level
+        if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2])) {
+            const char name = f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C');
+            const std::string base = (fs::path(o.out) / "shots" / (selector + "-" + name)).string();
+            fs::create_directories(fs::path(base).parent_path());
+            renderer->save_png(base + ".png");
+            size_t k = 0;
+            for (uint32_t id = 0; id < rt.object_count(); ++id) {
+                const tcr::ObjectResult& obj = rt.object(id);
+                if (!obj.drawn) continue;
+                lod_color(double(obj.triangles) / w.meshes[w.scene.instances[id].mesh]->triangle_count, draws[k++].color);
+            }
+            renderer->render(cam.view, cam.projection, draws, indices, at);
+            renderer->save_png(base + "-lod.png");
+        }
+    }
+    return summarize(selector, o.budget_ms, rows);
+}
+
+// Renders sample objects at several resolutions and sizes, fits the cost model by least squares.
+tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::vector<uint32_t>& handles, std::FILE* log) {
+    auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v[v.size() / 2];
+    };
+    tcr::Camera cam;
+    const float eye[3] = {0, 0, 0}, target[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    tcr::look_at(eye, target, up, cam.view);
+    tcr::perspective(60.0f * 3.14159265f / 180.0f, float(renderer.width()) / float(renderer.height()), 0.05f, 200.0f, cam.projection);
+    cam.viewport_width = renderer.width();
+    cam.viewport_height = renderer.height();
+    std::vector<uint32_t> indices;
+    std::vector<walk::Renderer::Draw> draws;
+    // warm up, then empty frames: t_init + t_final
+    for (int r = 0; r < 10; ++r) renderer.render(cam.view, cam.projection, draws, indices, 0);
+    std::vector<double> empty;
+    for (int r = 0; r < 25; ++r) {
+        const auto t0 = Clock::now();
+        renderer.render(cam.view, cam.projection, draws, indices, 0);
+        empty.push_back(ms_since(t0));
+    }
+    const double empty_ms = median(empty);
+    std::vector<tcr::CostSample> samples;
+    std::vector<std::array<float, 16>> models(64);
+    const size_t mesh_count = std::min<size_t>(w.meshes.size(), 4);
+    for (size_t mi = 0; mi < mesh_count; ++mi) {
+        const tom::MeshView& mesh = *w.meshes[mi];
+        double d2 = 0;
+        float c[3];
+        for (int k = 0; k < 3; ++k) {
+            d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
+            c[k] = 0.5f * (mesh.bounds_min[k] + mesh.bounds_max[k]);
+        }
+        // objects of a fixed size (diagonal 1) at three distances: the pixel counts vary; eight
+        // copies side by side, or 64 small ones for the per-draw cost
+        struct Config {
+            double fraction;
+            float distance;
+            int copies;
+        };
+        std::vector<Config> configs;
+        for (double fraction : {1.0, 0.4, 0.15, 0.05, 0.015})
+            for (float distance : {1.6f, 4.0f, 10.0f}) configs.push_back({fraction, distance, 8});
+        configs.push_back({0.015, 10.0f, 64});
+        configs.push_back({0.05, 10.0f, 64});
+        for (const Config& cfg : configs) {
+            const double fraction = cfg.fraction;
+            const float distance = cfg.distance;
+            const int copies = cfg.copies;
+            {
+                const uint32_t n = tom::vertex_count_for_fraction(mesh, fraction);
+                const uint32_t tris = tom::active_triangle_count(mesh, n);
+                indices.resize(size_t(tris) * 3);
+                tom::extract(mesh, n, indices.data(), indices.size());
+                draws.clear();
+                double pixels = 0;
+                const float s = float(1.0 / std::sqrt(d2));
+                const int columns = copies == 8 ? 4 : 8;
+                const float spacing = copies == 8 ? distance * 0.42f : distance * 0.13f;
+                for (int k = 0; k < copies; ++k) {
+                    std::array<float, 16>& t = models[k];
+                    const float x = (float(k % columns) - 0.5f * (columns - 1)) * spacing, y = (float(k / columns) - 0.5f * (copies / columns - 1)) * spacing;
+                    t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -distance - s * c[2], 1};
+                    walk::Renderer::Draw d{handles[mi], t.data(), 0, tris * 3, {0.8f, 0.8f, 0.8f}};
+                    draws.push_back(d);
+                    tcr::Box box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
+                    pixels += tcr::project_box(cam, t.data(), box).coverage_px;
+                }
+                std::vector<double> times;
+                for (int r = 0; r < 7; ++r) {
+                    const auto t0 = Clock::now();
+                    renderer.render(cam.view, cam.projection, draws, indices, indices.size());
+                    times.push_back(ms_since(t0));
+                }
+                tcr::CostSample sample;
+                sample.triangles = tris;
+                sample.vertices = n;
+                sample.pixels = pixels / copies;
+                sample.time_ms = std::max(0.0, median(times) - empty_ms) / copies;
+                samples.push_back(sample);
+                if (std::getenv("TCRWALK_DEBUG"))
+                    std::fprintf(log, "  sample mesh %zu level %.3f distance %.1f x%d: tris %u verts %u pixels %.0f time/object %.4f ms (frame %.3f)\n", mi,
+                                 fraction, distance, copies, tris, n, sample.pixels, sample.time_ms, median(times));
+            }
+        }
+    }
+    // the renderer's noise: one heavy frame (the last configuration of the first mesh, full
+    // detail, eight copies) drawn again and again
+    double noise_rel = 0;
+    {
+        const tom::MeshView& mesh = *w.meshes[0];
+        indices.resize(size_t(mesh.triangle_count) * 3);
+        tom::extract(mesh, mesh.vertex_count, indices.data(), indices.size());
+        for (walk::Renderer::Draw& d : draws) d.index_count = mesh.triangle_count * 3, d.mesh = handles[0];
+        std::vector<double> times;
+        for (int r = 0; r < 31; ++r) {
+            const auto t0 = Clock::now();
+            renderer.render(cam.view, cam.projection, draws, indices, indices.size());
+            times.push_back(ms_since(t0));
+        }
+        double mean = 0, var = 0;
+        for (double t : times) mean += t / times.size();
+        for (double t : times) var += (t - mean) * (t - mean) / times.size();
+        noise_rel = mean > 0 ? std::sqrt(var) / mean : 0.0;
+    }
+    const tcr::CalibrationResult fit = tcr::fit_cost_model(samples);
+    tcr::CostModel m = fit.model;
+    m.t_init_ms = 0.5 * empty_ms;
+    m.t_final_ms = 0.5 * empty_ms;
+    double spread = 0;
+    for (double e : empty) spread += (e - empty_ms) * (e - empty_ms) / empty.size();
+    m.safety_ms = std::max(0.25, 2.0 * std::sqrt(spread));
+    m.noise_rel = noise_rel;
+    std::fprintf(log,
+                 "calibration: %zu samples (4 meshes x (5 levels x 3 distances x 8 copies + 2 x 64 small copies), median of 7), empty frame %.3f ms\n"
+                 "  t_setup %.4g ms, t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms; fit: rms %.4f ms, mean relative error %.1f%% "
+                 "(%zu geometry bound, %zu fill bound); identical frames vary by %.1f%% (standard deviation)\n",
+                 samples.size(), empty_ms, m.t_setup_ms, m.t_tri_ms, m.t_vert_ms, m.t_pix_ms, fit.rms_error_ms, 100 * fit.mean_relative_error,
+                 fit.geometry_bound, fit.fill_bound, 100 * noise_rel);
+    return m;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    std::string make_scene, calibrate_out;
+    std::vector<std::string> mesh_files;
+    uint32_t instances = 300;
+    CLI::App app{"tcrwalk: render a scene of TOM objects headless along a path, under libtcr's selectors, and measure the frame budget"};
+    app.set_version_flag("--version", "tcrwalk 0.1.0");
+    app.add_option("--scene", o.scene, "Scene file (see samples/walkthrough/scene.h)");
+    app.add_option("--make-scene", make_scene, "Write a scene file from --meshes (deterministic from --seed) and exit");
+    app.add_option("--meshes", mesh_files, "For --make-scene: .tom files (paths stored relative to the scene file)");
+    app.add_option("--instances", instances, "For --make-scene: number of instances (default 300)");
+    app.add_option("--calibrate", calibrate_out, "Render sample objects, fit the cost model, write this calibration file (libtcr/CALIBRATION.md)");
+    app.add_option("--calibration", o.calibration, "Calibration file to run with (required unless --calibrate)");
+    app.add_option("--selector", o.selectors, "none, static, stress, greedy, barrier, exact, or all (default all)")->delimiter(',');
+    app.add_option("--budget-ms", o.budget_ms, "Frame budget in ms (default 40)")->check(CLI::PositiveNumber);
+    app.add_option("--frames", o.frames, "Frames along the path (default 300)")->check(CLI::Range(10u, 100000u));
+    app.add_flag("--simulate", o.simulate, "No OpenGL: frame times from the calibrated model plus noise");
+    app.add_option("--out", o.out, "Folder for CSV, summary and screenshots");
+    app.add_flag("--json", o.json, "Print one JSON summary per selector");
+    app.add_option("--width", o.width, "Viewport width (default 640)");
+    app.add_option("--height", o.height, "Viewport height (default 480)");
+    app.add_option("--hysteresis", o.hysteresis, "Relative dead band against the previous frame (default 0.05)");
+    app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in standard deviations of the calibrated frame noise (default 0.5)");
+    app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
+    app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"
+               "The whole walkthrough: bash scripts/walkthrough.sh");
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        app.exit(e);
+        return 2;
+    }
+    try {
+        if (!make_scene.empty()) {
+            if (mesh_files.empty()) {
+                std::fprintf(stderr, "error: --make-scene needs --meshes\n");
+                return 2;
+            }
+            std::vector<std::string> rel;
+            uint32_t heaviest = 0;
+            uint64_t most = 0;
+            for (size_t k = 0; k < mesh_files.size(); ++k) {
+                rel.push_back(fs::relative(fs::absolute(mesh_files[k]), fs::absolute(make_scene).parent_path()).string());
+                const tom::File f = tom::File::open(mesh_files[k]);
+                if (f.mesh_count() && f.mesh(0).triangle_count > most) most = f.mesh(0).triangle_count, heaviest = uint32_t(k);
+            }
+            walk::write_scene(make_scene, walk::make_scene(rel, instances, o.seed, heaviest));
+            const World w = load_world(make_scene);
+            std::printf("%s: %zu instances of %zu meshes, %llu triangles at full detail\n", make_scene.c_str(), w.scene.instances.size(),
+                        w.meshes.size(), static_cast<unsigned long long>(w.full_triangles));
+            return 0;
+        }
+        if (o.scene.empty()) {
+            std::fprintf(stderr, "error: give --scene (or --make-scene)\n");
+            return 2;
+        }
+        const World w = load_world(o.scene);
+        std::unique_ptr<walk::Renderer> renderer;
+        std::vector<uint32_t> handles;
+        if (!o.simulate || !calibrate_out.empty()) {
+            renderer = std::make_unique<walk::Renderer>(o.width, o.height);
+            for (const tom::MeshView* m : w.meshes) handles.push_back(renderer->add_mesh(*m));
+        } else {
+            handles.resize(w.meshes.size());
+        }
+        if (!calibrate_out.empty()) {
+            const tcr::CostModel m = calibrate(w, *renderer, handles, stdout);
+            tcr::write_cost_model(calibrate_out, m, "tcrwalk --calibrate on " + renderer->description());
+            std::printf("wrote %s\n", calibrate_out.c_str());
+            return 0;
+        }
+        if (o.calibration.empty()) {
+            std::fprintf(stderr, "error: give --calibration FILE (make one with --calibrate FILE)\n");
+            return 2;
+        }
+        const tcr::CostModel model = tcr::read_cost_model(o.calibration);
+        if (o.selectors.empty() || (o.selectors.size() == 1 && o.selectors[0] == "all")) o.selectors = {"none", "static", "stress", "greedy", "barrier", "exact"};
+        for (const std::string& s : o.selectors) {
+            tcr::SelectorKind k;
+            if (s != "none" && !tcr::parse_selector(s, k)) {
+                std::fprintf(stderr, "error: unknown selector '%s'\n", s.c_str());
+                return 2;
+            }
+        }
+        if (!o.out.empty()) fs::create_directories(o.out);
+        if (!o.json)
+            std::printf("%s, %zu objects, %llu triangles at full detail, %u frames, budget %.1f ms%s\n", o.scene.c_str(), w.scene.instances.size(),
+                        static_cast<unsigned long long>(w.full_triangles), o.frames, o.budget_ms,
+                        o.simulate ? " (simulated)" : (", " + renderer->description()).c_str());
+        std::vector<Summary> summaries;
+        std::vector<Row> rows;
+        for (const std::string& sel : o.selectors) {
+            summaries.push_back(run(w, sel, o, model, o.simulate ? nullptr : renderer.get(), handles, rows));
+            if (!o.out.empty()) {
+                std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
+                csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap\n";
+                for (const Row& r : rows)
+                    csv << r.frame << ',' << r.visible_objects << ',' << r.drawn_objects << ',' << r.visible_triangles << ',' << r.drawn_triangles << ','
+                        << r.predicted_ms << ',' << r.measured_ms << ',' << r.render_ms << ',' << r.cull_ms << ',' << r.optimize_ms << ',' << r.extract_ms
+                        << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << '\n';
+            }
+        }
+        std::vector<nlohmann::ordered_json> out;
+        for (const Summary& s : summaries) {
+            nlohmann::ordered_json j;
+            j["selector"] = s.selector;
+            j["frames"] = s.frames;
+            j["budget_ms"] = s.budget_ms;
+            j["frame_ms"] = {{"mean", s.mean}, {"max", s.max}, {"std", s.std}};
+            j["compute_ms"] = {{"mean", s.compute_mean}, {"max", s.compute_max}};
+            j["over_budget_fraction"] = s.over;
+            j["prediction_error"] = std::isnan(s.prediction_error) ? nlohmann::json(nullptr) : nlohmann::json(s.prediction_error);
+            j["drawn_triangles_mean"] = s.drawn;
+            j["visible_triangles_mean"] = s.visible;
+            j["gap_mean"] = std::isnan(s.gap) ? nlohmann::json(nullptr) : nlohmann::json(s.gap);
+            j["simulated"] = o.simulate;
+            out.push_back(j);
+        }
+        if (o.json) {
+            for (const auto& j : out) std::printf("%s\n", j.dump().c_str());
+        } else {
+            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible");
+            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
+                        "tris mean", "tris mean");
+            for (const Summary& s : summaries)
+                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f\n", s.selector.c_str(), s.mean, s.max, s.std,
+                            s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible);
+        }
+        if (!o.out.empty()) {
+            std::ofstream js(fs::path(o.out) / "summary.json");
+            nlohmann::ordered_json arr = nlohmann::ordered_json::array();
+            for (const auto& j : out) arr.push_back(j);
+            js << arr.dump(2) << "\n";
+        }
+        return 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+}

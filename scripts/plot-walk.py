@@ -1,0 +1,79 @@
+#!/usr/bin/python3
+"""Plots of a tcrwalk run (tcrwalk --out DIR): frame time against frame for every selector with
+the budget, and visible and drawn triangles against frame.
+
+usage: scripts/plot-walk.py DIR [--budget-ms B] [--format svg|png]
+"""
+import argparse
+import csv
+import glob
+import json
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+ORDER = ["none", "static", "stress", "greedy", "barrier", "exact"]
+
+
+def load(directory):
+    runs = {}
+    for path in glob.glob(os.path.join(directory, "frames-*.csv")):
+        name = os.path.basename(path)[len("frames-"):-len(".csv")]
+        with open(path) as f:
+            runs[name] = list(csv.DictReader(f))
+    return {k: runs[k] for k in sorted(runs, key=lambda n: ORDER.index(n) if n in ORDER else 99)}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("directory")
+    ap.add_argument("--budget-ms", type=float)
+    ap.add_argument("--format", choices=["svg", "png"], default="png")
+    args = ap.parse_args()
+    runs = load(args.directory)
+    if not runs:
+        print("error: no frames-*.csv in %s" % args.directory, file=sys.stderr)
+        return 1
+    budget = args.budget_ms
+    summary = os.path.join(args.directory, "summary.json")
+    if budget is None and os.path.exists(summary):
+        with open(summary) as f:
+            budget = json.load(f)[0]["budget_ms"]
+    fig, ax = plt.subplots(figsize=(9, 4.8))
+    for name, rows in runs.items():
+        ax.plot([int(r["frame"]) for r in rows], [float(r["measured_ms"]) for r in rows], label=name, linewidth=1.2 if name != "none" else 0.8)
+    if budget:
+        ax.axhline(budget, color="black", linestyle="--", linewidth=1, label="budget")
+        ax.axhline(1.1 * budget, color="gray", linestyle=":", linewidth=1, label="1.1 x budget")
+        ax.set_ylim(0, 3 * budget)
+    ax.set_xlabel("frame")
+    ax.set_ylabel("frame time (ms)")
+    ax.set_title("Frame time along the path (A: crowd close up, B: few far objects, C: spin)")
+    ax.legend(fontsize=8, ncol=4)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.directory, "frame-times." + args.format))
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(9, 4.8))
+    first = next(iter(runs.values()))
+    ax.semilogy([int(r["frame"]) for r in first], [max(1, int(r["visible_triangles"])) for r in first], color="black", label="visible (full detail)")
+    for name, rows in runs.items():
+        if name == "none":
+            continue
+        ax.semilogy([int(r["frame"]) for r in rows], [max(1, int(r["drawn_triangles"])) for r in rows], label="drawn: " + name)
+    ax.set_xlabel("frame")
+    ax.set_ylabel("triangles")
+    ax.set_title("Visible and drawn triangles along the path")
+    ax.legend(fontsize=8, ncol=3)
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.directory, "triangles." + args.format))
+    plt.close(fig)
+    print("plot-walk: frame-times.%s and triangles.%s in %s" % (args.format, args.format, args.directory))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# The walkthrough in one command: installs what is missing, builds, fetches the sample meshes,
+# converts them with tombuild, lays out a scene of 300 instances, calibrates the cost model on
+# the headless renderer, renders the path under every selector, and writes the table, the CSV,
+# the plots and the screenshots to out/walk/.
+# usage: bash scripts/walkthrough.sh [BUDGET_MS=40] [FRAMES=300]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+cd "$root"
+budget="${1:-40}"; frames="${2:-300}"
+scripts/install-deps.sh
+scripts/build.sh
+scripts/fetch-samples.sh
+out=out/walk
+mkdir -p "$out"
+build/tools/tombuild data/meshes/bunny00.off data/meshes/fandisk.off data/meshes/cow.off data/meshes/elephant.off \
+  data/meshes/mushroom.off data/assimp/OBJ/WusonOBJ.obj -o "$out/meshes" -j 2 -q
+build/samples/walkthrough/tcrwalk --make-scene "$out/scene.txt" --meshes "$out"/meshes/*.tom --instances 300 --seed 1
+build/samples/walkthrough/tcrwalk --scene "$out/scene.txt" --calibrate "$out/calibration.txt"
+build/samples/walkthrough/tcrwalk --scene "$out/scene.txt" --calibration "$out/calibration.txt" --budget-ms "$budget" \
+  --frames "$frames" --selector all --out "$out/run" | tee "$out/table.txt"
+scripts/plot-walk.py "$out/run" --budget-ms "$budget"
+echo "walkthrough: table $out/table.txt, CSV and plots in $out/run/, screenshots in $out/run/shots/"

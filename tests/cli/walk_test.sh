@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The walkthrough end to end on a small scene: a scene file, a calibration on the headless
+# renderer, a short real-rendered path with screenshots, and a simulated path in which the
+# barrier and exact selectors must keep every frame within the budget.
+set -u
+tools="$1"; walk="$2"; data="$3"; src="$(cd "$(dirname "$0")/../.." && pwd)"
+work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
+fail=0; passed=0
+check() {
+  local what="$1"; shift
+  if "$@"; then passed=$((passed+1)); else echo "FAILED: $what"; fail=$((fail+1)); fi
+}
+"$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
+check "a scene file is made" "$walk" --make-scene "$work/scene.txt" --meshes "$work"/meshes/*.tom --instances 60 --seed 3
+check "the scene file lists meshes and instances" test "$(grep -c '^instance' "$work/scene.txt")" -eq 60
+check "calibration on the headless renderer" "$walk" --scene "$work/scene.txt" --calibrate "$work/calibration.txt" --width 320 --height 240
+check "the calibration file has every key" bash -c "for k in t_init_ms t_final_ms t_setup_ms t_tri_ms t_vert_ms t_pix_ms safety_ms noise_rel; do grep -q \"^\$k \" '$work/calibration.txt' || exit 1; done"
+
+# a short real-rendered path
+check "a real-rendered path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --selector none,exact,barrier \
+  --frames 30 --budget-ms 6 --width 320 --height 240 --out "$work/real" --json
+for s in none exact barrier; do
+  check "frames-$s.csv has a row per frame" test "$(wc -l < "$work/real/frames-$s.csv")" -eq 31
+done
+check "the summary has the documented keys" /usr/bin/python3 -c "
+import json
+runs = json.load(open('$work/real/summary.json'))
+assert [r['selector'] for r in runs] == ['none', 'exact', 'barrier'], runs
+for r in runs:
+    for k in ['selector', 'frames', 'budget_ms', 'frame_ms', 'over_budget_fraction', 'prediction_error', 'drawn_triangles_mean', 'visible_triangles_mean']:
+        assert k in r, (k, r)
+    assert set(r['frame_ms']) >= {'mean', 'max', 'std'}
+none, exact = runs[0], runs[1]
+assert exact['drawn_triangles_mean'] < none['drawn_triangles_mean'], (exact, none)   # the budget cut triangles
+assert none['frame_ms']['mean'] > 6, none                                          # full detail does not fit
+"
+check "screenshots at A, B, C, normal and LOD views, non-empty and different" /usr/bin/python3 -c "
+import matplotlib.image as im
+for s in ['exact', 'barrier']:
+    for v in 'ABC':
+        a = im.imread('$work/real/shots/%s-%s.png' % (s, v)); b = im.imread('$work/real/shots/%s-%s-lod.png' % (s, v))
+        assert a.shape == (240, 320, 4) and b.shape == a.shape, a.shape
+        if v == 'B' and a[..., :3].std() <= 0.01:
+            continue  # B looks at the few far objects: a small scene may show none
+        assert a[..., :3].std() > 0.01, ('blank picture', s, v)
+        assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() > 20, ('LOD view identical', s, v)
+"
+check "plots of the run" "$src/scripts/plot-walk.py" "$work/real" --format png
+check "the plots exist" test -s "$work/real/frame-times.png" -a -s "$work/real/triangles.png"
+
+# the simulated path: every selector, barrier and exact never over budget
+check "a simulated path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --simulate --selector all --frames 300 \
+  --budget-ms 6 --out "$work/sim" --json
+check "barrier and exact keep every simulated frame within budget" /usr/bin/python3 -c "
+import csv
+for s in ['barrier', 'exact']:
+    rows = list(csv.DictReader(open('$work/sim/frames-%s.csv' % s)))
+    assert len(rows) == 300
+    worst = max(float(r['measured_ms']) for r in rows)
+    assert worst <= 6.0, (s, worst)
+"
+check "full detail would take at least 3x the budget" /usr/bin/python3 -c "
+import json
+runs = {r['selector']: r for r in json.load(open('$work/sim/summary.json'))}
+assert runs['none']['frame_ms']['mean'] >= 3 * 6, runs['none']
+assert runs['exact']['drawn_triangles_mean'] < runs['none']['drawn_triangles_mean'] / 3, runs['exact']
+"
+check "a missing scene is an error" bash -c "! '$walk' --scene '$work/none.txt' --calibration '$work/calibration.txt' 2>/dev/null"
+echo "$passed passed, $fail failed"
+[ "$fail" -eq 0 ]
