@@ -11,6 +11,8 @@
 
 #include <stdexcept>
 
+#include "tcr/view.h"
+
 namespace walk {
 
 namespace {
@@ -121,12 +123,7 @@ void Renderer::render(const float view[16], const float projection[16], const st
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     glUseProgram(impl_->program);
     float vp[16];
-    for (int c = 0; c < 4; ++c)
-        for (int r = 0; r < 4; ++r) {
-            float s = 0;
-            for (int k = 0; k < 4; ++k) s += projection[k * 4 + r] * view[c * 4 + k];
-            vp[c * 4 + r] = s;
-        }
+    tcr::multiply(projection, view, vp);
     glUniformMatrix4fv(impl_->u_vp, 1, GL_FALSE, vp);
     // the frame's index buffers, streamed into one buffer object (orphaned each frame)
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, impl_->index_buffer);

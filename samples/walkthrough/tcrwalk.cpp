@@ -18,7 +18,6 @@
 #include <numeric>
 #include <random>
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "renderer.h"
@@ -29,6 +28,7 @@
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
+#include "tool_common.h"
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -458,16 +458,7 @@ int main(int argc, char** argv) {
     app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
     app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"
                "The whole walkthrough: bash scripts/walkthrough.sh");
-    try {
-        app.parse(argc, argv);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForVersion& e) {
-        return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-        app.exit(e);
-        return 2;
-    }
+    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
     try {
         if (!make_scene.empty()) {
             if (mesh_files.empty()) {
