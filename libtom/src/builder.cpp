@@ -256,6 +256,27 @@ struct Builder {
     template <class Adj>
     bool best_target(const Adj& adj, uint32_t v, Candidate& best, bool check_legal = true) {
         if (kind[v] == kLocked || removed[v]) return false;
+        if (!check_legal && predicate == Predicate::quadric && kind[v] == kInterior && pairs.empty()) {
+            // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
+            const uint32_t seen = next_visit();
+            stamp[v] = seen;
+            const Quadric& q = quadric[v];
+            bool any = false;
+            auto consider = [&](uint32_t u) {
+                if (stamp[u] == seen || removed[u]) return;
+                stamp[u] = seen;
+                const float c = evaluate(q, pos[u]);
+                if (!any || c < best.cost || (c == best.cost && u < best.u)) best = {c, v, u};
+                any = true;
+            };
+            adj.each(v, [&](uint32_t t) {
+                uint32_t a, c;
+                others(t, v, a, c);
+                consider(a);
+                consider(c);
+            });
+            return any;
+        }
         scratch.clear();
         const uint32_t seen = next_visit();
         stamp[v] = seen;
