@@ -7,6 +7,7 @@
 #include "tom/extract.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -234,6 +235,26 @@ Extracted extract(const MeshView& m, uint32_t vertex_count, uint16_t* dst, size_
     if (m.index_size == 2) return extract_impl<uint16_t>(m, vertex_count, dst, capacity);
     // 32-bit storage into a 16-bit buffer: only valid for resolutions <= 65536 (contract)
     return extract_impl<uint32_t>(m, std::min<uint32_t>(vertex_count, 65536u), dst, capacity);
+}
+
+MorphedVertex geomorph(const MeshView& m, uint32_t n, float a) noexcept {
+    MorphedVertex r;
+    r.index = n;
+    if (n >= m.vertex_count) return r;
+    a = std::min(1.0f, std::max(0.0f, a));
+    const uint32_t s = m.substitute_at(n);  // < n: alive at resolution n, where vertex n sits on it
+    auto lerp = [&](const float* stream, int width, float* out) {
+        if (!stream) return;
+        // (1 - a) x + a y: exactly the substitute at a = 0 and the vertex itself at a = 1
+        for (int k = 0; k < width; ++k) out[k] = (1.0f - a) * stream[size_t(s) * width + k] + a * stream[size_t(n) * width + k];
+    };
+    lerp(m.positions, 3, r.position);
+    lerp(m.normals, 3, r.normal);
+    lerp(m.texcoords, 2, r.texcoord);
+    lerp(m.colors, 4, r.color);
+    const float len = std::sqrt(r.normal[0] * r.normal[0] + r.normal[1] * r.normal[1] + r.normal[2] * r.normal[2]);
+    if (len > 0) r.normal[0] /= len, r.normal[1] /= len, r.normal[2] /= len;
+    return r;
 }
 
 ChainStats chain_stats(const MeshView& m, uint32_t vertex_count) noexcept {

@@ -1,5 +1,8 @@
 // Extraction: 16- and 32-bit outputs, capacity limits, resolution queries, chain statistics.
 
+#include <array>
+#include <set>
+
 #include <catch2/catch.hpp>
 
 #include "support.h"
@@ -108,5 +111,41 @@ TEST_CASE("chain statistics: empty at full resolution, short and growing as reso
         CHECK(mean >= previous);
         CHECK(mean < 8.0);  // the paper: chains stay short
         previous = mean;
+    }
+}
+
+TEST_CASE("geomorph: a = 0 is the surface of resolution n, a = 1 that of n + 1", "[extract][geomorph]") {
+    const Built b = bunny();
+    const tom::MeshView m = b.tom.view();
+    std::vector<uint32_t> next(size_t(m.triangle_count) * 3);
+    for (uint32_t n : {m.min_vertex_count, m.vertex_count / 100, m.vertex_count / 7, m.vertex_count / 2, m.vertex_count - 1}) {
+        INFO("n " << n);
+        const tom::MorphedVertex v0 = tom::geomorph(m, n, 0.0f), v1 = tom::geomorph(m, n, 1.0f), vh = tom::geomorph(m, n, 0.5f);
+        REQUIRE(v0.index == n);
+        const uint32_t s = b.tom.substitute[n];
+        for (int k = 0; k < 3; ++k) {
+            CHECK(v0.position[k] == b.tom.positions[3 * s + k]);
+            CHECK(v1.position[k] == b.tom.positions[3 * n + k]);
+            CHECK(vh.position[k] == Approx(0.5f * (b.tom.positions[3 * s + k] + b.tom.positions[3 * n + k])));
+        }
+        CHECK(std::abs(v1.normal[0] * v1.normal[0] + v1.normal[1] * v1.normal[1] + v1.normal[2] * v1.normal[2] - 1.0f) < 1e-5f);
+        // level n + 1 with vertex n moved onto its substitute draws exactly level n: every
+        // triangle either collapses (two corners at one point) or equals one of level n's
+        const tom::Extracted e = tom::extract(m, n + 1, next.data(), next.size());
+        const std::vector<uint32_t> level_n = test::brute_force_active(m, n);
+        std::multiset<std::array<uint32_t, 3>> expect, got;
+        auto rotated = [](uint32_t a, uint32_t c, uint32_t d) {
+            if (a <= c && a <= d) return std::array<uint32_t, 3>{a, c, d};
+            if (c <= a && c <= d) return std::array<uint32_t, 3>{c, d, a};
+            return std::array<uint32_t, 3>{d, a, c};
+        };
+        for (size_t i = 0; i < level_n.size(); i += 3) expect.insert(rotated(level_n[i], level_n[i + 1], level_n[i + 2]));
+        for (size_t i = 0; i < size_t(e.triangle_count) * 3; i += 3) {
+            uint32_t c[3];
+            for (int k = 0; k < 3; ++k) c[k] = next[i + k] == n ? s : next[i + k];  // vertex n at a = 0 is its substitute
+            if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) continue;
+            got.insert(rotated(c[0], c[1], c[2]));
+        }
+        CHECK(got == expect);
     }
 }

@@ -37,6 +37,22 @@ uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fractio
 Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint32_t* destination, size_t destination_capacity) noexcept;
 Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint16_t* destination, size_t destination_capacity) noexcept;
 
+/// The one vertex that moves in a geomorph between resolutions n and n + 1 (TOM paper: only
+/// vertex n changes between them). Streams the mesh lacks are left zero.
+struct MorphedVertex {
+    uint32_t index = 0;        ///< n: overwrite this vertex of the n + 1 prefix with the values below
+    float position[3] = {0, 0, 0};
+    float normal[3] = {0, 0, 0};   ///< interpolated, then normalised
+    float texcoord[2] = {0, 0};
+    float color[4] = {0, 0, 0, 0};
+};
+
+/// Attributes of vertex n at the fractional resolution n + a, a in [0, 1]: interpolated from its
+/// substitute's (a = 0: the surface of resolution n) to its own (a = 1: resolution n + 1). Draw
+/// vertices [0, n + 1) with this vertex replaced and the index buffer of resolution n + 1.
+/// \pre min_vertex_count <= n < vertex_count. Allocates nothing.
+MorphedVertex geomorph(const MeshView& mesh, uint32_t n, float a) noexcept;
+
 /// Substitution-chain statistics of one resolution (the paper's Fig. 6).
 struct ChainStats {
     uint64_t corners = 0;        ///< corners of the active triangles
