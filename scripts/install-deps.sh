@@ -18,12 +18,27 @@ packages=(
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
 )
 
+# node and npm run Khronos' glTF validator in the tests (from the npm registry, below)
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+root="$(cd "$(dirname "$0")/.." && pwd)"
+install_validator() {
+  # Khronos' glTF validator, into the git-ignored .tools/ (checks tomextract's .glb output)
+  if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ]; then
+    mkdir -p "$root/.tools"
+    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 >/dev/null
+    echo "install-deps: gltf-validator installed in .tools/"
+  fi
+}
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
+  install_validator
   exit 0
 fi
 if [ "$(id -u)" -ne 0 ]; then
@@ -35,4 +50,5 @@ echo "install-deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -qq
 apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+install_validator
 echo "install-deps: done"

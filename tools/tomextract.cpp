@@ -22,13 +22,24 @@ int main(int argc, char** argv) {
     auto* v = app.add_option("-n,--vertices", vertices, "Vertex count (per mesh, clamped to its range)");
     f->excludes(t)->excludes(v);
     t->excludes(v);
+    std::vector<double> lods;
+    auto* l = app.add_option("--lods", lods, "Levels in % of the triangles, finest first, into one .glb with MSFT_lod (e.g. 100,50,25,10)")
+                  ->delimiter(',')
+                  ->check(CLI::Range(0.0, 100.0));
+    l->excludes(f)->excludes(t)->excludes(v);
     app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
-    app.add_option("-o,--output", output, "Output .obj or .ply")->required();
+    app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF)")->required();
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
-               "Example: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj");
+               "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
+               "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
-    if (!fraction && !triangles && !vertices) {
-        std::fprintf(stderr, "error: give one of --fraction, --triangles or --vertices\n");
+    if (!fraction && !triangles && !vertices && lods.empty()) {
+        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices or --lods\n");
+        return tools::exit_usage;
+    }
+    auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
+    if (!lods.empty() && !is_glb()) {
+        std::fprintf(stderr, "error: --lods writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
         return tools::exit_usage;
     }
     try {
@@ -40,6 +51,31 @@ int main(int argc, char** argv) {
         uint64_t total_tris = 0;
         for (uint32_t i = 0; i < file.mesh_count(); ++i)
             if (!mesh_index || *mesh_index == i) total_tris += file.mesh(i).triangle_count;
+        if (is_glb()) {
+            std::vector<tom::GlbMesh> glb;
+            uint64_t written = 0;
+            for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+                if (mesh_index && *mesh_index != i) continue;
+                const tom::MeshView& m = file.mesh(i);
+                tom::GlbMesh g;
+                g.mesh = &m;
+                if (!lods.empty()) {
+                    for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0));
+                } else if (fraction) {
+                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction));
+                } else if (triangles) {
+                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, total_tris ? double(*triangles) / double(total_tris) : 1.0));
+                } else {
+                    g.vertex_counts.push_back(uint32_t(std::min<uint64_t>(*vertices, m.vertex_count)));
+                }
+                written += tom::active_triangle_count(m, g.vertex_counts.front());
+                glb.push_back(g);
+            }
+            tom::export_glb(output, glb);
+            std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest -> %s\n", path.c_str(), glb.size(), glb.size() == 1 ? "" : "es",
+                        lods.empty() ? size_t(1) : lods.size(), lods.size() > 1 ? "s" : "", static_cast<unsigned long long>(written), output.c_str());
+            return tools::exit_ok;
+        }
         std::vector<tom::ExportPart> parts;
         uint64_t out_tris = 0, out_verts = 0;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {

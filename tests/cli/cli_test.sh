@@ -64,6 +64,26 @@ check "the extracted PLY converts back" expect_exit 0 "$tools/tombuild" "$work/c
 check "tomextract without a resolution exits 2" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" -o "$work/x.obj"
 check "tomextract to an unknown type exits 1" expect_exit 1 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.5 -o "$work/x.xyz"
 
+# glTF out: one level, or levels through MSFT_lod; Khronos' validator; back through our importer
+check "tomextract a level to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.2 -o "$work/cow20.glb"
+check "tomextract --lods to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/fandisk.tom" --lods 100,50,25,10 -o "$work/fandisk-lods.glb"
+"$tools/tombuild" "$data/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb" -o "$work/engine" -q
+check "a 34-primitive glTF to .glb" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --fraction 0.25 -o "$work/engine25.glb"
+check "the .glb files validate with no errors" node "$src/scripts/validate-gltf.mjs" "$work/cow20.glb" "$work/fandisk-lods.glb" "$work/engine25.glb"
+check "MSFT_lod lists the three coarser levels, coarser in order" /usr/bin/python3 -c "
+import json, struct
+b = open('$work/fandisk-lods.glb', 'rb').read()
+n = struct.unpack('<I', b[12:16])[0]; d = json.loads(b[20:20 + n])
+assert d['extensionsUsed'] == ['MSFT_lod'], d.get('extensionsUsed')
+assert d['nodes'][0]['extensions']['MSFT_lod']['ids'] == [1, 2, 3]
+counts = [d['accessors'][m['primitives'][0]['indices']]['count'] // 3 for m in d['meshes']]
+assert counts[0] == 12946 and counts[0] > counts[1] > counts[2] > counts[3], counts
+assert abs(counts[1] - 6473) <= 3 and abs(counts[3] - 1295) <= 3, counts
+"
+check "the .glb converts back with every primitive" expect_exit 0 "$tools/tombuild" "$work/engine25.glb" -o "$work/back"
+check "34 meshes come back" bash -c "'$tools/tominfo' '$work/back/engine25.tom' --json | /usr/bin/python3 -c 'import json,sys; d=json.load(sys.stdin); assert d[\"mesh_count\"] == 34, d[\"mesh_count\"]'"
+check "--lods needs a .glb" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" --lods 100,50 -o "$work/x.obj"
+
 # reports: the table, one JSON per input valid against the schema, the batch summary, plots
 check "tombuild --report --report-json" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" -o "$work/r" --report --report-json "$work/r/reports" --levels 50,10,2
 check "the report table has the levels" grep -q "^   10.0%" "$work/stdout"
