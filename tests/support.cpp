@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -46,6 +47,36 @@ std::vector<NamedMesh> generated_meshes() {
     std::vector<NamedMesh> out;
     out.push_back(named("sphere 12x16", tom::make_sphere(12, 16), true, 2));
     out.push_back(named("bumpy sphere 40x40", tom::make_sphere(40, 40, 1.0f, 0.1f), true, 2));
+    {
+        // a UV sphere cut along a meridian, as textured spheres are: the seam vertices are
+        // duplicated (same position, u = 0 and u = 1); welded it is a closed sphere
+        tom::Mesh s = tom::make_sphere(14, 18);
+        const uint32_t rings = 14, segments = 18;
+        auto ring_vertex = [&](uint32_t i, uint32_t j) { return 1 + (i - 1) * segments + (j % segments); };
+        s.texcoords.assign(size_t(s.vertex_count()) * 2, 0.0f);
+        std::vector<uint32_t> copy(rings, 0);
+        for (uint32_t i = 1; i < rings; ++i) {
+            const uint32_t v = ring_vertex(i, 0);
+            copy[i] = s.vertex_count();
+            s.positions.insert(s.positions.end(), {s.positions[3 * v], s.positions[3 * v + 1], s.positions[3 * v + 2]});
+            s.texcoords.insert(s.texcoords.end(), {1.0f, float(i) / rings});
+        }
+        for (uint32_t v = 1; v < 1 + (rings - 1) * segments; ++v) s.texcoords[2 * v] = float((v - 1) % segments) / segments;
+        // triangles of the last column (j = segments - 1 to j = 0) use the u = 1 copies
+        for (size_t t = 0; t < s.indices.size(); t += 3) {
+            bool last_column = false;
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = s.indices[t + k];
+                if (v >= 1 && v < 1 + (rings - 1) * segments && (v - 1) % segments == segments - 1) last_column = true;
+            }
+            if (!last_column) continue;
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = s.indices[t + k];
+                if (v >= 1 && v < 1 + (rings - 1) * segments && (v - 1) % segments == 0) s.indices[t + k] = copy[1 + (v - 1) / segments];
+            }
+        }
+        out.push_back(named("sphere with a UV seam", s, true, 2));
+    }
     out.push_back(named("torus 24x12", tom::make_torus(24, 12), true, 0));
     out.push_back(named("grid 20x20 (border)", tom::make_grid(20, 20), false));
     {
@@ -227,8 +258,13 @@ void check_invariants(const NamedMesh& input, const tom::TomMesh& built) {
     std::vector<uint32_t> resolutions = {s, N};
     for (int k = 1; k < 12; ++k) resolutions.push_back(s + uint32_t(uint64_t(N - s) * k / 12));
     resolutions.push_back(std::min(N, s + 1));
+    for (uint32_t& n : resolutions)
+        if (m.splits_pair(n)) --n;  // a resolution keeps both copies of a seam pair, or neither
     std::sort(resolutions.begin(), resolutions.end());
     resolutions.erase(std::unique(resolutions.begin(), resolutions.end()), resolutions.end());
+    // coincident copies (attribute seams, duplicated input), to check they never separate
+    std::map<std::array<float, 3>, std::vector<uint32_t>> copies;
+    for (uint32_t v = 0; v < N; ++v) copies[{built.positions[3 * v], built.positions[3 * v + 1], built.positions[3 * v + 2]}].push_back(v);
     const Topology full_topo = topology(in.positions.data(), in.indices.data(), in.triangle_count(), true);
     uint32_t previous_count = 0;
     std::vector<uint32_t> buffer32(size_t(m.triangle_count) * 3 + 3, 0xDEADBEEF);
@@ -250,6 +286,16 @@ void check_invariants(const NamedMesh& input, const tom::TomMesh& built) {
             REQUIRE(expect[i + 2] < n);
         }
         std::fill(buffer32.begin(), buffer32.end(), 0xDEADBEEF);
+        for (const auto& [position, group] : copies) {
+            if (group.size() < 2) continue;
+            uint32_t first = group[0];
+            while (first >= n) first = built.substitute[first];
+            for (uint32_t v : group) {
+                while (v >= n) v = built.substitute[v];
+                INFO("coincident copies separated at resolution " << n);
+                REQUIRE(std::memcmp(&built.positions[3 * v], &built.positions[3 * first], 12) == 0);
+            }
+        }
         // no cracks: welding by position, the level has no more border edges than the input
         const Topology topo = topology(built.positions.data(), expect.data(), count, true);
         REQUIRE(topo.border_edges <= full_topo.border_edges);

@@ -66,7 +66,9 @@ inline double evaluate(const Quadric& q, Vec3 p) {
     return r > 0 && q.w > 0 ? r / q.w : 0;
 }
 
-enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2 };
+// kSeam: one of two coincident copies (an attribute seam), each on its own chart's border; the
+// two collapse together along the seam (see seam_target) and stay coincident at every resolution
+enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2, kSeam = 3 };
 
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr float kBoundaryWeight = 4.0f;  // border edge planes vs. area-weighted face planes
@@ -128,6 +130,10 @@ struct Builder {
     std::vector<uint8_t> kind;
     std::vector<uint8_t> removed;
     std::vector<uint32_t> border_next, border_prev;
+    std::vector<uint32_t> partner;     // a seam vertex's coincident copy, or kNone
+    std::vector<uint32_t> wedge;       // the position class of a vertex: its first coincident copy
+    std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
+    std::vector<uint32_t> pair_steps;  // substitution j and j + 1 are one seam collapse
     std::vector<Quadric> quadric;
     // non-edge pairs closer than the threshold, symmetric; a substitution v -> u moves v's pairs
     // to u (Garland-Heckbert), so parts stay joinable after their first vertices are gone
@@ -158,10 +164,20 @@ struct Builder {
     // A border loop of three edges cannot lose a vertex (it would fold onto itself).
     // A border vertex moves along its loop, or onto a pair partner (joining two parts).
     bool border_move_allowed(uint32_t v, uint32_t u) const {
-        if (kind[v] != kBorder) return true;
+        if (kind[v] != kBorder && kind[v] != kSeam) return true;
         if (u != border_next[v] && u != border_prev[v])
             return !pairs.empty() && std::find(pairs[v].begin(), pairs[v].end(), u) != pairs[v].end();
         return border_next[border_next[v]] != border_prev[v];
+    }
+
+    // For a seam vertex v moving to its border neighbour u: the copy's matching move v' -> u',
+    // u' the copy's border neighbour at u's position; kNone when there is none.
+    uint32_t seam_target(uint32_t v, uint32_t u) const {
+        const uint32_t w = partner[v];
+        if (w == kNone || removed[w]) return kNone;
+        for (const uint32_t c : {border_next[w], border_prev[w]})
+            if (c != kNone && !removed[c] && std::memcmp(&pos[c], &pos[u], sizeof(Vec3)) == 0) return c;
+        return kNone;
     }
 
     // The binary oracle's geometric and topological tests for v -> u:
@@ -172,48 +188,68 @@ struct Builder {
     template <class Adj>
     bool illegal(const Adj& adj, uint32_t v, uint32_t u) const {
         const Vec3 pv = pos[v], pu = pos[u];
-        uint32_t opposite[4];
+        uint32_t opposite[8];
         size_t co = 0;
         bool bad = false;
-        // v's neighbours get this visit's stamp; flips are checked on the way
-        const uint32_t mark = next_visit();
+        const uint32_t wv = wedge[v], wu = wedge[u];
+        // flips: v's own triangles (in index space: only they move)
         adj.each(v, [&](uint32_t t) {
-            if (bad) return;
+            if (bad || contains(t, u)) return;
             uint32_t a, c;
             others(t, v, a, c);
-            stamp[a] = mark;
-            stamp[c] = mark;
-            if (a == u || c == u) {
-                if (co < 4) opposite[co++] = a == u ? c : a;
-                else bad = true;
-                return;
-            }
             const Vec3 pa = pos[a], pc = pos[c];
             const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
             const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
             if (dot(n0, n1) <= 0.0f && dot(n0, n0) > 0.0f) bad = true;
         });
         if (bad) return true;
+        // link condition on the surface welded by position (seam copies are one point): every
+        // class adjacent to both v's and u's must be opposite a triangle joining them, otherwise
+        // two edges merge into a non-manifold one
+        const uint32_t mark = next_visit();
         auto is_opposite = [&](uint32_t w) {
             for (size_t i = 0; i < co; ++i)
                 if (opposite[i] == w) return true;
             return false;
         };
-        // link condition: a neighbour of both that is not opposite the edge would merge two edges
-        adj.each(u, [&](uint32_t t) {
-            if (bad) return;
-            uint32_t a, c;
-            others(t, u, a, c);
-            if (a != v && stamp[a] == mark && !is_opposite(a)) bad = true;
-            if (c != v && stamp[c] == mark && !is_opposite(c)) bad = true;
-            // a tetrahedron folds flat: u's triangle (u, a, c) with both a and c opposite would be
-            // duplicated by v's (v, a, c) rewritten to u
-            if (!bad && co == 2 && a != v && c != v && is_opposite(a) && is_opposite(c)) {
-                adj.each(v, [&](uint32_t s2) {
-                    if (!bad && !contains(s2, u) && contains(s2, a) && contains(s2, c)) bad = true;
-                });
-            }
-        });
+        uint32_t x = v;
+        do {
+            adj.each(x, [&](uint32_t t) {
+                uint32_t a, c;
+                others(t, x, a, c);
+                const uint32_t wa = wedge[a], wc = wedge[c];
+                stamp[wa] = mark;
+                stamp[wc] = mark;
+                if (wa == wu || wc == wu) {
+                    const uint32_t w = wa == wu ? wc : wa;
+                    if (!is_opposite(w)) {
+                        if (co < 8) opposite[co++] = w;
+                        else bad = true;
+                    }
+                }
+            });
+            x = next_copy[x];
+        } while (x != v && !bad);
+        if (bad) return true;
+        uint32_t y = u;
+        do {
+            adj.each(y, [&](uint32_t t) {
+                if (bad) return;
+                uint32_t a, c;
+                others(t, y, a, c);
+                const uint32_t wa = wedge[a], wc = wedge[c];
+                if (wa != wv && stamp[wa] == mark && !is_opposite(wa)) bad = true;
+                if (wc != wv && stamp[wc] == mark && !is_opposite(wc)) bad = true;
+                // a tetrahedron folds flat: u's triangle (u, a, c) with both a and c opposite
+                // would be duplicated by v's (v, a, c) rewritten to u
+                if (!bad && y == u && co == 2 && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
+                    adj.each(v, [&](uint32_t s2) {
+                        if (!bad && !contains(s2, u) && contains(s2, a) && contains(s2, c)) bad = true;
+                    });
+                }
+            });
+            y = next_copy[y];
+        } while (y != u && !bad);
         return bad;
     }
 
@@ -286,7 +322,15 @@ struct Builder {
             if (!border_move_allowed(v, u)) return;
             scratch.push_back({0.0f, v, u});
         };
-        if (kind[v] == kBorder) {
+        if (kind[v] == kSeam) {
+            for (const uint32_t u : {border_next[v], border_prev[v]}) {
+                if (stamp[u] == seen || removed[u]) continue;
+                stamp[u] = seen;
+                const uint32_t u2 = seam_target(v, u);
+                if (u2 == kNone || !border_move_allowed(v, u) || !border_move_allowed(partner[v], u2)) continue;
+                scratch.push_back({0.0f, v, u});
+            }
+        } else if (kind[v] == kBorder) {
             offer(border_next[v]);
             offer(border_prev[v]);
         } else {
@@ -304,7 +348,10 @@ struct Builder {
                     scratch.push_back({0.0f, v, u});
                 }
         if (scratch.empty()) return false;
-        for (Candidate& c : scratch) c.cost = cost(adj, v, c.u);
+        for (Candidate& c : scratch) {
+            c.cost = cost(adj, v, c.u);
+            if (kind[v] == kSeam) c.cost += cost(adj, partner[v], seam_target(v, c.u));  // both copies move
+        }
         if (!check_legal) {
             best = scratch[0];
             for (const Candidate& c : scratch)
@@ -316,7 +363,7 @@ struct Builder {
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
         for (const Candidate& c : scratch)
-            if (!illegal(adj, v, c.u)) {
+            if (!illegal(adj, v, c.u) && (kind[v] != kSeam || !illegal(adj, partner[v], seam_target(v, c.u)))) {
                 best = c;
                 return true;
             }
@@ -351,7 +398,7 @@ struct Builder {
         removed_order.push_back(v);
         removed_target.push_back(u);
         if (predicate == Predicate::quadric) add(quadric[u], quadric[v]);
-        if (kind[v] == kBorder) {
+        if (kind[v] == kBorder || kind[v] == kSeam) {
             const uint32_t p = border_prev[v], q = border_next[v];
             if (u == q) {
                 border_prev[u] = p;
@@ -438,7 +485,7 @@ void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp)
     }
 }
 
-void classify(Builder& b, BuildStats& stats) {
+void classify(Builder& b, BuildStats& stats, bool allow_seams) {
     const uint32_t n = b.n, m = b.m;
     b.kind.assign(n, kInterior);
     b.border_next.assign(n, kNone);
@@ -467,12 +514,15 @@ void classify(Builder& b, BuildStats& stats) {
         else
             b.kind[v] = kLocked;
     }
-    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart:
-    // an open-addressing table of exact position bits finds them
+    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
+    // An open-addressing table of exact position bits groups them: a group of two border vertices
+    // whose border neighbours are coincident too is a seam (the two collapse together); any other
+    // group is locked.
+    b.partner.assign(n, kNone);
     {
         size_t cap = 16;
         while (cap < size_t(n) * 2) cap *= 2;
-        std::vector<uint32_t> table(cap, kNone);
+        std::vector<uint32_t> table(cap, kNone), first(n, kNone), count(n, 0), second(n, kNone);
         auto same = [&](uint32_t a, uint32_t c) { return std::memcmp(&b.pos[a], &b.pos[c], sizeof(Vec3)) == 0; };
         for (uint32_t v = 0; v < n; ++v) {
             uint32_t bits[3];
@@ -484,13 +534,47 @@ void classify(Builder& b, BuildStats& stats) {
             for (size_t i = size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
                 if (table[i] == kNone) {
                     table[i] = v;
+                    first[v] = v;
+                    count[v] = 1;
                     break;
                 }
                 if (same(table[i], v)) {
-                    b.kind[table[i]] = kLocked;
-                    b.kind[v] = kLocked;
+                    first[v] = table[i];
+                    if (++count[table[i]] == 2) second[table[i]] = v;
                     break;
                 }
+            }
+        }
+        // position classes: the first copy names the class; copies are linked in a circle
+        b.wedge.assign(first.begin(), first.end());
+        b.next_copy.resize(n);
+        {
+            std::vector<uint32_t> last(n, kNone);
+            for (uint32_t v = 0; v < n; ++v) b.next_copy[v] = v;
+            for (uint32_t v = 0; v < n; ++v) {
+                const uint32_t r = first[v];
+                if (v == r) {
+                    last[r] = v;
+                    continue;
+                }
+                b.next_copy[v] = r;          // v closes the circle
+                b.next_copy[last[r]] = v;    // after the class's previous copy
+                last[r] = v;
+            }
+        }
+        auto pos_eq = [&](uint32_t a, uint32_t c) { return a != kNone && c != kNone && same(a, c); };
+        for (uint32_t v = 0; v < n; ++v) {
+            const uint32_t r = first[v];
+            if (count[r] < 2) continue;
+            const uint32_t a = r, c = second[r];
+            const bool seam = count[r] == 2 && b.kind[a] == kBorder && b.kind[c] == kBorder &&
+                              ((pos_eq(b.border_next[a], b.border_prev[c]) && pos_eq(b.border_prev[a], b.border_next[c])) ||
+                               (pos_eq(b.border_next[a], b.border_next[c]) && pos_eq(b.border_prev[a], b.border_prev[c])));
+            if (seam && allow_seams) {
+                b.kind[v] = kSeam;
+                b.partner[v] = v == a ? c : a;
+            } else {
+                b.kind[v] = kLocked;
             }
         }
     }
@@ -499,6 +583,7 @@ void classify(Builder& b, BuildStats& stats) {
     for (uint32_t v = 0; v < n; ++v) {
         stats.locked_vertices += b.kind[v] == kLocked;
         stats.border_vertices += b.kind[v] == kBorder;
+        stats.seam_vertices += b.kind[v] == kSeam;
     }
 }
 
@@ -648,6 +733,27 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
             for (const Candidate& c : candidates) {
                 if (executed >= quota) break;
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
+                if (b.kind[c.v] == kSeam) {
+                    // both copies move, each to the copy of the target on its side
+                    const uint32_t v2 = b.partner[c.v], u2 = b.seam_target(c.v, c.u);
+                    if (b.removed[c.v] || b.removed[c.u] || v2 == kNone || u2 == kNone || pass_mark[v2] == pass || pass_mark[u2] == pass ||
+                        !b.border_move_allowed(c.v, c.u) || !b.border_move_allowed(v2, u2) || b.illegal(adj, c.v, c.u) || b.illegal(adj, v2, u2)) {
+                        dirty[c.v] = 1;
+                        needs_oracle[c.v] = 1;
+                        continue;
+                    }
+                    for (const uint32_t x : {c.v, c.u, v2, u2}) b.mark_ring(adj, x, dirty);
+                    b.pair_steps.push_back(uint32_t(b.removed_order.size()));
+                    b.apply(adj, c.v, c.u);
+                    adj.splice(c.v, c.u);
+                    b.apply(adj, v2, u2);
+                    adj.splice(v2, u2);
+                    b.partner[c.u] = u2;  // the targets are the seam's copies from now on
+                    b.partner[u2] = c.u;
+                    pass_mark[c.v] = pass_mark[c.u] = pass_mark[v2] = pass_mark[u2] = pass;
+                    executed += 2;
+                    continue;
+                }
                 if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u)) {
                     dirty[c.v] = 1;  // look again next pass, through the oracle
                     needs_oracle[c.v] = 1;
@@ -666,7 +772,7 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                             if (b.stamp[w] == seen) continue;
                             b.stamp[w] = seen;
                             if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) continue;
-                            if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {
+                            if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {  // borders, seams: look again
                                 dirty[w] = 1;
                                 continue;
                             }
@@ -779,6 +885,7 @@ MeshView TomMesh::view() const noexcept {
     v.colors = colors.empty() ? nullptr : colors.data();
     v.substitute = substitute.data();
     v.triangles = triangles.data();
+    v.pair_bits = pair_bits.empty() ? nullptr : pair_bits.data();
     for (int k = 0; k < 3; ++k) v.bounds_min[k] = bounds_min[k], v.bounds_max[k] = bounds_max[k];
     return v;
 }
@@ -812,7 +919,9 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     b.death_step.assign(b.m, kNone);
     b.removed_order.reserve(b.n);
     b.removed_target.reserve(b.n);
-    classify(b, stats);
+    // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
+    // keep coincident copies locked
+    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
     if (b.predicate == Predicate::quadric) init_quadrics(b);
     find_pairs(b, params.pair_threshold, stats);
 
@@ -874,6 +983,15 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
             out.bounds_min[k] = std::min(out.bounds_min[k], mesh.positions[3 * size_t(i) + k]);
             out.bounds_max[k] = std::max(out.bounds_max[k], mesh.positions[3 * size_t(i) + k]);
         }
+    // a seam collapse removed two vertices at steps j, j + 1: they sit at n-2-j and n-1-j, and
+    // no resolution may take one without the other
+    if (!b.pair_steps.empty()) {
+        out.pair_bits.assign((size_t(n) + 7) / 8, 0);
+        for (const uint32_t j : b.pair_steps) {
+            const uint32_t i = n - 2 - j;
+            out.pair_bits[i / 8] |= uint8_t(1u << (i % 8));
+        }
+    }
     stats.substitutions = removed_count;
     if (stats_out) *stats_out = stats;
     return out;

@@ -31,8 +31,11 @@ inline bool alive(const I* substitute, const I* tri, uint32_t n) noexcept {
     return a != b && b != c && a != c;
 }
 
+// Into [min_vertex_count, vertex_count], and never between the two copies of a seam pair
+// (resolution n takes vertices [0, n): n - 1 without n would open the seam): one below then.
 inline uint32_t clamp_resolution(const MeshView& m, uint32_t n) noexcept {
-    return std::min(std::max(n, m.min_vertex_count), m.vertex_count);
+    n = std::min(std::max(n, m.min_vertex_count), m.vertex_count);
+    return m.splits_pair(n) ? n - 1 : n;
 }
 
 template <class I>
@@ -216,7 +219,7 @@ uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) 
         else
             lo = mid + 1;
     }
-    return lo;
+    return m.splits_pair(lo) ? lo + 1 : lo;  // a resolution that keeps a seam pair together
 }
 
 uint32_t vertex_count_for_fraction(const MeshView& m, double fraction) noexcept {

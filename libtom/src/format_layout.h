@@ -28,7 +28,7 @@ constexpr uint32_t fourcc(const char (&s)[5]) {
 }
 constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), sec_normals = fourcc("NORM"),
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
-                   sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META");
+                   sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR");
 
 // little-endian loads and stores (the format is little-endian; so is every supported host)
 inline uint32_t load_u32(const uint8_t* p) {

@@ -70,6 +70,7 @@ struct MeshSections {
     const SectionInfo* substitute = nullptr;
     const SectionInfo* triangles = nullptr;
     const SectionInfo* metadata = nullptr;
+    const SectionInfo* pairs = nullptr;
 };
 
 } // namespace
@@ -128,7 +129,7 @@ void File::Impl::validate(const OpenOptions& options) {
         // rule 9: known sections belong to an existing mesh, once each
         const SectionInfo** slot = nullptr;
         if (type == sec_mesh || type == sec_positions || type == sec_normals || type == sec_texcoords || type == sec_colors ||
-            type == sec_substitute || type == sec_triangles || type == sec_metadata) {
+            type == sec_substitute || type == sec_triangles || type == sec_metadata || type == sec_pairs) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
             MeshSections& ms = per_mesh[s.mesh];
@@ -139,6 +140,7 @@ void File::Impl::validate(const OpenOptions& options) {
                  : type == sec_colors ? &ms.colors
                  : type == sec_substitute ? &ms.substitute
                  : type == sec_triangles ? &ms.triangles
+                 : type == sec_pairs     ? &ms.pairs
                                          : &ms.metadata;
             if (*slot) fail(e, field, 9, "mesh " + std::to_string(s.mesh) + " has this section twice");
             *slot = &s;
@@ -237,6 +239,21 @@ void File::Impl::validate(const OpenOptions& options) {
             if (at != bytes) fail(ms.metadata->offset + at, mesh_field + " META", 15, "bytes after the last entry");
             v.metadata = p;
             v.metadata_bytes = bytes;
+        }
+        // rule 16: seam pairs: (V + 7) / 8 bytes, pairs of removed vertices, never overlapping
+        if (ms.pairs) {
+            if (ms.pairs->bytes != (nv + 7) / 8)
+                fail(ms.pairs->offset, mesh_field + " PAIR", 16, std::to_string(ms.pairs->bytes) + " bytes where the vertex count requires " + std::to_string((nv + 7) / 8));
+            const uint8_t* bits = data + ms.pairs->offset;
+            bool previous = false;
+            for (uint32_t i = 0; i < v.vertex_count; ++i) {
+                const bool set = (bits[i / 8] >> (i % 8)) & 1u;
+                if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count || previous))
+                    fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16,
+                         "a pair must join two removed vertices and pairs must not overlap");
+                previous = set;
+            }
+            v.pair_bits = bits;
         }
     }
 }

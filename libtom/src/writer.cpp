@@ -99,6 +99,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOp
         sections.push_back({sec_substitute, mi, index_bytes(m.substitute, index_size)});
         sections.push_back({sec_triangles, mi, index_bytes(m.triangles, index_size)});
         if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});
+        if (!m.pair_bits.empty()) sections.push_back({sec_pairs, mi, m.pair_bits});
     }
     const uint64_t table_offset = header_bytes;
     uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;

@@ -64,8 +64,10 @@ TEST_CASE("a closed genus-0 surface ends as a tetrahedron, a torus keeps its hol
 }
 
 TEST_CASE("borders stay in place: a grid keeps its outline down to 5% of its triangles", "[builder]") {
-    const test::NamedMesh grid = test::generated_meshes()[3];
-    REQUIRE(grid.name.find("grid") != std::string::npos);
+    test::NamedMesh grid;
+    for (test::NamedMesh& nm : test::generated_meshes())
+        if (nm.name.rfind("grid 20x20", 0) == 0) grid = std::move(nm);
+    REQUIRE(grid.mesh.vertex_count() > 0);
     for (tom::Predicate p : {tom::Predicate::quadric, tom::Predicate::memoryless}) {
         tom::BuildParams bp;
         bp.predicate = p;

@@ -278,6 +278,29 @@ TEST_CASE("rules 9 to 15: structure behind valid checksums", "[format][corrupt]"
     CHECK(rule_of(b) == 15);
 }
 
+TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[format][corrupt][seams]") {
+    // a UV sphere cut along a meridian: its seam copies collapse in pairs
+    const tom::Mesh seam_sphere = test::generated_meshes()[2].mesh;
+    REQUIRE(test::generated_meshes()[2].name.find("seam") != std::string::npos);
+    tom::BuildStats stats;
+    const tom::TomMesh t = tom::build(seam_sphere, {}, &stats);
+    CHECK(stats.seam_vertices > 0);
+    REQUIRE(!t.pair_bits.empty());
+    const std::vector<uint8_t> good = tom::serialize({t});
+    const tom::File f = tom::File::from_bytes(good.data(), good.size());
+    REQUIRE(f.mesh(0).pair_bits != nullptr);
+    const Section& pairs = find(sections_of(good), "PAIR");
+    std::vector<uint8_t> b = good;
+    for (size_t k = 0; k < pairs.bytes; ++k) b[pairs.offset + k] = 0xFF;  // every bit: overlapping pairs
+    fix_checksums(b);
+    CHECK(rule_of(b) == 16);
+    CHECK(message_of(b).find("must not overlap") != std::string::npos);
+    b = good;
+    b[pairs.offset] |= 1;  // vertex 0 is a survivor
+    fix_checksums(b);
+    CHECK(rule_of(b) == 16);
+}
+
 TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {
     const std::vector<uint8_t> good = tom::serialize({small_mesh()});
     std::mt19937 rng(1234);

@@ -39,6 +39,7 @@ struct BuildStats {
     uint32_t substitutions = 0;      ///< vertices removed = vertex_count - min_vertex_count
     uint32_t locked_vertices = 0;    ///< never substituted: non-manifold, coincident copies, border corners
     uint32_t border_vertices = 0;
+    uint32_t seam_vertices = 0;      ///< coincident copies on attribute seams, collapsed in pairs
     uint32_t passes = 0;             ///< passes (Strategy::passes) or 0
     uint32_t pair_candidates = 0;    ///< non-edge pairs offered by the oracle
 };
@@ -56,6 +57,7 @@ struct TomMesh {
     std::vector<uint32_t> substitute;     ///< per vertex: substitute[i] < i, or i for survivors
     std::vector<uint32_t> triangles;      ///< 3 per triangle, original corners, sorted by death
     std::vector<uint32_t> original_index; ///< sorted vertex -> index in the cleaned input (not stored in files)
+    std::vector<uint8_t> pair_bits;       ///< bit i (LSB first): vertices i and i + 1 are a seam pair, removed together; empty if none
     std::vector<MetadataEntry> metadata;
     float bounds_min[3] = {0, 0, 0};
     float bounds_max[3] = {0, 0, 0};

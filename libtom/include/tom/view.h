@@ -29,10 +29,15 @@ struct MeshView {
     float bounds_min[3] = {0, 0, 0};
     float bounds_max[3] = {0, 0, 0};
     const uint8_t* metadata = nullptr; ///< metadata entries (FORMAT.md, section META)
+    const uint8_t* pair_bits = nullptr;  ///< bit i: vertices i and i + 1 are a seam pair (section PAIR), or null
     size_t metadata_bytes = 0;
 
     uint32_t substitute_at(uint32_t i) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];
+    }
+    /// True when resolution n would take one copy of a seam pair without the other.
+    bool splits_pair(uint32_t n) const noexcept {
+        return pair_bits && n > 0 && n < vertex_count && (pair_bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
     }
     uint32_t corner(uint32_t c) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(triangles)[c] : static_cast<const uint32_t*>(triangles)[c];
