@@ -28,6 +28,17 @@ def load(directory):
     return {k: runs[k] for k in sorted(runs, key=lambda n: ORDER.index(n) if n in ORDER else 99)}
 
 
+def save(fig, ax, ylabel, title, legend_columns, path):
+    """Labels a plot against frame, writes it to path and closes it."""
+    ax.set_xlabel("frame")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8, ncol=legend_columns)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("directory")
@@ -50,13 +61,8 @@ def main():
         ax.axhline(budget, color="black", linestyle="--", linewidth=1, label="budget")
         ax.axhline(1.1 * budget, color="gray", linestyle=":", linewidth=1, label="1.1 x budget")
         ax.set_ylim(0, 3 * budget)
-    ax.set_xlabel("frame")
-    ax.set_ylabel("frame time (ms)")
-    ax.set_title("Frame time along the path (A: crowd close up, B: few far objects, C: spin)")
-    ax.legend(fontsize=8, ncol=4)
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.directory, "frame-times." + args.format))
-    plt.close(fig)
+    save(fig, ax, "frame time (ms)", "Frame time along the path (A: crowd close up, B: few far objects, C: spin)", 4,
+         os.path.join(args.directory, "frame-times." + args.format))
     fig, ax = plt.subplots(figsize=(9, 4.8))
     first = next(iter(runs.values()))
     ax.semilogy([int(r["frame"]) for r in first], [max(1, int(r["visible_triangles"])) for r in first], color="black", label="visible (full detail)")
@@ -64,13 +70,8 @@ def main():
         if name == "none":
             continue
         ax.semilogy([int(r["frame"]) for r in rows], [max(1, int(r["drawn_triangles"])) for r in rows], label="drawn: " + name)
-    ax.set_xlabel("frame")
-    ax.set_ylabel("triangles")
-    ax.set_title("Visible and drawn triangles along the path")
-    ax.legend(fontsize=8, ncol=3)
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.directory, "triangles." + args.format))
-    plt.close(fig)
+    save(fig, ax, "triangles", "Visible and drawn triangles along the path", 3,
+         os.path.join(args.directory, "triangles." + args.format))
     print("plot-walk: frame-times.%s and triangles.%s in %s" % (args.format, args.format, args.directory))
     return 0
 
