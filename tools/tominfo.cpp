@@ -49,6 +49,8 @@ int main(int argc, char** argv) {
             if (m.normals) attrs.push_back("normal");
             if (m.texcoords) attrs.push_back("texcoord0");
             if (m.colors) attrs.push_back("color0");
+            if (m.texcoords1) attrs.push_back("texcoord1");
+            if (m.tangents) attrs.push_back("tangent");
             mj["attributes"] = attrs;
             mj["bounds_min"] = {m.bounds_min[0], m.bounds_min[1], m.bounds_min[2]};
             mj["bounds_max"] = {m.bounds_max[0], m.bounds_max[1], m.bounds_max[2]};

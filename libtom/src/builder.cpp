@@ -883,6 +883,8 @@ MeshView TomMesh::view() const noexcept {
     v.normals = normals.empty() ? nullptr : normals.data();
     v.texcoords = texcoords.empty() ? nullptr : texcoords.data();
     v.colors = colors.empty() ? nullptr : colors.data();
+    v.texcoords1 = texcoords1.empty() ? nullptr : texcoords1.data();
+    v.tangents = tangents.empty() ? nullptr : tangents.data();
     v.substitute = substitute.data();
     v.triangles = triangles.data();
     v.pair_bits = pair_bits.empty() ? nullptr : pair_bits.data();
@@ -960,6 +962,8 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     permute(mesh.normals, out.normals, 3);
     permute(mesh.texcoords, out.texcoords, 2);
     permute(mesh.colors, out.colors, 4);
+    permute(mesh.texcoords1, out.texcoords1, 2);
+    permute(mesh.tangents, out.tangents, 4);
 
     // triangle t is alive at resolution r >= key(t): key = n - step for a triangle killed by
     // substitution `step` (its removed vertex gets index n-1-step), s for the survivors.

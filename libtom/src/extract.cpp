@@ -255,8 +255,13 @@ MorphedVertex geomorph(const MeshView& m, uint32_t n, float a) noexcept {
     lerp(m.normals, 3, r.normal);
     lerp(m.texcoords, 2, r.texcoord);
     lerp(m.colors, 4, r.color);
-    const float len = std::sqrt(r.normal[0] * r.normal[0] + r.normal[1] * r.normal[1] + r.normal[2] * r.normal[2]);
-    if (len > 0) r.normal[0] /= len, r.normal[1] /= len, r.normal[2] /= len;
+    lerp(m.texcoords1, 2, r.texcoord1);
+    lerp(m.tangents, 4, r.tangent);
+    for (float* q : {r.normal, r.tangent}) {
+        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (len > 0) q[0] /= len, q[1] /= len, q[2] /= len;
+    }
+    if (m.tangents) r.tangent[3] = r.tangent[3] < 0.0f ? -1.0f : 1.0f;
     return r;
 }
 

@@ -21,14 +21,28 @@ constexpr uint32_t s_type = 0, s_mesh = 4, s_offset = 8, s_bytes = 16, s_checksu
 constexpr uint32_t m_vertex_count = 0, m_triangle_count = 4, m_min_vertex_count = 8, m_index_size = 12, m_material = 16,
                    m_attributes = 20, m_bounds_min = 24, m_bounds_max = 36, m_name_bytes = 48;
 
-enum Attribute : uint32_t { attr_normals = 1, attr_texcoords = 2, attr_colors = 4 };
+enum Attribute : uint32_t { attr_normals = 1, attr_texcoords = 2, attr_colors = 4, attr_texcoords1 = 8, attr_tangents = 16 };
+constexpr uint32_t known_attributes = attr_normals | attr_texcoords | attr_colors | attr_texcoords1 | attr_tangents;
 
 constexpr uint32_t fourcc(const char (&s)[5]) {
     return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 | uint32_t(uint8_t(s[3])) << 24;
 }
 constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), sec_normals = fourcc("NORM"),
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
-                   sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR");
+                   sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
+                   sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG");
+
+/// The optional f32 vertex streams: attribute flag, section type and name, floats per vertex.
+struct AttributeStream {
+    uint32_t flag;
+    uint32_t section;
+    const char* name;
+    uint32_t components;
+};
+constexpr AttributeStream attribute_streams[] = {{attr_normals, sec_normals, "NORM", 3},     {attr_texcoords, sec_texcoords, "TEX0", 2},
+                                                 {attr_colors, sec_colors, "COL0", 4},       {attr_texcoords1, sec_texcoords1, "TEX1", 2},
+                                                 {attr_tangents, sec_tangents, "TANG", 4}};
+constexpr int attribute_stream_count = int(sizeof(attribute_streams) / sizeof(attribute_streams[0]));
 
 // little-endian loads and stores (the format is little-endian; so is every supported host)
 inline uint32_t load_u32(const uint8_t* p) {

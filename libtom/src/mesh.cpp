@@ -65,9 +65,7 @@ CleanStats clean_mesh(Mesh& mesh) {
         throw ImportError("mesh '" + mesh.name + "': index count " + std::to_string(mesh.indices.size()) + " is not a multiple of 3");
     if (mesh.positions.size() / 3 > size_t(UINT32_MAX) - 1 || mesh.indices.size() / 3 > size_t(UINT32_MAX) - 1)
         throw ImportError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
-    check_stream(mesh, mesh.normals, 3, "normal");
-    check_stream(mesh, mesh.texcoords, 2, "texcoord");
-    check_stream(mesh, mesh.colors, 4, "color");
+    for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char* what) { check_stream(mesh, stream, width, what); });
     const uint32_t n = mesh.vertex_count();
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!std::isfinite(mesh.positions[i]))
@@ -100,9 +98,7 @@ CleanStats clean_mesh(Mesh& mesh) {
     stats.unreferenced_vertices = n - next;
     if (next != n) {
         compact_stream(mesh.positions, remap, 3, next);
-        compact_stream(mesh.normals, remap, 3, next);
-        compact_stream(mesh.texcoords, remap, 2, next);
-        compact_stream(mesh.colors, remap, 4, next);
+        for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char*) { compact_stream(stream, remap, width, next); });
         for (uint32_t& i : mesh.indices) i = remap[i];
     }
 

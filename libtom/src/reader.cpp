@@ -64,9 +64,7 @@ std::string type_name(uint32_t type) {
 struct MeshSections {
     const SectionInfo* mesh = nullptr;
     const SectionInfo* positions = nullptr;
-    const SectionInfo* normals = nullptr;
-    const SectionInfo* texcoords = nullptr;
-    const SectionInfo* colors = nullptr;
+    const SectionInfo* streams[attribute_stream_count] = {};  // as layout::attribute_streams
     const SectionInfo* substitute = nullptr;
     const SectionInfo* triangles = nullptr;
     const SectionInfo* metadata = nullptr;
@@ -128,16 +126,17 @@ void File::Impl::validate(const OpenOptions& options) {
             fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
         // rule 9: known sections belong to an existing mesh, once each
         const SectionInfo** slot = nullptr;
-        if (type == sec_mesh || type == sec_positions || type == sec_normals || type == sec_texcoords || type == sec_colors ||
-            type == sec_substitute || type == sec_triangles || type == sec_metadata || type == sec_pairs) {
+        int stream = -1;
+        for (int k = 0; k < attribute_stream_count; ++k)
+            if (type == attribute_streams[k].section) stream = k;
+        if (type == sec_mesh || type == sec_positions || stream >= 0 || type == sec_substitute || type == sec_triangles ||
+            type == sec_metadata || type == sec_pairs) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
             MeshSections& ms = per_mesh[s.mesh];
             slot = type == sec_mesh ? &ms.mesh
                  : type == sec_positions ? &ms.positions
-                 : type == sec_normals ? &ms.normals
-                 : type == sec_texcoords ? &ms.texcoords
-                 : type == sec_colors ? &ms.colors
+                 : stream >= 0 ? &ms.streams[stream]
                  : type == sec_substitute ? &ms.substitute
                  : type == sec_triangles ? &ms.triangles
                  : type == sec_pairs     ? &ms.pairs
@@ -176,12 +175,11 @@ void File::Impl::validate(const OpenOptions& options) {
             fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "index size " + std::to_string(v.index_size) + " is not 2 or 4");
         if (v.index_size == 2 && v.vertex_count > 65536)
             fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "16-bit indices for " + std::to_string(v.vertex_count) + " vertices");
-        if (attributes & ~uint32_t(attr_normals | attr_texcoords | attr_colors))
-            fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "unknown attribute flags");
-        for (auto [flag, sec, name] : {std::tuple{attr_normals, ms.normals, "NORM"}, std::tuple{attr_texcoords, ms.texcoords, "TEX0"},
-                                       std::tuple{attr_colors, ms.colors, "COL0"}})
-            if (bool(attributes & flag) != (sec != nullptr))
-                fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, std::string("attribute flags and section ") + name + " disagree");
+        if (attributes & ~known_attributes) fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "unknown attribute flags");
+        for (int k = 0; k < attribute_stream_count; ++k)
+            if (bool(attributes & attribute_streams[k].flag) != (ms.streams[k] != nullptr))
+                fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10,
+                     std::string("attribute flags and section ") + attribute_streams[k].name + " disagree");
         // rule 11: stream sizes
         auto check_size = [&](const SectionInfo* sec, uint64_t expected, const char* name) {
             if (sec && sec->bytes != expected)
@@ -190,15 +188,15 @@ void File::Impl::validate(const OpenOptions& options) {
         };
         const uint64_t nv = v.vertex_count, nt = v.triangle_count;
         check_size(ms.positions, nv * 12, "POSI");
-        check_size(ms.normals, nv * 12, "NORM");
-        check_size(ms.texcoords, nv * 8, "TEX0");
-        check_size(ms.colors, nv * 16, "COL0");
+        for (int k = 0; k < attribute_stream_count; ++k)
+            check_size(ms.streams[k], nv * 4 * attribute_streams[k].components, attribute_streams[k].name);
         check_size(ms.substitute, nv * v.index_size, "SUBS");
         check_size(ms.triangles, nt * 3 * v.index_size, "TRIS");
         v.positions = reinterpret_cast<const float*>(data + ms.positions->offset);
-        v.normals = ms.normals ? reinterpret_cast<const float*>(data + ms.normals->offset) : nullptr;
-        v.texcoords = ms.texcoords ? reinterpret_cast<const float*>(data + ms.texcoords->offset) : nullptr;
-        v.colors = ms.colors ? reinterpret_cast<const float*>(data + ms.colors->offset) : nullptr;
+        static constexpr const float* MeshView::*view_stream[attribute_stream_count] = {&MeshView::normals, &MeshView::texcoords, &MeshView::colors,
+                                                                                         &MeshView::texcoords1, &MeshView::tangents};
+        for (int k = 0; k < attribute_stream_count; ++k)
+            v.*view_stream[k] = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
         v.substitute = data + ms.substitute->offset;
         v.triangles = data + ms.triangles->offset;
         // rule 12: resolution range

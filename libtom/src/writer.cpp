@@ -80,10 +80,16 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOp
         store_u32(&head[m_min_vertex_count], m.min_vertex_count);
         store_u32(&head[m_index_size], index_size);
         store_u32(&head[m_material], uint32_t(m.material));
+        // the optional streams, in the order of layout::attribute_streams
+        std::vector<PendingSection> streams;
         uint32_t attributes = 0;
-        if (!m.normals.empty()) attributes |= attr_normals;
-        if (!m.texcoords.empty()) attributes |= attr_texcoords;
-        if (!m.colors.empty()) attributes |= attr_colors;
+        int stream = 0;
+        for_each_attribute_stream(m, [&](const std::vector<float>& values, size_t, const char*) {
+            const AttributeStream& spec = attribute_streams[stream++];
+            if (values.empty()) return;
+            attributes |= spec.flag;
+            streams.push_back({spec.section, mi, float_bytes(values)});
+        });
         store_u32(&head[m_attributes], attributes);
         for (int k = 0; k < 3; ++k) {
             store_f32(&head[m_bounds_min + 4 * k], m.bounds_min[k]);
@@ -93,9 +99,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOp
         head.insert(head.end(), m.name.begin(), m.name.end());
         sections.push_back({sec_mesh, mi, std::move(head)});
         sections.push_back({sec_positions, mi, float_bytes(m.positions)});
-        if (!m.normals.empty()) sections.push_back({sec_normals, mi, float_bytes(m.normals)});
-        if (!m.texcoords.empty()) sections.push_back({sec_texcoords, mi, float_bytes(m.texcoords)});
-        if (!m.colors.empty()) sections.push_back({sec_colors, mi, float_bytes(m.colors)});
+        for (PendingSection& section : streams) sections.push_back(std::move(section));
         sections.push_back({sec_substitute, mi, index_bytes(m.substitute, index_size)});
         sections.push_back({sec_triangles, mi, index_bytes(m.triangles, index_size)});
         if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});

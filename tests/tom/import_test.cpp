@@ -9,6 +9,7 @@
 #include "support.h"
 #include "tom/builder.h"
 #include "tom/errors.h"
+#include "tom/format.h"
 #include "tom/import.h"
 
 namespace {
@@ -111,6 +112,41 @@ TEST_CASE("glTF: .gltf with .bin, embedded and .glb give the same mesh with its 
     CHECK(meshes[0].positions == meshes[2].positions);
     CHECK(meshes[0].texcoords == meshes[2].texcoords);
     CHECK(meshes[0].indices == meshes[2].indices);
+}
+
+TEST_CASE("glTF: TEXCOORD_1 and TANGENT are read, built, stored and extracted with their vertices", "[import][gltf][attributes]") {
+    struct Case {
+        const char* file;
+        bool texcoord1, tangent;
+    };
+    for (const Case c : {Case{"assimp/glTF2/BoxTexcoords-glTF/boxTexcoords.gltf", true, false},
+                         Case{"assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf", false, true}}) {
+        INFO(c.file);
+        tom::ImportResult r = tom::import_file(test::sample(c.file));
+        REQUIRE(r.meshes.size() == 1);
+        tom::Mesh m = r.meshes[0];
+        const uint32_t n = m.vertex_count();
+        CHECK(m.texcoords1.size() == (c.texcoord1 ? n * 2 : 0));
+        CHECK(m.tangents.size() == (c.tangent ? n * 4 : 0));
+        for (size_t v = 0; v < m.tangents.size(); v += 4) CHECK(std::abs(m.tangents[v + 3]) == 1.0f);  // handedness
+        const tom::Mesh input = m;
+        tom::clean_mesh(m);
+        const tom::TomMesh t = tom::build(m);
+        const std::vector<uint8_t> bytes = tom::serialize({t});
+        const tom::File f = tom::File::from_bytes(bytes.data(), bytes.size());
+        const tom::MeshView& v = f.mesh(0);
+        REQUIRE((v.texcoords1 != nullptr) == c.texcoord1);
+        REQUIRE((v.tangents != nullptr) == c.tangent);
+        // each sorted vertex carries the attributes of the input vertex it came from
+        for (uint32_t i = 0; i < v.vertex_count; ++i) {
+            const uint32_t o = t.original_index[i];
+            for (int k = 0; k < 3; ++k) REQUIRE(v.positions[3 * i + k] == input.positions[3 * o + k]);
+            if (c.texcoord1)
+                for (int k = 0; k < 2; ++k) REQUIRE(v.texcoords1[2 * i + k] == input.texcoords1[2 * o + k]);
+            if (c.tangent)
+                for (int k = 0; k < 4; ++k) REQUIRE(v.tangents[4 * i + k] == input.tangents[4 * o + k]);
+        }
+    }
 }
 
 TEST_CASE("glTF: Draco-compressed primitives decode to the same meshes as the uncompressed file", "[import][gltf][draco]") {

@@ -53,7 +53,7 @@ struct TomMesh {
     std::string name;
     int32_t material = -1;
     uint32_t min_vertex_count = 0;
-    std::vector<float> positions, normals, texcoords, colors;  ///< sorted, as in Mesh
+    std::vector<float> positions, normals, texcoords, colors, texcoords1, tangents;  ///< sorted, as in Mesh
     std::vector<uint32_t> substitute;     ///< per vertex: substitute[i] < i, or i for survivors
     std::vector<uint32_t> triangles;      ///< 3 per triangle, original corners, sorted by death
     std::vector<uint32_t> original_index; ///< sorted vertex -> index in the cleaned input (not stored in files)

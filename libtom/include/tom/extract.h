@@ -46,6 +46,8 @@ struct MorphedVertex {
     float normal[3] = {0, 0, 0};   ///< interpolated, then normalised
     float texcoord[2] = {0, 0};
     float color[4] = {0, 0, 0, 0};
+    float texcoord1[2] = {0, 0};
+    float tangent[4] = {0, 0, 0, 0}; ///< xyz interpolated and normalised; w the sign (+-1) of the interpolated w
 };
 
 /// Attributes of vertex n at the fractional resolution n + a, a in [0, 1]: interpolated from its

@@ -24,6 +24,8 @@ struct MeshView {
     const float* normals = nullptr;    ///< xyz * vertex_count, or null
     const float* texcoords = nullptr;  ///< uv * vertex_count, or null
     const float* colors = nullptr;     ///< rgba * vertex_count, or null
+    const float* texcoords1 = nullptr; ///< uv * vertex_count (TEXCOORD_1), or null
+    const float* tangents = nullptr;   ///< xyzw * vertex_count (w = +-1 handedness), or null
     const void* substitute = nullptr;  ///< index_size bytes * vertex_count
     const void* triangles = nullptr;   ///< index_size bytes * 3 * triangle_count
     float bounds_min[3] = {0, 0, 0};

@@ -40,6 +40,21 @@ struct Writer {
     }
 };
 
+// glTF requires unit normals and tangents, and a tangent's w of exactly +-1: copies of the first
+// `count` vectors of `width` 3 (normals) or 4 (tangents), normalised (a zero vector becomes +z / +x).
+std::vector<float> unit_vectors(const float* src, uint32_t count, size_t width) {
+    std::vector<float> out(src, src + size_t(count) * width);
+    for (size_t v = 0; v < out.size(); v += width) {
+        float* q = &out[v];
+        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (len > 0) q[0] /= len, q[1] /= len, q[2] /= len;
+        else if (width == 3) q[0] = 0, q[1] = 0, q[2] = 1;
+        else q[0] = 1, q[1] = 0, q[2] = 0;
+        if (width == 4) q[3] = q[3] < 0 ? -1.0f : 1.0f;
+    }
+    return out;
+}
+
 } // namespace
 
 void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes) {
@@ -62,17 +77,16 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes) {
         attributes["POSITION"] = w.accessor(w.view(m.positions, size_t(n_max) * 12, kArrayBuffer), kFloat, n_max, "VEC3",
                                             {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
         if (m.normals) {
-            std::vector<float> normals(m.normals, m.normals + size_t(n_max) * 3);
-            for (size_t v = 0; v < normals.size(); v += 3) {  // glTF requires unit normals
-                float* q = &normals[v];
-                const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-                if (len > 0) q[0] /= len, q[1] /= len, q[2] /= len;
-                else q[0] = 0, q[1] = 0, q[2] = 1;
-            }
+            const std::vector<float> normals = unit_vectors(m.normals, n_max, 3);
             attributes["NORMAL"] = w.accessor(w.view(normals.data(), normals.size() * 4, kArrayBuffer), kFloat, n_max, "VEC3");
         }
         if (m.texcoords) attributes["TEXCOORD_0"] = w.accessor(w.view(m.texcoords, size_t(n_max) * 8, kArrayBuffer), kFloat, n_max, "VEC2");
         if (m.colors) attributes["COLOR_0"] = w.accessor(w.view(m.colors, size_t(n_max) * 16, kArrayBuffer), kFloat, n_max, "VEC4");
+        if (m.texcoords1) attributes["TEXCOORD_1"] = w.accessor(w.view(m.texcoords1, size_t(n_max) * 8, kArrayBuffer), kFloat, n_max, "VEC2");
+        if (m.tangents && m.normals) {
+            const std::vector<float> tangents = unit_vectors(m.tangents, n_max, 4);
+            attributes["TANGENT"] = w.accessor(w.view(tangents.data(), tangents.size() * 4, kArrayBuffer), kFloat, n_max, "VEC4");
+        }
         std::vector<uint32_t> indices(size_t(m.triangle_count) * 3);
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
             const Extracted e = extract(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size());

@@ -255,6 +255,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             const size_t n = mesh.positions.size() / 3;
             if (attr("NORMAL") >= 0) mesh.normals = reader.read_floats(attr("NORMAL"), "NORMAL", 3, 3, false, n);
             if (attr("TEXCOORD_0") >= 0) mesh.texcoords = reader.read_floats(attr("TEXCOORD_0"), "TEXCOORD_0", 2, 2, true, n);
+            if (attr("TEXCOORD_1") >= 0) mesh.texcoords1 = reader.read_floats(attr("TEXCOORD_1"), "TEXCOORD_1", 2, 2, true, n);
+            if (attr("TANGENT") >= 0) mesh.tangents = reader.read_floats(attr("TANGENT"), "TANGENT", 4, 4, false, n);
             if (attr("COLOR_0") >= 0) {
                 std::vector<float> c = reader.read_floats(attr("COLOR_0"), "COLOR_0", 3, 4, true, n);
                 if (c.size() == n * 3) {
