@@ -14,7 +14,13 @@ let failed = 0;
 for (const file of process.argv.slice(2)) {
   const report = await validator.validateBytes(new Uint8Array(fs.readFileSync(file)), {
     uri: file,
-    externalResourceFunction: (uri) => Promise.resolve(new Uint8Array(fs.readFileSync(path.join(path.dirname(file), decodeURIComponent(uri))))),
+    externalResourceFunction: (uri) => {
+      try {
+        return Promise.resolve(new Uint8Array(fs.readFileSync(path.join(path.dirname(file), decodeURIComponent(uri)))));
+      } catch (e) {
+        return Promise.reject(e.message);  // reported by the validator as an error of this file
+      }
+    },
   });
   const i = report.issues;
   console.log(`${file}: ${i.numErrors} errors, ${i.numWarnings} warnings, ${i.numInfos} infos`);

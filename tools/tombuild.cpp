@@ -121,7 +121,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
         }
         std::error_code ec;
         fs::create_directories(fs::path(job.output).parent_path(), ec);
-        const std::vector<uint8_t> bytes = tom::serialize(built, wopt);
+        const std::vector<uint8_t> bytes = tom::serialize(built, imported.scene, wopt);
         tom::write_bytes_atomically(job.output, bytes.data(), bytes.size());
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[1024];

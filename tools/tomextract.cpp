@@ -1,6 +1,8 @@
-// tomextract: writes a .tom file's meshes at one resolution as OBJ or PLY.
+// tomextract: writes a .tom file's meshes at one resolution as OBJ or PLY, or at one or more
+// resolutions as binary glTF with the file's materials and instances.
 
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 
 #include "tom/errors.h"
@@ -28,7 +30,10 @@ int main(int argc, char** argv) {
                   ->check(CLI::Range(0.0, 100.0));
     l->excludes(f)->excludes(t)->excludes(v);
     app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
-    app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF)")->required();
+    app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
+    std::string texture_dir;
+    app.add_option("--texture-dir", texture_dir,
+                   "For .glb: the folder the stored texture URIs are relative to (the source asset's); they are rewritten relative to the output");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
@@ -44,6 +49,10 @@ int main(int argc, char** argv) {
     }
     try {
         const tom::File file = tom::File::open(path);
+        if (const std::filesystem::path parent = std::filesystem::path(output).parent_path(); !parent.empty()) {
+            std::error_code ec;
+            std::filesystem::create_directories(parent, ec);  // a failure shows when the file is written
+        }
         if (mesh_index && *mesh_index >= file.mesh_count()) {
             std::fprintf(stderr, "error: %s has %u meshes; --mesh %u does not exist\n", path.c_str(), file.mesh_count(), *mesh_index);
             return tools::exit_usage;
@@ -54,6 +63,13 @@ int main(int argc, char** argv) {
         if (is_glb()) {
             std::vector<tom::GlbMesh> glb;
             uint64_t written = 0;
+            tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
+            if (mesh_index) {
+                std::vector<tom::Instance> kept;
+                for (tom::Instance inst : scene.instances)
+                    if (inst.mesh == *mesh_index) inst.mesh = 0, kept.push_back(inst);
+                scene.instances.swap(kept);
+            }
             for (uint32_t i = 0; i < file.mesh_count(); ++i) {
                 if (mesh_index && *mesh_index != i) continue;
                 const tom::MeshView& m = file.mesh(i);
@@ -71,9 +87,12 @@ int main(int argc, char** argv) {
                 written += tom::active_triangle_count(m, g.vertex_counts.front());
                 glb.push_back(g);
             }
-            tom::export_glb(output, glb);
-            std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest -> %s\n", path.c_str(), glb.size(), glb.size() == 1 ? "" : "es",
-                        lods.empty() ? size_t(1) : lods.size(), lods.size() > 1 ? "s" : "", static_cast<unsigned long long>(written), output.c_str());
+            tom::export_glb(output, glb, scene, texture_dir);
+            std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", path.c_str(), glb.size(),
+                        glb.size() == 1 ? "" : "es", lods.empty() ? size_t(1) : lods.size(), lods.size() > 1 ? "s" : "",
+                        static_cast<unsigned long long>(written), scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
+                        tom::draw_list(scene, uint32_t(glb.size())).size(), tom::draw_list(scene, uint32_t(glb.size())).size() == 1 ? "" : "s",
+                        output.c_str());
             return tools::exit_ok;
         }
         std::vector<tom::ExportPart> parts;

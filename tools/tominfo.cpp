@@ -21,6 +21,8 @@ int main(int argc, char** argv) {
     app.add_flag("--sections", sections, "Also list the section table");
     bool show_curve = false;
     app.add_flag("--curve", show_curve, "Also print each mesh's stored error curve");
+    bool show_scene = false;
+    app.add_flag("--scene", show_scene, "Also list the materials (with texture references) and the instances (node, mesh, position)");
     app.add_flag("--no-verify", no_verify, "Skip the checksum pass (the structure is still validated)");
     app.footer("Exit codes: 0 ok, 1 the file is unreadable or invalid (the reason is printed), 2 usage error.");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
@@ -75,12 +77,30 @@ int main(int argc, char** argv) {
             }
             j["meshes"].push_back(mj);
         }
+        const tom::Scene& scene = file.scene();
+        j["materials"] = nlohmann::json::array();
+        for (const tom::Material& m : scene.materials) {
+            nlohmann::ordered_json mj = {{"name", m.name},
+                                         {"base_color", m.base_color},
+                                         {"metallic", m.metallic},
+                                         {"roughness", m.roughness},
+                                         {"alpha_mode", int(m.alpha_mode)},
+                                         {"double_sided", m.double_sided}};
+            mj["textures"] = nlohmann::json::array();
+            for (const tom::TextureRef& t : m.textures)
+                mj["textures"].push_back({{"role", tom::to_string(t.role)}, {"texcoord", t.texcoord}, {"uri", t.uri}, {"mime_type", t.mime_type}});
+            j["materials"].push_back(mj);
+        }
+        j["instances"] = nlohmann::json::array();
+        for (const tom::Instance& inst : scene.instances)
+            j["instances"].push_back({{"mesh", inst.mesh}, {"node", inst.node}, {"name", inst.name}, {"transform", inst.transform}});
         j["face_vertex_bytes"] = total_fv;
         j["percent_of_face_vertex"] = total_fv ? 100.0 * double(file.file_bytes()) / double(total_fv) : 0.0;
         if (sections || json) {
             j["sections"] = nlohmann::json::array();
             for (const tom::SectionInfo& s : file.sections())
-                j["sections"].push_back({{"type", std::string(s.type)}, {"mesh", s.mesh}, {"offset", s.offset}, {"bytes", s.bytes}});
+                j["sections"].push_back({{"type", std::string(s.type)}, {"mesh", s.mesh == 0xFFFFFFFFu ? nlohmann::json("file") : nlohmann::json(s.mesh)},
+                                         {"offset", s.offset}, {"bytes", s.bytes}});
         }
         if (json) {
             std::printf("%s\n", j.dump(2).c_str());
@@ -102,6 +122,24 @@ int main(int argc, char** argv) {
                         has_curve ? std::to_string(mj["error_curve"]["k_mean"].get<double>()).substr(0, 7).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_max"].get<double>()).substr(0, 7).c_str() : "-", attrs.c_str());
         }
+        std::printf("  scene: %zu material%s, %zu instance%s%s\n", scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
+                    scene.instances.size(), scene.instances.size() == 1 ? "" : "s",
+                    scene.instances.empty() ? " (each mesh is drawn once, untransformed)" : "");
+        for (size_t i = 0; show_scene && i < scene.materials.size(); ++i) {
+            const tom::Material& m = scene.materials[i];
+            std::printf("    material %zu '%s': base colour %.3g %.3g %.3g %.3g, metallic %.3g, roughness %.3g%s%s\n", i, m.name.c_str(), m.base_color[0],
+                        m.base_color[1], m.base_color[2], m.base_color[3], m.metallic, m.roughness, m.double_sided ? ", double-sided" : "",
+                        m.alpha_mode == tom::AlphaMode::blend ? ", blend" : m.alpha_mode == tom::AlphaMode::mask ? ", mask" : "");
+            for (const tom::TextureRef& t : m.textures)
+                std::printf("      %s texture (TEXCOORD_%u): %s\n", tom::to_string(t.role), t.texcoord,
+                            t.uri.empty() ? ("embedded " + t.mime_type).c_str() : t.uri.c_str());
+        }
+        for (size_t i = 0; show_scene && i < scene.instances.size(); ++i) {
+            const tom::Instance& inst = scene.instances[i];
+            std::printf("    instance %zu: mesh %u '%.*s' at node %u '%s', translation %.4g %.4g %.4g\n", i, inst.mesh,
+                        int(file.mesh(inst.mesh).name.size()), file.mesh(inst.mesh).name.data(), inst.node, inst.name.c_str(), inst.transform[12],
+                        inst.transform[13], inst.transform[14]);
+        }
         for (uint32_t i = 0; show_curve && i < file.mesh_count(); ++i) {
             const auto& cj = j["meshes"][i]["error_curve"];
             if (cj.is_null()) {
@@ -118,7 +156,8 @@ int main(int argc, char** argv) {
         if (sections) {
             std::printf("  sections:\n");
             for (const tom::SectionInfo& s : file.sections())
-                std::printf("    %-4s mesh %-4u offset %10llu  %12llu bytes  crc %08x\n", s.type, s.mesh, static_cast<unsigned long long>(s.offset),
+                std::printf("    %-4s mesh %-4s offset %10llu  %12llu bytes  crc %08x\n", s.type,
+                            s.mesh == 0xFFFFFFFFu ? "file" : std::to_string(s.mesh).c_str(), static_cast<unsigned long long>(s.offset),
                             static_cast<unsigned long long>(s.bytes), s.checksum);
         }
         return tools::exit_ok;

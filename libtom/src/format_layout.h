@@ -30,7 +30,10 @@ constexpr uint32_t fourcc(const char (&s)[5]) {
 constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), sec_normals = fourcc("NORM"),
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
                    sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
-                   sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG");
+                   sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
+                   sec_instances = fourcc("INST");
+/// The `mesh` field of file-level sections (MATL, INST).
+constexpr uint32_t file_level = 0xFFFFFFFFu;
 
 /// The optional f32 vertex streams: attribute flag, section type and name, floats per vertex.
 struct AttributeStream {

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "format_layout.h"
+#include "scene_codec.h"
 #include "tom/errors.h"
 #include "tom/format.h"
 
@@ -38,6 +39,7 @@ struct File::Impl {
     uint32_t version_major = 0, version_minor = 0;
     std::vector<MeshView> meshes;
     std::vector<SectionInfo> sections;
+    Scene scene;
 
     ~Impl() {
         if (map) ::munmap(map, map_bytes);
@@ -106,6 +108,8 @@ void File::Impl::validate(const OpenOptions& options) {
     if (mesh_count > section_count) fail(h_mesh_count, "mesh_count", 9, std::to_string(mesh_count) + " meshes but only " + std::to_string(section_count) + " sections");
 
     std::vector<MeshSections> per_mesh(mesh_count);
+    const SectionInfo* materials_section = nullptr;
+    const SectionInfo* instances_section = nullptr;
     sections.resize(section_count);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
@@ -124,7 +128,14 @@ void File::Impl::validate(const OpenOptions& options) {
         // rule 8: content checksum
         if (options.verify_checksums && crc32(data + s.offset, s.bytes) != s.checksum)
             fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
-        // rule 9: known sections belong to an existing mesh, once each
+        // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
+        if (type == sec_materials || type == sec_instances) {
+            if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
+            const SectionInfo*& file_slot = type == sec_materials ? materials_section : instances_section;
+            if (file_slot) fail(e, field, 9, "the file has this section twice");
+            file_slot = &s;
+            continue;
+        }
         const SectionInfo** slot = nullptr;
         int stream = -1;
         for (int k = 0; k < attribute_stream_count; ++k)
@@ -254,6 +265,16 @@ void File::Impl::validate(const OpenOptions& options) {
             v.pair_bits = bits;
         }
     }
+    // rules 17 and 18: the scene
+    if (materials_section) {
+        scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
+        for (uint32_t mi = 0; mi < mesh_count; ++mi)
+            if (meshes[mi].material >= 0 && size_t(meshes[mi].material) >= scene.materials.size())
+                fail(per_mesh[mi].mesh->offset + m_material, "mesh " + std::to_string(mi) + " material", 17,
+                     "material " + std::to_string(meshes[mi].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
+    }
+    if (instances_section)
+        scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
 }
 
 File::File(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -308,6 +329,7 @@ uint64_t File::file_bytes() const noexcept { return impl_->size; }
 uint32_t File::mesh_count() const noexcept { return uint32_t(impl_->meshes.size()); }
 const MeshView& File::mesh(uint32_t index) const noexcept { return impl_->meshes[index]; }
 const std::vector<SectionInfo>& File::sections() const noexcept { return impl_->sections; }
+const Scene& File::scene() const noexcept { return impl_->scene; }
 
 MetadataValue find_metadata(const MeshView& view, std::string_view key) noexcept {
     MetadataValue r;

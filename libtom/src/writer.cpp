@@ -4,11 +4,13 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 
 #include <unistd.h>
 
 #include "format_layout.h"
+#include "scene_codec.h"
 #include "tom/errors.h"
 #include "tom/format.h"
 
@@ -69,8 +71,15 @@ uint32_t choose_index_size(const TomMesh& mesh, IndexSize requested) {
 
 } // namespace
 
-std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options) {
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options) { return serialize(meshes, Scene{}, options); }
+
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options) {
+    for (const Instance& inst : scene.instances)
+        if (inst.mesh >= meshes.size())
+            throw std::invalid_argument("serialize: an instance names mesh " + std::to_string(inst.mesh) + " of " + std::to_string(meshes.size()));
     std::vector<PendingSection> sections;
+    if (!scene.materials.empty()) sections.push_back({sec_materials, file_level, detail::encode_materials(scene.materials)});
+    if (!scene.instances.empty()) sections.push_back({sec_instances, file_level, detail::encode_instances(scene.instances)});
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
         const TomMesh& m = meshes[mi];
         const uint32_t index_size = choose_index_size(m, options.index_size);
@@ -154,7 +163,11 @@ void write_bytes_atomically(const std::string& path, const void* data, size_t by
 }
 
 void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const WriteOptions& options) {
-    const std::vector<uint8_t> bytes = serialize(meshes, options);
+    write_file(path, meshes, Scene{}, options);
+}
+
+void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options) {
+    const std::vector<uint8_t> bytes = serialize(meshes, scene, options);
     write_bytes_atomically(path, bytes.data(), bytes.size());
 }
 

@@ -69,7 +69,21 @@ check "tomextract a level to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/c
 check "tomextract --lods to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/fandisk.tom" --lods 100,50,25,10 -o "$work/fandisk-lods.glb"
 "$tools/tombuild" "$data/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb" -o "$work/engine" -q
 check "a 34-primitive glTF to .glb" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --fraction 0.25 -o "$work/engine25.glb"
-check "the .glb files validate with no errors" node "$src/scripts/validate-gltf.mjs" "$work/cow20.glb" "$work/fandisk-lods.glb" "$work/engine25.glb"
+# a scene: materials with a texture file, node transforms, instances
+"$tools/tombuild" "$data/assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf" "$data/assimp/glTF2/textureTransform/TextureTransformTest.gltf" -o "$work/scenes" -q
+check "tominfo --scene lists materials, textures and instances" expect_exit 0 "$tools/tominfo" "$work/scenes/BoxTextured.tom" --scene
+check "with the texture URI" grep -q "baseColor texture (TEXCOORD_0): CesiumLogoFlat.png" "$work/stdout"
+check "tomextract a scene with --texture-dir" expect_exit 0 "$tools/tomextract" "$work/scenes/BoxTextured.tom" --fraction 0.5 -o "$work/box/box.glb" --texture-dir "$data/assimp/glTF2/BoxTextured-glTF"
+check "the box's node keeps its rotation and its material its texture" /usr/bin/python3 -c "
+import json, struct, os
+b = open('$work/box/box.glb', 'rb').read()
+n = struct.unpack('<I', b[12:16])[0]; d = json.loads(b[20:20 + n])
+assert d['nodes'][0]['matrix'][5] == 0.0 and d['nodes'][0]['matrix'][6] == -1.0, d['nodes']
+assert d['materials'][0]['name'] == 'Texture' and d['materials'][0]['pbrMetallicRoughness']['baseColorTexture']['index'] == 0
+assert os.path.isfile(os.path.join('$work/box', d['images'][0]['uri'])), d['images']
+"
+check "tomextract the 12-instance texture-transform scene with its levels" expect_exit 0 "$tools/tomextract" "$work/scenes/TextureTransformTest.tom" --lods 100,50 -o "$work/tt.glb" --texture-dir "$data/assimp/glTF2/textureTransform"
+check "the .glb files validate with no errors" node "$src/scripts/validate-gltf.mjs" "$work/cow20.glb" "$work/fandisk-lods.glb" "$work/engine25.glb" "$work/box/box.glb" "$work/tt.glb"
 check "MSFT_lod lists the three coarser levels, coarser in order" /usr/bin/python3 -c "
 import json, struct
 b = open('$work/fandisk-lods.glb', 'rb').read()

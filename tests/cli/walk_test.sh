@@ -65,6 +65,21 @@ runs = {r['selector']: r for r in json.load(open('$work/sim/summary.json'))}
 assert runs['none']['frame_ms']['mean'] >= 3 * 6, runs['none']
 assert runs['exact']['drawn_triangles_mean'] < runs['none']['drawn_triangles_mean'] / 3, runs['exact']
 "
+# tomview: a whole glTF scene (34 meshes, 115 instances, 34 materials) drawn from its .tom
+view="$(dirname "$walk")/tomview"
+"$tools/tombuild" "$data/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb" -o "$work/engine" -q --no-error-curve
+check "tomview draws every instance of the scene" bash -c "'$view' '$work/engine/2CylinderEngine.tom' -o '$work/engine-full.png' --width 320 --height 240 | grep -q '115 instances of 34 meshes, 34 materials'"
+check "tomview at 10% and in LOD colours" "$view" "$work/engine/2CylinderEngine.tom" -f 0.1 --lod-colors -o "$work/engine-10.png" --width 320 --height 240
+check "the pictures show the scene in its materials' colours, and differ" /usr/bin/python3 -c "
+import matplotlib.image as im
+a = im.imread('$work/engine-full.png'); b = im.imread('$work/engine-10.png')
+assert a.shape == (240, 320, 4) and b.shape == a.shape, a.shape
+assert a[..., :3].std() > 0.05, 'blank picture'
+blue = (a[..., 2] > a[..., 0] + 0.2).sum()   # the engine's blue and teal parts
+assert blue > 100, blue
+assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() > 500
+"
+check "tomview on a file that is not a .tom exits 1" bash -c "'$view' '$data/meshes/fandisk.off' -o '$work/x.png'; test \$? -eq 1"
 check "a missing scene is an error" bash -c "! '$walk' --scene '$work/none.txt' --calibration '$work/calibration.txt' 2>/dev/null"
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -14,6 +14,7 @@
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
+#include "tom/scene.h"
 #include "tom/generate.h"
 
 namespace {
@@ -107,6 +108,35 @@ tom::TomMesh small_mesh() {
     t.metadata.push_back({"note", {1, 2, 3, 4, 5}});
     t.metadata.push_back({"empty", {}});
     return t;
+}
+
+// two materials (one with textures), three instances of meshes 0 and 1 (or only mesh 0)
+tom::Scene small_scene(uint32_t meshes = 2) {
+    tom::Scene scene;
+    tom::Material plain;
+    plain.name = "plain";
+    plain.base_color[0] = 0.25f;
+    plain.alpha_mode = tom::AlphaMode::mask;
+    plain.alpha_cutoff = 0.3f;
+    tom::Material textured;
+    textured.name = "textured";
+    textured.metallic = 0.0f;
+    textured.roughness = 0.5f;
+    textured.emissive[2] = 1.0f;
+    textured.double_sided = true;
+    textured.textures.push_back({tom::TextureRole::base_color, 0, "images/albedo.png", "image/png"});
+    textured.textures.push_back({tom::TextureRole::normal, 1, "", "image/jpeg"});
+    scene.materials = {plain, textured};
+    for (uint32_t i = 0; i < 3; ++i) {
+        tom::Instance inst;
+        inst.mesh = i % meshes;
+        inst.node = 10 + i;
+        inst.name = i == 1 ? "" : "node " + std::to_string(i);
+        inst.transform[12] = float(i);
+        inst.transform[0] = 2.0f;
+        scene.instances.push_back(inst);
+    }
+    return scene;
 }
 
 } // namespace
@@ -332,8 +362,95 @@ TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[forma
     CHECK(rule_of(b) == 16);
 }
 
+TEST_CASE("scenes: materials with texture references and instances survive the round trip; rules 17 and 18", "[format][scene]") {
+    tom::TomMesh a = small_mesh(), b = small_mesh();
+    a.material = 1;
+    b.material = -1;
+    const tom::Scene scene = small_scene();
+    const std::vector<uint8_t> good = tom::serialize({a, b}, scene);
+    CHECK(tom::serialize({a, b}, scene) == good);  // deterministic
+    const tom::File f = tom::File::from_bytes(good.data(), good.size());
+    const tom::Scene& got = f.scene();
+    REQUIRE(got.materials.size() == 2);
+    for (size_t i = 0; i < 2; ++i) {
+        const tom::Material &x = scene.materials[i], &y = got.materials[i];
+        CHECK(y.name == x.name);
+        CHECK(std::equal(x.base_color, x.base_color + 4, y.base_color));
+        CHECK(y.metallic == x.metallic);
+        CHECK(y.roughness == x.roughness);
+        CHECK(std::equal(x.emissive, x.emissive + 3, y.emissive));
+        CHECK(y.alpha_mode == x.alpha_mode);
+        CHECK(y.alpha_cutoff == x.alpha_cutoff);
+        CHECK(y.double_sided == x.double_sided);
+        REQUIRE(y.textures.size() == x.textures.size());
+        for (size_t t = 0; t < x.textures.size(); ++t) {
+            CHECK(y.textures[t].role == x.textures[t].role);
+            CHECK(y.textures[t].texcoord == x.textures[t].texcoord);
+            CHECK(y.textures[t].uri == x.textures[t].uri);
+            CHECK(y.textures[t].mime_type == x.textures[t].mime_type);
+        }
+    }
+    REQUIRE(got.instances.size() == 3);
+    for (size_t i = 0; i < 3; ++i) {
+        CHECK(got.instances[i].mesh == scene.instances[i].mesh);
+        CHECK(got.instances[i].node == scene.instances[i].node);
+        CHECK(got.instances[i].name == scene.instances[i].name);
+        CHECK(std::equal(scene.instances[i].transform, scene.instances[i].transform + 16, got.instances[i].transform));
+    }
+    CHECK(f.mesh(0).material == 1);
+    // without a scene: nothing stored, and the draw list is every mesh once
+    const std::vector<uint8_t> bare = tom::serialize({a, b});
+    const tom::File g = tom::File::from_bytes(bare.data(), bare.size());
+    CHECK(g.scene().materials.empty());
+    const std::vector<tom::Instance> all = tom::draw_list(g.scene(), g.mesh_count());
+    REQUIRE(all.size() == 2);
+    CHECK((all[0].mesh == 0 && all[1].mesh == 1 && all[1].transform[0] == 1.0f && all[1].transform[12] == 0.0f));
+    // an instance of a mesh the file does not have cannot be written
+    tom::Scene bad = scene;
+    bad.instances[0].mesh = 2;
+    CHECK_THROWS_AS(tom::serialize({a, b}, bad), std::invalid_argument);
+
+    const std::vector<Section> secs = sections_of(good);
+    const Section &matl = find(secs, "MATL"), &inst = find(secs, "INST");
+    std::vector<uint8_t> c = good;
+    put32(c, matl.entry + 4, 0);  // a file-level section claimed by mesh 0
+    fix_checksums(c);
+    CHECK(rule_of(c) == 9);
+    c = good;
+    put32(c, matl.offset, 1000);  // 1000 materials announced
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    CHECK(message_of(c).find("runs past the end of the section") != std::string::npos);
+    c = good;
+    put32(c, matl.offset + 16 + 36, 7);  // alpha mode 7
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    c = good;
+    put32(c, matl.offset + 16 + 48, uint32_t(matl.bytes) + 8);  // name outside the section
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    CHECK(message_of(c).find("material 0 name") != std::string::npos);
+    c = good;
+    put32(c, matl.offset, 1);  // one material left, but mesh 0 uses material 1
+    put32(c, matl.offset + 4, uint32_t(scene.materials[0].textures.size()));
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    CHECK(message_of(c).find("material 1 is not among the 1 stored") != std::string::npos);
+    c = good;
+    put32(c, inst.offset + 16, 5);  // instance 0 of mesh 5
+    fix_checksums(c);
+    CHECK(rule_of(c) == 18);
+    CHECK(message_of(c).find("instance 0 mesh") != std::string::npos);
+    c = good;
+    put32(c, inst.offset + 16 + 16, 0x7F800000u);  // an infinite transform entry
+    fix_checksums(c);
+    CHECK(rule_of(c) == 18);
+}
+
 TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {
-    const std::vector<uint8_t> good = tom::serialize({small_mesh()});
+    tom::TomMesh with_material = small_mesh();
+    with_material.material = 0;
+    const std::vector<uint8_t> good = tom::serialize({with_material}, small_scene(1));
     std::mt19937 rng(1234);
     int rejected = 0, accepted = 0;
     for (int trial = 0; trial < 4000; ++trial) {

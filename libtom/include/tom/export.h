@@ -1,11 +1,13 @@
 #pragma once
-// Writing one resolution of a TOM mesh as OBJ or PLY, so a level can be opened in MeshLab or Blender.
+// Writing TOM levels: one resolution as OBJ or PLY, so a level can be opened in MeshLab or
+// Blender, or one or several as binary glTF with the file's scene.
 // Part of tom::io.
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "tom/scene.h"
 #include "tom/view.h"
 
 namespace tom {
@@ -31,13 +33,17 @@ struct GlbMesh {
     std::vector<uint32_t> vertex_counts;  ///< resolutions, finest first
 };
 
-/// Writes a binary glTF 2.0 (.glb): per resolution a glTF mesh with one primitive per input mesh,
-/// all levels of an input mesh sharing its vertex streams (POSITION, NORMAL, TEXCOORD_0, COLOR_0:
-/// the levels are prefixes of one vertex array) with their own indices (16-bit when they fit).
-/// With one resolution: one node. With several: the first is the scene's node and the others are
-/// its levels of detail through the MSFT_lod extension (coarser in order). Materials referenced by
-/// index get placeholder materials named "material N" (material tables are not stored in .tom yet).
+/// Writes a binary glTF 2.0 (.glb). Per input mesh and resolution a glTF mesh of one primitive;
+/// all levels of an input mesh share its vertex streams (POSITION, NORMAL, TEXCOORD_0/1, COLOR_0,
+/// TANGENT: the levels are prefixes of one vertex array) with their own indices (16-bit when they
+/// fit). One node per instance of `scene` (instances index `meshes`), with its world transform;
+/// without instances, one untransformed node per mesh. With several resolutions, each node's
+/// coarser levels are nodes of their own listed by its MSFT_lod extension (coarser in order).
+/// The scene's materials are written with their factors and the textures stored by URI
+/// (`texture_dir`: the folder those URIs are relative to, i.e. the source asset's; they are
+/// rewritten relative to the output; empty keeps them as stored); images that were embedded in
+/// the source are not kept. Without stored materials, referenced ones get placeholders.
 /// Written to a temporary name and renamed. \throw IoError when it cannot be written.
-void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes);
+void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene = {}, const std::string& texture_dir = "");
 
 } // namespace tom

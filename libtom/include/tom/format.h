@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tom/builder.h"
+#include "tom/scene.h"
 #include "tom/view.h"
 
 namespace tom {
@@ -27,11 +28,15 @@ struct WriteOptions {
 
 /// The complete file image of `meshes`. Deterministic: equal inputs give equal bytes.
 std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
+/// The same with a scene: its materials and instances are stored in the file-level sections.
+/// \pre every instance names a mesh < meshes.size() (\throw std::invalid_argument otherwise).
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options = {});
 
 /// Writes `meshes` to `path` through a temporary file in the same folder that is
 /// renamed into place, so `path` never holds a truncated file.
 /// \throw IoError naming the path when the file cannot be written or renamed.
 void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
+void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options = {});
 
 /// Writes bytes to `path` atomically (temporary file + rename). \throw IoError.
 void write_bytes_atomically(const std::string& path, const void* data, size_t bytes);
@@ -69,6 +74,8 @@ public:
     uint64_t file_bytes() const noexcept;
     uint32_t mesh_count() const noexcept;
     const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count()
+    /// Materials and instances (empty when the file has none; see tom::draw_list).
+    const Scene& scene() const noexcept;
     const std::vector<SectionInfo>& sections() const noexcept;
 
 private:

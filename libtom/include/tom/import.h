@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "tom/mesh.h"
+#include "tom/scene.h"
 
 namespace tom {
 
@@ -16,6 +17,7 @@ struct ImportResult {
     std::vector<Mesh> meshes;           ///< one per triangle primitive (glTF) or one for the file
     std::vector<std::string> skipped;   ///< primitives not imported and why (points, lines, ...)
     std::vector<std::string> warnings;  ///< problems the reader worked around (one line each)
+    Scene scene;                        ///< glTF: materials, and the default scene's nodes as instances of `meshes`
 };
 
 /// True when `path` has an extension import_file() reads (case-insensitive).

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <map>
 
 #include <nlohmann/json.hpp>
 
@@ -55,16 +57,74 @@ std::vector<float> unit_vectors(const float* src, uint32_t count, size_t width) 
     return out;
 }
 
+// The scene's materials (factors, and textures whose images are files: `texture_dir` is the folder
+// their stored URIs are relative to, rewritten relative to the output; empty keeps them as
+// stored); placeholders when the file stores no materials but meshes refer to some.
+void write_materials(json& doc, const Scene& scene, int max_material, const std::string& texture_dir, const std::string& path) {
+    if (scene.materials.empty()) {
+        if (max_material < 0) return;
+        doc["materials"] = json::array();
+        for (int k = 0; k <= max_material; ++k) doc["materials"].push_back({{"name", "material " + std::to_string(k)}});
+        return;
+    }
+    if (size_t(max_material + 1) > scene.materials.size())
+        throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(max_material) + " of " + std::to_string(scene.materials.size()));
+    namespace fs = std::filesystem;
+    const fs::path out_dir = fs::absolute(fs::path(path)).parent_path();
+    json images = json::array(), textures = json::array();
+    std::map<std::string, int> texture_of;  // one glTF texture per distinct URI
+    doc["materials"] = json::array();
+    for (const Material& m : scene.materials) {
+        json pbr = {{"baseColorFactor", m.base_color}, {"metallicFactor", m.metallic}, {"roughnessFactor", m.roughness}};
+        json mat = {{"name", m.name}, {"pbrMetallicRoughness", json::object()}};
+        if (m.emissive[0] != 0 || m.emissive[1] != 0 || m.emissive[2] != 0) mat["emissiveFactor"] = m.emissive;
+        if (m.alpha_mode != AlphaMode::opaque) mat["alphaMode"] = m.alpha_mode == AlphaMode::mask ? "MASK" : "BLEND";
+        if (m.alpha_mode == AlphaMode::mask) mat["alphaCutoff"] = m.alpha_cutoff;
+        if (m.double_sided) mat["doubleSided"] = true;
+        for (const TextureRef& t : m.textures) {
+            if (t.uri.empty()) continue;  // embedded in the source: not kept
+            std::string uri = t.uri;
+            if (!texture_dir.empty() && uri.find("://") == std::string::npos)
+                uri = fs::relative(fs::absolute(fs::path(texture_dir) / uri), out_dir).generic_string();
+            auto [it, fresh] = texture_of.emplace(uri, int(textures.size()));
+            if (fresh) {
+                json image = {{"uri", uri}};
+                images.push_back(image);
+                textures.push_back({{"source", images.size() - 1}});
+            }
+            const json info = {{"index", it->second}, {"texCoord", t.texcoord}};
+            switch (t.role) {
+            case TextureRole::base_color: pbr["baseColorTexture"] = info; break;
+            case TextureRole::metallic_roughness: pbr["metallicRoughnessTexture"] = info; break;
+            case TextureRole::normal: mat["normalTexture"] = info; break;
+            case TextureRole::occlusion: mat["occlusionTexture"] = info; break;
+            case TextureRole::emissive: mat["emissiveTexture"] = info; break;
+            }
+        }
+        mat["pbrMetallicRoughness"] = pbr;
+        doc["materials"].push_back(mat);
+    }
+    if (!images.empty()) {
+        doc["images"] = images;
+        doc["textures"] = textures;
+    }
+}
+
 } // namespace
 
-void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes) {
+void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene, const std::string& texture_dir) {
     Writer w;
     size_t levels = 0;
     for (const GlbMesh& m : meshes) levels = std::max(levels, m.vertex_counts.size());
     if (levels == 0) throw IoError("cannot write '" + path + "': no resolution requested");
-    std::vector<json> level_primitives(levels, json::array());
+    for (const Instance& inst : scene.instances)
+        if (inst.mesh >= meshes.size()) throw IoError("cannot write '" + path + "': an instance names mesh " + std::to_string(inst.mesh) + " of " + std::to_string(meshes.size()));
+    // glTF mesh of (input mesh, level), -1 where that level has no triangles
+    std::vector<std::vector<int>> level_mesh(meshes.size(), std::vector<int>(levels, -1));
+    json gltf_meshes = json::array();
     int max_material = -1;
-    for (const GlbMesh& gm : meshes) {
+    for (size_t mi = 0; mi < meshes.size(); ++mi) {
+        const GlbMesh& gm = meshes[mi];
         const MeshView& m = *gm.mesh;
         uint32_t n_max = 0;
         for (uint32_t n : gm.vertex_counts) n_max = std::max(n_max, std::min(n, m.vertex_count));
@@ -107,30 +167,46 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes) {
                 primitive["material"] = m.material;
                 max_material = std::max(max_material, m.material);
             }
-            level_primitives[level].push_back(primitive);
+            level_mesh[mi][level] = int(gltf_meshes.size());
+            const std::string name(m.name);
+            gltf_meshes.push_back({{"name", levels > 1 ? name + " level " + std::to_string(level) : name}, {"primitives", {primitive}}});
         }
     }
     json doc;
     doc["asset"] = {{"version", "2.0"}, {"generator", "libtom (tomextract)"}};
-    doc["meshes"] = json::array();
+    doc["meshes"] = gltf_meshes;
+    // one node per instance (each mesh once, untransformed, without a scene); with several levels,
+    // its coarser levels follow it as nodes of their own listed by its MSFT_lod extension
     doc["nodes"] = json::array();
-    for (size_t level = 0; level < levels; ++level) {
-        if (level_primitives[level].empty()) throw IoError("cannot write '" + path + "': level " + std::to_string(level) + " has no triangles");
-        doc["meshes"].push_back({{"name", "level " + std::to_string(level)}, {"primitives", level_primitives[level]}});
-        doc["nodes"].push_back({{"name", level == 0 ? std::string("tom") : "tom lod " + std::to_string(level)}, {"mesh", level}});
-    }
-    if (levels > 1) {
+    json roots = json::array();
+    const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    for (const Instance& inst : draw_list(scene, uint32_t(meshes.size()))) {
+        const std::vector<int>& lm = level_mesh[inst.mesh];
+        if (lm[0] < 0) continue;
+        auto node_of = [&](int mesh, const std::string& name) {
+            json node = {{"mesh", mesh}};
+            if (!name.empty()) node["name"] = name;
+            if (!std::equal(inst.transform, inst.transform + 16, identity)) node["matrix"] = inst.transform;
+            return node;
+        };
+        const size_t index = doc["nodes"].size();
+        roots.push_back(index);
+        doc["nodes"].push_back(node_of(lm[0], inst.name));
         json ids = json::array();
-        for (size_t level = 1; level < levels; ++level) ids.push_back(level);
-        doc["nodes"][0]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
-        doc["extensionsUsed"] = {"MSFT_lod"};
+        for (size_t level = 1; level < levels; ++level) {
+            if (lm[level] < 0) continue;
+            ids.push_back(doc["nodes"].size());
+            doc["nodes"].push_back(node_of(lm[level], inst.name.empty() ? std::string() : inst.name + " lod " + std::to_string(level)));
+        }
+        if (!ids.empty()) {
+            doc["nodes"][index]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
+            doc["extensionsUsed"] = {"MSFT_lod"};
+        }
     }
-    doc["scenes"] = {{{"nodes", {0}}}};
+    if (roots.empty()) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
+    doc["scenes"] = {{{"nodes", roots}}};
     doc["scene"] = 0;
-    if (max_material >= 0) {
-        doc["materials"] = json::array();
-        for (int k = 0; k <= max_material; ++k) doc["materials"].push_back({{"name", "material " + std::to_string(k)}});
-    }
+    write_materials(doc, scene, max_material, texture_dir, path);
     while (w.bin.size() % 4) w.bin.push_back(0);
     doc["buffers"] = {{{"byteLength", w.bin.size()}}};
     doc["bufferViews"] = w.views;

@@ -6,11 +6,7 @@
 // error that names it, never an empty mesh.
 
 #define TINYGLTF_IMPLEMENTATION
-#define TINYGLTF_ENABLE_DRACO
-#define TINYGLTF_NO_STB_IMAGE
-#define TINYGLTF_NO_STB_IMAGE_WRITE
-#define TINYGLTF_NO_EXTERNAL_IMAGE
-#include <tiny_gltf.h>
+#include "gltf_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -229,6 +225,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
 
     const std::string stem = file_stem(path);
+    std::vector<std::vector<uint32_t>> mesh_parts(model.meshes.size());  // glTF mesh -> imported meshes
     for (size_t mi = 0; mi < model.meshes.size(); ++mi) {
         const tinygltf::Mesh& gm = model.meshes[mi];
         const std::string mesh_name = gm.name.empty() ? "mesh" + std::to_string(mi) : gm.name;
@@ -283,9 +280,11 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             if (mesh.indices.empty()) reader.fail("has no complete triangle");
             for (size_t i = 0; i < mesh.positions.size(); ++i)
                 if (!std::isfinite(mesh.positions[i])) reader.fail("POSITION of vertex " + std::to_string(i / 3) + " is not finite");
+            mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
             result.meshes.push_back(std::move(mesh));
         }
     }
+    result.scene = gltf_scene(model, mesh_parts, path);
     if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
     return result;
 }

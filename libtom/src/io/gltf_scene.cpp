@@ -1,0 +1,139 @@
+// glTF materials and node tree -> tom::Scene (materials with texture references, instances
+// with world transforms).
+
+#include <cmath>
+
+#include "gltf_model.h"
+#include "tom/errors.h"
+
+namespace tom::detail {
+
+namespace {
+
+constexpr size_t max_instances = 1000000;
+
+void texture_ref(const tinygltf::Model& model, int texture, int texcoord, TextureRole role, Material& out) {
+    if (texture < 0 || size_t(texture) >= model.textures.size()) return;
+    const int source = model.textures[size_t(texture)].source;
+    TextureRef ref;
+    ref.role = role;
+    ref.texcoord = texcoord > 0 ? uint32_t(texcoord) : 0u;
+    if (source >= 0 && size_t(source) < model.images.size()) {
+        const tinygltf::Image& image = model.images[size_t(source)];
+        ref.mime_type = image.mimeType;
+        if (image.uri.rfind("data:", 0) == 0) {  // embedded as a data URI: keep its type, not its bytes
+            const size_t end = image.uri.find_first_of(";,");
+            if (ref.mime_type.empty() && end != std::string::npos) ref.mime_type = image.uri.substr(5, end - 5);
+        } else {
+            ref.uri = image.uri;
+        }
+    }
+    out.textures.push_back(std::move(ref));
+}
+
+Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
+    Material out;
+    out.name = m.name;
+    const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    for (size_t k = 0; k < 4 && k < pbr.baseColorFactor.size(); ++k) out.base_color[k] = float(pbr.baseColorFactor[k]);
+    out.metallic = float(pbr.metallicFactor);
+    out.roughness = float(pbr.roughnessFactor);
+    for (size_t k = 0; k < 3 && k < m.emissiveFactor.size(); ++k) out.emissive[k] = float(m.emissiveFactor[k]);
+    out.alpha_mode = m.alphaMode == "MASK" ? AlphaMode::mask : m.alphaMode == "BLEND" ? AlphaMode::blend : AlphaMode::opaque;
+    out.alpha_cutoff = float(m.alphaCutoff);
+    out.double_sided = m.doubleSided;
+    texture_ref(model, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, TextureRole::base_color, out);
+    texture_ref(model, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, TextureRole::metallic_roughness, out);
+    texture_ref(model, m.normalTexture.index, m.normalTexture.texCoord, TextureRole::normal, out);
+    texture_ref(model, m.occlusionTexture.index, m.occlusionTexture.texCoord, TextureRole::occlusion, out);
+    texture_ref(model, m.emissiveTexture.index, m.emissiveTexture.texCoord, TextureRole::emissive, out);
+    // the specular-glossiness extension's diffuse colour and texture stand for the base colour
+    const auto sg = m.extensions.find("KHR_materials_pbrSpecularGlossiness");
+    if (sg != m.extensions.end() && sg->second.IsObject()) {
+        const tinygltf::Value& diffuse = sg->second.Get("diffuseFactor");
+        if (diffuse.IsArray() && diffuse.ArrayLen() == 4)
+            for (int k = 0; k < 4; ++k) out.base_color[k] = float(diffuse.Get(k).GetNumberAsDouble());
+        const tinygltf::Value& tex = sg->second.Get("diffuseTexture");
+        if (tex.IsObject() && tex.Get("index").IsNumber() && pbr.baseColorTexture.index < 0)
+            texture_ref(model, tex.Get("index").GetNumberAsInt(), tex.Get("texCoord").IsNumber() ? tex.Get("texCoord").GetNumberAsInt() : 0,
+                        TextureRole::base_color, out);
+    }
+    return out;
+}
+
+// The node's local transform, column-major: its matrix, or T * R * S.
+void local_transform(const tinygltf::Node& node, float out[16]) {
+    if (node.matrix.size() == 16) {
+        for (int k = 0; k < 16; ++k) out[k] = float(node.matrix[size_t(k)]);
+        return;
+    }
+    double q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1}, t[3] = {0, 0, 0};
+    if (node.rotation.size() == 4)
+        for (int k = 0; k < 4; ++k) q[k] = node.rotation[size_t(k)];
+    if (node.scale.size() == 3)
+        for (int k = 0; k < 3; ++k) s[k] = node.scale[size_t(k)];
+    if (node.translation.size() == 3)
+        for (int k = 0; k < 3; ++k) t[k] = node.translation[size_t(k)];
+    const double x = q[0], y = q[1], z = q[2], w = q[3];
+    const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),   // column 0
+                         2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),   // column 1
+                         2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
+    for (int c = 0; c < 3; ++c) {
+        for (int k = 0; k < 3; ++k) out[4 * c + k] = float(r[3 * c + k] * s[c]);
+        out[4 * c + 3] = 0;
+    }
+    for (int k = 0; k < 3; ++k) out[12 + k] = float(t[k]);
+    out[15] = 1;
+}
+
+struct Flattener {
+    const tinygltf::Model& model;
+    const std::vector<std::vector<uint32_t>>& mesh_parts;
+    const std::string& path;
+    Scene& scene;
+    std::vector<uint8_t> on_path;  // nodes between the root and the current one: a repeat is a cycle
+
+    void visit(int index, const float parent[16]) {
+        if (index < 0 || size_t(index) >= model.nodes.size())
+            throw ImportError(path + ": the node tree refers to node " + std::to_string(index) + ", which does not exist");
+        if (on_path[size_t(index)]) throw ImportError(path + ": node " + std::to_string(index) + " is its own ancestor (the node tree has a cycle)");
+        on_path[size_t(index)] = 1;
+        const tinygltf::Node& node = model.nodes[size_t(index)];
+        float local[16], world[16];
+        local_transform(node, local);
+        multiply_4x4(parent, local, world);
+        if (node.mesh >= 0 && size_t(node.mesh) < mesh_parts.size()) {
+            for (const uint32_t part : mesh_parts[size_t(node.mesh)]) {
+                if (scene.instances.size() >= max_instances)
+                    throw ImportError(path + ": the node tree gives more than " + std::to_string(max_instances) + " instances");
+                Instance inst;
+                inst.mesh = part;
+                inst.node = uint32_t(index);
+                inst.name = node.name;
+                for (int k = 0; k < 16; ++k) inst.transform[k] = world[k];
+                scene.instances.push_back(std::move(inst));
+            }
+        }
+        for (const int child : node.children) visit(child, world);
+        on_path[size_t(index)] = 0;
+    }
+};
+
+} // namespace
+
+Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path) {
+    Scene scene;
+    for (const tinygltf::Material& m : model.materials) scene.materials.push_back(material(model, m));
+    const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
+    if (size_t(which) < model.scenes.size()) {
+        Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};
+        const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        for (const int root : model.scenes[size_t(which)].nodes) f.visit(root, identity);
+        for (const Instance& inst : scene.instances)
+            for (const float x : inst.transform)
+                if (!std::isfinite(x)) throw ImportError(path + ": node " + std::to_string(inst.node) + " has a transform that is not finite");
+    }
+    return scene;
+}
+
+} // namespace tom::detail
