@@ -18,7 +18,7 @@ packages=(
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
 )
 
-# node and npm run Khronos' glTF validator in the tests (from the npm registry, below)
+# node and npm run Khronos' glTF validator and gltfpack in the tests (from the npm registry, below)
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   packages+=(nodejs npm)
 fi
@@ -29,11 +29,13 @@ for p in "${packages[@]}"; do
 done
 root="$(cd "$(dirname "$0")/.." && pwd)"
 install_validator() {
-  # Khronos' glTF validator, into the git-ignored .tools/ (checks tomextract's .glb output)
-  if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ]; then
+  # from the npm registry into the git-ignored .tools/: Khronos' glTF validator (checks
+  # tomextract's .glb output) and gltfpack 0.18, the version of Debian's meshoptimizer decoders
+  # (writes the KHR_mesh_quantization / EXT_meshopt_compression inputs the tests decode)
+  if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ] || [ ! -f "$root/.tools/node_modules/gltfpack/package.json" ]; then
     mkdir -p "$root/.tools"
-    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 >/dev/null
-    echo "install-deps: gltf-validator installed in .tools/"
+    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 gltfpack@0.18.0 >/dev/null
+    echo "install-deps: gltf-validator and gltfpack installed in .tools/"
   fi
 }
 if [ ${#missing[@]} -eq 0 ]; then

@@ -149,6 +149,25 @@ TEST_CASE("glTF: TEXCOORD_1 and TANGENT are read, built, stored and extracted wi
     }
 }
 
+TEST_CASE("glTF: KHR_texture_transform is baked into the texture coordinates it applies to", "[import][gltf][attributes]") {
+    // meshes 0-2 share accessor 2 and meshes 3-8 accessor 1; 6 has no transform
+    const tom::ImportResult r = tom::import_file(test::sample("assimp/glTF2/textureTransform/TextureTransformTest.gltf"));
+    REQUIRE(r.meshes.size() == 9);
+    const std::vector<float>& plain = r.meshes[6].texcoords;  // accessor 1, untransformed
+    REQUIRE(r.meshes[4].texcoords.size() == plain.size());
+    for (size_t i = 0; i < plain.size(); ++i) CHECK(r.meshes[4].texcoords[i] == Approx(1.5f * plain[i]));  // "Scale"
+    const double c = std::cos(0.39269908169872414), s = std::sin(0.39269908169872414);
+    for (size_t i = 0; i < plain.size(); i += 2) {  // "Rotation": [c s; -s c]
+        CHECK(r.meshes[3].texcoords[i] == Approx(c * plain[i] + s * plain[i + 1]).margin(1e-6));
+        CHECK(r.meshes[3].texcoords[i + 1] == Approx(-s * plain[i] + c * plain[i + 1]).margin(1e-6));
+    }
+    // "Offset U" and "Offset UV" share an accessor: they differ by (0, 0.5)
+    for (size_t i = 0; i < r.meshes[0].texcoords.size(); i += 2) {
+        CHECK(r.meshes[2].texcoords[i] == Approx(r.meshes[0].texcoords[i]));
+        CHECK(r.meshes[2].texcoords[i + 1] == Approx(r.meshes[0].texcoords[i + 1] + 0.5f));
+    }
+}
+
 TEST_CASE("glTF: Draco-compressed primitives decode to the same meshes as the uncompressed file", "[import][gltf][draco]") {
     tom::ImportResult plain = tom::import_file(test::sample("assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"));
     tom::ImportResult draco = tom::import_file(test::sample("assimp/glTF2/draco/2CylinderEngine.gltf"));

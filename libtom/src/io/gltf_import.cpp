@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "gltf_meshopt.h"
 #include "gltf_schema.h"
 #include "import_backends.h"
 #include "tom/errors.h"
@@ -55,7 +56,8 @@ int component_bytes(int component_type) {
 
 class PrimitiveReader {
 public:
-    PrimitiveReader(const tinygltf::Model& model, std::string where) : model_(model), where_(std::move(where)) {}
+    PrimitiveReader(const tinygltf::Model& model, std::string where, bool quantized)
+        : model_(model), where_(std::move(where)), quantized_(quantized) {}
 
     [[noreturn]] void fail(const std::string& what) const { throw ImportError(where_ + ": " + what); }
 
@@ -89,8 +91,25 @@ public:
         return buffer.data.data() + view.byteOffset + a.byteOffset;
     }
 
-    // Reads a float attribute with `want` components (normalized integers accepted where glTF allows).
-    std::vector<float> read_floats(int index, const char* role, int want_min, int want_max, bool allow_normalized, size_t expect_count) const {
+    // Which component types an attribute may have: the core specification's, or with
+    // KHR_mesh_quantization (what gltfpack writes) also integers, normalized or not.
+    enum class Kind { position, vector, texcoord, color };
+    static bool allowed(Kind kind, int ctype, bool normalized, bool quantized) {
+        if (ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) return true;
+        const bool ubyte_or_ushort = ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+        const bool byte_or_short = ctype == TINYGLTF_COMPONENT_TYPE_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_SHORT;
+        switch (kind) {
+        case Kind::color: return ubyte_or_ushort && normalized;
+        case Kind::texcoord: return (ubyte_or_ushort && normalized) || (quantized && (ubyte_or_ushort || byte_or_short));
+        case Kind::position: return quantized && (ubyte_or_ushort || byte_or_short);
+        case Kind::vector: return quantized && byte_or_short && normalized;
+        }
+        return false;
+    }
+
+    // Reads a float attribute of want_min..want_max components, converting integer components
+    // (normalized: to [0, 1] or [-1, 1] as glTF defines; otherwise their value).
+    std::vector<float> read_floats(int index, const char* role, int want_min, int want_max, Kind kind, size_t expect_count) const {
         size_t count, stride;
         int components, ctype;
         const uint8_t* p = locate(index, role, count, stride, components, ctype);
@@ -99,22 +118,34 @@ public:
         if (expect_count && count != expect_count)
             fail(name + " has " + std::to_string(count) + " elements but POSITION has " + std::to_string(expect_count));
         const bool normalized = model_.accessors[size_t(index)].normalized;
-        if (ctype != TINYGLTF_COMPONENT_TYPE_FLOAT && !(allow_normalized && normalized &&
-                                                         (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)))
-            fail(name + " has component type " + std::to_string(ctype) + ", expected float" + (allow_normalized ? " or normalized unsigned byte/short" : ""));
+        if (!allowed(kind, ctype, normalized, quantized_))
+            fail(name + " has component type " + std::to_string(ctype) + (normalized ? " (normalized)" : "") + ", which glTF does not allow here" +
+                 (quantized_ ? "" : " without KHR_mesh_quantization"));
         std::vector<float> out(count * size_t(components));
         for (size_t i = 0; i < count; ++i) {
             const uint8_t* e = p + i * stride;
             for (int k = 0; k < components; ++k) {
                 float x;
-                if (ctype == TINYGLTF_COMPONENT_TYPE_FLOAT) {
-                    std::memcpy(&x, e + 4 * k, 4);
-                } else if (ctype == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) {
-                    x = float(e[k]) / 255.0f;
-                } else {
+                switch (ctype) {
+                case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&x, e + 4 * k, 4); break;
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: x = normalized ? float(e[k]) / 255.0f : float(e[k]); break;
+                case TINYGLTF_COMPONENT_TYPE_BYTE: {
+                    const float c = float(int8_t(e[k]));
+                    x = normalized ? std::max(c / 127.0f, -1.0f) : c;
+                    break;
+                }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
                     uint16_t u;
                     std::memcpy(&u, e + 2 * k, 2);
-                    x = float(u) / 65535.0f;
+                    x = normalized ? float(u) / 65535.0f : float(u);
+                    break;
+                }
+                default: {  // SHORT
+                    int16_t v;
+                    std::memcpy(&v, e + 2 * k, 2);
+                    x = normalized ? std::max(float(v) / 32767.0f, -1.0f) : float(v);
+                    break;
+                }
                 }
                 out[i * size_t(components) + size_t(k)] = x;
             }
@@ -155,6 +186,7 @@ public:
 private:
     const tinygltf::Model& model_;
     std::string where_;
+    bool quantized_;  // the file uses KHR_mesh_quantization
 };
 
 // Triangle lists from TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN index sequences.
@@ -196,7 +228,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
         if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
     }
-    const nlohmann::json doc = check_gltf_schema(bytes, binary, path);
+    nlohmann::json doc = check_gltf_schema(bytes, binary, path);
+    const bool meshopt = prepare_meshopt(doc, bytes, binary, path);
     tinygltf::Model model;
     std::string err, warn;
     const size_t slash = path.find_last_of('/');
@@ -221,8 +254,10 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     if (!warn.empty()) result.warnings.push_back(one_line(warn));
     for (const std::string& ext : model.extensionsRequired)
         if (ext != "KHR_draco_mesh_compression" && ext != "KHR_materials_pbrSpecularGlossiness" && ext != "KHR_texture_transform" &&
-            ext != "KHR_materials_unlit")
+            ext != "KHR_materials_unlit" && ext != "KHR_mesh_quantization" && ext != "EXT_meshopt_compression")
             throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
+    if (meshopt) decode_meshopt(model, doc, path);
+    const bool quantized = std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_mesh_quantization") != model.extensionsUsed.end();
 
     const std::string stem = file_stem(path);
     std::vector<std::vector<uint32_t>> mesh_parts(model.meshes.size());  // glTF mesh -> imported meshes
@@ -238,7 +273,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                                          mode_name(mode) + " has no triangles");
                 continue;
             }
-            PrimitiveReader reader(model, where);
+            PrimitiveReader reader(model, where, quantized);
             auto attr = [&](const char* key) {
                 auto it = prim.attributes.find(key);
                 return it == prim.attributes.end() ? -1 : it->second;
@@ -248,14 +283,14 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             Mesh mesh;
             mesh.name = stem + "/" + mesh_name + (gm.primitives.size() > 1 ? "#" + std::to_string(pi) : std::string());
             mesh.material = prim.material;
-            mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, false, 0);
+            mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, PrimitiveReader::Kind::position, 0);
             const size_t n = mesh.positions.size() / 3;
-            if (attr("NORMAL") >= 0) mesh.normals = reader.read_floats(attr("NORMAL"), "NORMAL", 3, 3, false, n);
-            if (attr("TEXCOORD_0") >= 0) mesh.texcoords = reader.read_floats(attr("TEXCOORD_0"), "TEXCOORD_0", 2, 2, true, n);
-            if (attr("TEXCOORD_1") >= 0) mesh.texcoords1 = reader.read_floats(attr("TEXCOORD_1"), "TEXCOORD_1", 2, 2, true, n);
-            if (attr("TANGENT") >= 0) mesh.tangents = reader.read_floats(attr("TANGENT"), "TANGENT", 4, 4, false, n);
+            if (attr("NORMAL") >= 0) mesh.normals = reader.read_floats(attr("NORMAL"), "NORMAL", 3, 3, PrimitiveReader::Kind::vector, n);
+            if (attr("TEXCOORD_0") >= 0) mesh.texcoords = reader.read_floats(attr("TEXCOORD_0"), "TEXCOORD_0", 2, 2, PrimitiveReader::Kind::texcoord, n);
+            if (attr("TEXCOORD_1") >= 0) mesh.texcoords1 = reader.read_floats(attr("TEXCOORD_1"), "TEXCOORD_1", 2, 2, PrimitiveReader::Kind::texcoord, n);
+            if (attr("TANGENT") >= 0) mesh.tangents = reader.read_floats(attr("TANGENT"), "TANGENT", 4, 4, PrimitiveReader::Kind::vector, n);
             if (attr("COLOR_0") >= 0) {
-                std::vector<float> c = reader.read_floats(attr("COLOR_0"), "COLOR_0", 3, 4, true, n);
+                std::vector<float> c = reader.read_floats(attr("COLOR_0"), "COLOR_0", 3, 4, PrimitiveReader::Kind::color, n);
                 if (c.size() == n * 3) {
                     mesh.colors.resize(n * 4);
                     for (size_t v = 0; v < n; ++v) {
@@ -266,6 +301,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                     mesh.colors.swap(c);
                 }
             }
+            if (const std::string w = bake_texture_transform(model, prim.material, mesh); !w.empty())
+                result.warnings.push_back(mesh.name + ": " + w);
             std::vector<uint32_t> seq;
             if (prim.indices >= 0) {
                 seq = reader.read_indices(prim.indices, n);

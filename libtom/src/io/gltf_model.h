@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "tom/mesh.h"
 #include "tom/scene.h"
 
 namespace tom::detail {
@@ -22,5 +23,11 @@ namespace tom::detail {
 /// the node's world transform. \throw ImportError naming `path` and the node for a cycle or a
 /// node tree that would give more than 1,000,000 instances.
 Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path);
+
+/// Bakes the KHR_texture_transform of material `material` (its base colour texture's, else the
+/// first of its textures that has one) into the TEXCOORD set it applies to: .tom keeps texture
+/// references without transforms (and gltfpack's quantized UVs rely on one). Returns a warning
+/// when textures of the material carry different transforms (only one can be baked), else "".
+std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh);
 
 } // namespace tom::detail

@@ -121,6 +121,56 @@ struct Flattener {
 
 } // namespace
 
+std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh) {
+    if (material < 0 || size_t(material) >= model.materials.size()) return "";
+    const tinygltf::Material& m = model.materials[size_t(material)];
+    struct Ref {
+        const tinygltf::ExtensionMap* ext;
+        int texcoord;
+    };
+    const Ref refs[] = {{&m.pbrMetallicRoughness.baseColorTexture.extensions, m.pbrMetallicRoughness.baseColorTexture.texCoord},
+                        {&m.pbrMetallicRoughness.metallicRoughnessTexture.extensions, m.pbrMetallicRoughness.metallicRoughnessTexture.texCoord},
+                        {&m.normalTexture.extensions, m.normalTexture.texCoord},
+                        {&m.occlusionTexture.extensions, m.occlusionTexture.texCoord},
+                        {&m.emissiveTexture.extensions, m.emissiveTexture.texCoord}};
+    const tinygltf::Value* chosen = nullptr;
+    int set = 0;
+    bool disagree = false;
+    for (const Ref& r : refs) {
+        const auto it = r.ext->find("KHR_texture_transform");
+        if (it == r.ext->end() || !it->second.IsObject()) continue;
+        if (!chosen) {
+            chosen = &it->second;
+            set = it->second.Get("texCoord").IsNumber() ? it->second.Get("texCoord").GetNumberAsInt() : r.texcoord;
+        } else if (!(it->second == *chosen)) {
+            disagree = true;
+        }
+    }
+    if (!chosen) return "";
+    std::vector<float>& uv = set == 0 ? mesh.texcoords : set == 1 ? mesh.texcoords1 : mesh.texcoords;
+    if (set > 1 || uv.empty()) return "";
+    auto pair = [&](const char* key, double a, double b, double out[2]) {
+        out[0] = a, out[1] = b;
+        const tinygltf::Value& v = chosen->Get(key);
+        if (v.IsArray() && v.ArrayLen() == 2)
+            for (int k = 0; k < 2; ++k) out[k] = v.Get(k).GetNumberAsDouble();
+    };
+    double offset[2], scale[2];
+    pair("offset", 0, 0, offset);
+    pair("scale", 1, 1, scale);
+    const double r = chosen->Get("rotation").IsNumber() ? chosen->Get("rotation").GetNumberAsDouble() : 0.0;
+    const double c = std::cos(r), s = std::sin(r);
+    // uv' = T R S uv with R = [c s; -s c] (the extension's definition)
+    for (size_t i = 0; i + 1 < uv.size(); i += 2) {
+        const double x = scale[0] * uv[i], y = scale[1] * uv[i + 1];
+        uv[i] = float(c * x + s * y + offset[0]);
+        uv[i + 1] = float(-s * x + c * y + offset[1]);
+    }
+    return disagree ? "material " + std::to_string(material) + ": its textures carry different KHR_texture_transforms; the first was baked into TEXCOORD_" +
+                          std::to_string(set)
+                    : "";
+}
+
 Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path) {
     Scene scene;
     for (const tinygltf::Material& m : model.materials) scene.materials.push_back(material(model, m));
