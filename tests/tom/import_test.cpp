@@ -1,8 +1,11 @@
 // Import of every supported format from the real samples, and clear errors for broken files.
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 
@@ -147,6 +150,47 @@ TEST_CASE("glTF: TEXCOORD_1 and TANGENT are read, built, stored and extracted wi
                 for (int k = 0; k < 4; ++k) REQUIRE(v.tangents[4 * i + k] == input.tangents[4 * o + k]);
         }
     }
+}
+
+TEST_CASE("OBJ: texture coordinates per face corner split vertices at UV seams, never smeared", "[import][attributes]") {
+    // the (position, uv) pairs the file's faces use, read from the text
+    const std::string path = test::sample("assimp/OBJ/spider.obj");
+    std::ifstream in(path);
+    std::vector<std::array<float, 3>> v;
+    std::vector<std::array<float, 2>> vt;
+    std::set<std::pair<std::array<float, 3>, std::array<float, 2>>> expect;
+    for (std::string line; std::getline(in, line);) {
+        std::istringstream ls(line);
+        std::string tag;
+        ls >> tag;
+        if (tag == "v") {
+            std::array<float, 3> p{};
+            ls >> p[0] >> p[1] >> p[2];
+            v.push_back(p);
+        } else if (tag == "vt") {
+            std::array<float, 2> t{};
+            ls >> t[0] >> t[1];
+            vt.push_back(t);
+        } else if (tag == "f") {
+            for (std::string corner; ls >> corner;) {
+                const int a = std::stoi(corner), b = std::stoi(corner.substr(corner.find('/') + 1));
+                expect.insert({v[size_t(a - 1)], vt[size_t(b - 1)]});
+            }
+        }
+    }
+    REQUIRE(expect.size() > v.size());  // the spider has UV seams
+    tom::ImportResult r = tom::import_file(path);
+    REQUIRE(r.meshes.size() == 1);
+    const tom::Mesh& m = r.meshes[0];
+    std::set<std::pair<std::array<float, 3>, std::array<float, 2>>> got;
+    for (uint32_t i : m.indices)
+        got.insert({{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]}, {m.texcoords[2 * i], m.texcoords[2 * i + 1]}});
+    std::vector<std::pair<std::array<float, 3>, std::array<float, 2>>> extra, missing;
+    std::set_difference(got.begin(), got.end(), expect.begin(), expect.end(), std::back_inserter(extra));
+    std::set_difference(expect.begin(), expect.end(), got.begin(), got.end(), std::back_inserter(missing));
+    for (const auto& e : extra) UNSCOPED_INFO("extra " << e.first[0] << " " << e.first[1] << " " << e.first[2] << " uv " << e.second[0] << " " << e.second[1]);
+    for (const auto& e : missing) UNSCOPED_INFO("missing " << e.first[0] << " " << e.first[1] << " " << e.first[2] << " uv " << e.second[0] << " " << e.second[1]);
+    CHECK(got == expect);
 }
 
 TEST_CASE("glTF: KHR_texture_transform is baked into the texture coordinates it applies to", "[import][gltf][attributes]") {

@@ -9,6 +9,7 @@
 #include <map>
 #include <mutex>
 #include <sstream>
+#include <vector>
 
 #include "import_backends.h"
 #include "tom/errors.h"
@@ -56,10 +57,11 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     OmMesh om;
     om.request_vertex_normals();
     om.request_vertex_texcoords2D();
+    om.request_halfedge_texcoords2D();  // OBJ: a texture coordinate per face corner (UV seams)
     om.request_vertex_colors();
     om.request_vertex_status();  // marks the copies OpenMesh makes for non-manifold faces
     OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
-                                OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
+                                OpenMesh::IO::Options::FaceTexCoord | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
     std::ostringstream messages;
     bool ok;
     {
@@ -81,6 +83,7 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     if (extension == "stl") {
         opt -= OpenMesh::IO::Options::VertexNormal;
         opt -= OpenMesh::IO::Options::VertexTexCoord;
+        opt -= OpenMesh::IO::Options::FaceTexCoord;
         opt -= OpenMesh::IO::Options::VertexColor;
     }
     ImportResult result;
@@ -118,41 +121,83 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         }
         if (copies) result.warnings.push_back(std::to_string(copies) + " vertices duplicated for non-manifold faces");
     }
+    // Texture coordinates per face corner (OBJ's v/vt): a vertex with different ones on different
+    // faces is split into one vertex per distinct coordinate (a UV seam), never smeared into one.
+    const bool corner_uv = opt.check(OpenMesh::IO::Options::FaceTexCoord);
+    std::vector<uint32_t> corners;  // per face corner: the output vertex
+    std::vector<std::pair<uint32_t, std::array<float, 2>>> wedges;  // output vertex -> (OpenMesh vertex, uv)
+    corners.reserve(om.n_faces() * 3);
+    if (corner_uv) {
+        std::map<std::pair<int, std::array<float, 2>>, uint32_t> wedge_of;
+        for (auto fh : om.faces()) {
+            std::vector<OmMesh::HalfedgeHandle> hs;
+            for (auto h : om.fh_range(fh)) hs.push_back(h);
+            std::vector<OmMesh::TexCoord2D> uv;
+            for (auto h : hs) uv.push_back(om.texcoord2D(h));
+            // A face OpenMesh could only add with fresh copies of all its vertices (non-manifold
+            // input) gets its corners' coordinates one place off: OpenMesh looks for the file's
+            // first vertex, does not find it among the copies, and starts at the halfedge before
+            // the face's own. The copies are made in file order, so the file's first corner is the
+            // lowest copy: rotate back.
+            bool all_copies = true;
+            for (auto h : hs) all_copies &= om.status(om.to_vertex_handle(h)).fixed_nonmanifold();
+            if (all_copies) {
+                const auto start = om.prev_halfedge_handle(om.halfedge_handle(fh));
+                size_t at_start = 0, first = 0;
+                for (size_t k = 0; k < hs.size(); ++k) {
+                    if (hs[k] == start) at_start = k;
+                    if (om.to_vertex_handle(hs[k]).idx() < om.to_vertex_handle(hs[first]).idx()) first = k;
+                }
+                std::vector<OmMesh::TexCoord2D> fixed(uv.size());
+                for (size_t k = 0; k < hs.size(); ++k) fixed[(first + k) % hs.size()] = uv[(at_start + k) % hs.size()];
+                uv.swap(fixed);
+            }
+            for (size_t k = 0; k < hs.size(); ++k) {
+                const std::array<float, 2> t{float(uv[k][0]), float(uv[k][1])};
+                const int v = om.to_vertex_handle(hs[k]).idx();
+                const auto [it, fresh] = wedge_of.emplace(std::make_pair(v, t), uint32_t(wedges.size()));
+                if (fresh) wedges.push_back({uint32_t(v), t});
+                corners.push_back(it->second);
+            }
+        }
+    } else {
+        for (auto vh : om.vertices()) wedges.push_back({uint32_t(vh.idx()), {0.0f, 0.0f}});
+        for (auto fh : om.faces())
+            for (auto vh : om.fv_range(fh)) corners.push_back(uint32_t(vh.idx()));
+    }
     Mesh mesh;
     mesh.name = file_stem(path);
-    const size_t n = om.n_vertices();
+    const size_t n = wedges.size();
     mesh.positions.resize(n * 3);
-    for (auto vh : om.vertices()) {
-        const auto p = om.point(vh);
-        for (int k = 0; k < 3; ++k) mesh.positions[3 * size_t(vh.idx()) + k] = float(p[k]);
+    for (size_t w = 0; w < n; ++w) {
+        const auto p = om.point(OmMesh::VertexHandle(int(wedges[w].first)));
+        for (int k = 0; k < 3; ++k) mesh.positions[3 * w + size_t(k)] = float(p[k]);
     }
     if (opt.check(OpenMesh::IO::Options::VertexNormal)) {
         mesh.normals.resize(n * 3);
-        for (auto vh : om.vertices()) {
-            const auto q = om.normal(vh);
-            for (int k = 0; k < 3; ++k) mesh.normals[3 * size_t(vh.idx()) + k] = float(q[k]);
+        for (size_t w = 0; w < n; ++w) {
+            const auto q = om.normal(OmMesh::VertexHandle(int(wedges[w].first)));
+            for (int k = 0; k < 3; ++k) mesh.normals[3 * w + size_t(k)] = float(q[k]);
         }
     }
-    if (opt.check(OpenMesh::IO::Options::VertexTexCoord)) {
+    if (corner_uv || opt.check(OpenMesh::IO::Options::VertexTexCoord)) {
         mesh.texcoords.resize(n * 2);
-        for (auto vh : om.vertices()) {
-            const auto t = om.texcoord2D(vh);
-            mesh.texcoords[2 * size_t(vh.idx())] = float(t[0]);
-            mesh.texcoords[2 * size_t(vh.idx()) + 1] = float(t[1]);
+        for (size_t w = 0; w < n; ++w) {
+            const auto t = corner_uv ? OmMesh::TexCoord2D(wedges[w].second[0], wedges[w].second[1]) : om.texcoord2D(OmMesh::VertexHandle(int(wedges[w].first)));
+            mesh.texcoords[2 * w] = float(t[0]);
+            mesh.texcoords[2 * w + 1] = float(t[1]);
         }
     }
     if (opt.check(OpenMesh::IO::Options::VertexColor)) {
         mesh.colors.resize(n * 4);
-        for (auto vh : om.vertices()) {
-            const auto c = om.color(vh);
-            for (int k = 0; k < 4; ++k) mesh.colors[4 * size_t(vh.idx()) + k] = float(c[k]);
+        for (size_t w = 0; w < n; ++w) {
+            const auto c = om.color(OmMesh::VertexHandle(int(wedges[w].first)));
+            for (int k = 0; k < 4; ++k) mesh.colors[4 * w + size_t(k)] = float(c[k]);
             // files without alpha leave it 0 in a float colour: treat as opaque
-            if (!opt.check(OpenMesh::IO::Options::ColorAlpha)) mesh.colors[4 * size_t(vh.idx()) + 3] = 1.0f;
+            if (!opt.check(OpenMesh::IO::Options::ColorAlpha)) mesh.colors[4 * w + 3] = 1.0f;
         }
     }
-    mesh.indices.reserve(om.n_faces() * 3);
-    for (auto fh : om.faces())
-        for (auto vh : om.fv_range(fh)) mesh.indices.push_back(uint32_t(vh.idx()));
+    mesh.indices = std::move(corners);
     result.meshes.push_back(std::move(mesh));
     return result;
 }
