@@ -37,6 +37,16 @@ nlohmann::ordered_json conventions_json(const tom::ReportParams& p) {
             {"fit", "D = k / N, D relative error (fraction of bbox_diagonal), N triangles; k from a least-squares fit in log space"}};
 }
 
+nlohmann::ordered_json attributes_json(const tom::AttributeDeviation& a) {
+    nlohmann::ordered_json j;
+    j["samples"] = a.samples;
+    j["normal_mean_degrees"] = a.normals ? nlohmann::json(a.normal_mean_degrees) : nlohmann::json();
+    j["normal_max_degrees"] = a.normals ? nlohmann::json(a.normal_max_degrees) : nlohmann::json();
+    j["uv_mean"] = a.texcoords ? nlohmann::json(a.uv_mean) : nlohmann::json();
+    j["uv_max"] = a.texcoords ? nlohmann::json(a.uv_max) : nlohmann::json();
+    return j;
+}
+
 nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext& ctx) {
     nlohmann::ordered_json j;
     j["name"] = r.name;
@@ -78,7 +88,8 @@ nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext
                                  {"hausdorff", pct(l.error.hausdorff, d)},
                                  {"mean", pct(std::max(l.error.forward.mean, l.error.backward.mean), d)},
                                  {"diagonal", d}}},
-                               {"chain", {{"mean_steps", l.mean_steps}, {"max_steps", l.chain.max_steps}, {"overhead", l.overhead}, {"histogram", hist}}}});
+                               {"chain", {{"mean_steps", l.mean_steps}, {"max_steps", l.chain.max_steps}, {"overhead", l.overhead}, {"histogram", hist}}},
+                               {"attributes", attributes_json(l.attributes)}});
     }
     j["error_curve"] = {{"diagonal", r.curve.diagonal}, {"k_mean", r.curve.k_mean}, {"k_max", r.curve.k_max}, {"points", nlohmann::json::array()}};
     for (const tom::ErrorCurvePoint& p : r.curve.points)
@@ -97,15 +108,20 @@ std::string report_table(const tom::MeshReport& r, const ReportContext& ctx) {
                   "direction (vertices, edges, faces), seed %llu\n",
                   r.bbox_diagonal, ctx.params.distance.samples_per_face, static_cast<unsigned long long>(ctx.params.distance.seed));
     o << line;
-    o << "   level  vertices triangles |  fwd max fwd mean  fwd rms |  bwd max bwd mean  bwd rms | hausdorff |  chain mean max overhead | extract us\n";
+    o << "   level  vertices triangles |  fwd max fwd mean  fwd rms |  bwd max bwd mean  bwd rms | hausdorff |  chain mean max overhead | extract us"
+         " | normal deg    uv\n";
     for (const tom::LevelReport& l : r.levels) {
         const double d = l.error.diagonal;
-        std::snprintf(line, sizeof line, "  %5.1f%% %9u %9u | %8.4f %8.5f %8.5f | %8.4f %8.5f %8.5f | %9.4f | %10.2f %3u %8.3f | %10.1f\n",
+        const std::string normal = l.attributes.normals ? format("%10.2f", l.attributes.normal_mean_degrees) : std::string(10, ' ') + "-";
+        const std::string uv = l.attributes.texcoords ? format("%6.4f", l.attributes.uv_mean) : "     -";
+        std::snprintf(line, sizeof line, "  %5.1f%% %9u %9u | %8.4f %8.5f %8.5f | %8.4f %8.5f %8.5f | %9.4f | %10.2f %3u %8.3f | %10.1f | %s %s\n",
                       100 * l.fraction, l.vertices, l.triangles, pct(l.error.forward.max, d), pct(l.error.forward.mean, d), pct(l.error.forward.rms, d),
                       pct(l.error.backward.max, d), pct(l.error.backward.mean, d), pct(l.error.backward.rms, d), pct(l.error.hausdorff, d), l.mean_steps,
-                      l.chain.max_steps, l.overhead, 1e6 * l.extract_seconds);
+                      l.chain.max_steps, l.overhead, 1e6 * l.extract_seconds, normal.c_str(), uv.c_str());
         o << line;
     }
+    o << "  normal deg, uv: mean angle between interpolated normals and mean texture-coordinate displacement at the closest point,\n"
+         "  over " << (r.levels.empty() ? 0 : r.levels[0].attributes.samples) << " area-uniform samples of the original's faces\n";
     const double fv = double(r.memory.face_vertex_bytes);
     std::snprintf(line, sizeof line,
                   "  memory (positions+normals, 32-bit): face-vertex %llu B (100%%), TOM %llu B (%.1f%%), 6 LODs %llu B (%.1f%%), progressive mesh "

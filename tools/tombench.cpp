@@ -113,8 +113,8 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
 
 } // namespace
 
-int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const std::string& predicate,
-        const std::string& strategy, const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
+int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const tom::BuildParams& params,
+        const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
 
 int main(int argc, char** argv) {
     std::vector<std::string> inputs;
@@ -129,6 +129,9 @@ int main(int argc, char** argv) {
     app.add_option("-r,--repeats", repeats, "Repeats per figure; medians are reported (default 5)")->check(CLI::Range(1, 1000));
     app.add_option("--predicate", predicate, "quadric or memoryless")->check(CLI::IsMember({"quadric", "memoryless"}));
     app.add_option("--strategy", strategy, "passes or heap")->check(CLI::IsMember({"passes", "heap"}));
+    float attribute_weight = tom::BuildParams{}.attribute_weight;
+    app.add_option("--attribute-weight", attribute_weight, "Weight of the predicates' attribute term (0: geometry only, as meshopt_simplify)")
+        ->check(CLI::NonNegativeNumber);
     app.add_flag("--json", json, "One JSON object per mesh (one per line) instead of the table");
     std::string meshopt_out;
     std::vector<double> meshopt_levels = {10, 5, 2, 1};
@@ -141,18 +144,19 @@ int main(int argc, char** argv) {
         return tools::exit_usage;
     }
     try {
-        return run(inputs, generated, json, repeats, predicate, strategy, meshopt_out, meshopt_levels);
+        tom::BuildParams params;
+        params.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
+        params.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
+        params.attribute_weight = attribute_weight;
+        return run(inputs, generated, json, repeats, params, meshopt_out, meshopt_levels);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tools::exit_failed;
     }
 }
 
-int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const std::string& predicate,
-        const std::string& strategy, const std::string& meshopt_out, const std::vector<double>& meshopt_levels) {
-    tom::BuildParams params;
-    params.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
-    params.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
+int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const tom::BuildParams& params,
+        const std::string& meshopt_out, const std::vector<double>& meshopt_levels) {
     std::vector<tom::Mesh> meshes;
     int status = tools::exit_ok;
     for (const std::string& in : inputs) {
@@ -177,8 +181,8 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
         meshes.push_back(std::move(m));
     }
     if (!json) {
-        std::printf("build: %s/%s; meshopt = meshopt_simplify to 1%% of the triangles (reference); medians of %d\n", predicate.c_str(),
-                    strategy.c_str(), repeats);
+        std::printf("build: %s/%s, attribute weight %g; meshopt = meshopt_simplify to 1%% of the triangles (reference); medians of %d\n",
+                    tom::to_string(params.predicate), tom::to_string(params.strategy), double(params.attribute_weight), repeats);
         std::printf("%-28s %10s %10s %10s %12s %8s | %s\n", "mesh", "triangles", "build ms", "meshopt ms", "build tri/s", "x meshopt",
                     "extract: fraction triangles Mtri/s memcpy-ratio");
     }
@@ -217,8 +221,9 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
             j["mesh"] = row.mesh;
             j["vertices"] = row.vertices;
             j["triangles"] = row.triangles;
-            j["predicate"] = predicate;
-            j["strategy"] = strategy;
+            j["predicate"] = tom::to_string(params.predicate);
+            j["strategy"] = tom::to_string(params.strategy);
+            j["attribute_weight"] = params.attribute_weight;
             j["build_ms"] = row.build_s * 1e3;
             j["meshopt_ms"] = row.meshopt_s * 1e3;
             j["meshopt_triangles"] = row.meshopt_triangles;

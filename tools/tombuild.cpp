@@ -28,6 +28,7 @@ struct Options {
     std::string strategy = "passes";
     float pair_threshold = 0.0f;
     float pass_fraction = 0.1f;
+    float attribute_weight = tom::BuildParams{}.attribute_weight;
     std::string index_size = "auto";
     bool progress = false;
     bool quiet = false;
@@ -190,6 +191,11 @@ int main(int argc, char** argv) {
     app.add_option("--pass-fraction", opt.pass_fraction, "passes: share of live vertices one pass may remove, (0,1] (default 0.1)")
         ->check(CLI::Range(0.0001f, 1.0f))
         ->group("Simplification");
+    app.add_option("--attribute-weight", opt.attribute_weight,
+                   "Weight of the attribute term (normals, TEXCOORD_0, COLOR_0) in the predicates; 0 = geometry only (default " +
+                       std::to_string(tom::BuildParams{}.attribute_weight).substr(0, 4) + ")")
+        ->check(CLI::NonNegativeNumber)
+        ->group("Simplification");
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
@@ -219,6 +225,7 @@ int main(int argc, char** argv) {
         params.strategy = opt.strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
         params.pair_threshold = opt.pair_threshold;
         params.pass_fraction = opt.pass_fraction;
+        params.attribute_weight = opt.attribute_weight;
         tom::WriteOptions wopt;
         wopt.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
 

@@ -19,6 +19,9 @@
 
 #include "tom/builder.h"
 
+#include "attribute_error.h"
+#include "vec3.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -29,13 +32,11 @@ namespace tom {
 
 namespace {
 
-struct Vec3 {
-    float x, y, z;
-};
-inline Vec3 sub(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-inline float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline float length(Vec3 a) { return std::sqrt(dot(a, a)); }
+using Vec3 = detail::Vec3T<float>;
+using detail::cross;
+using detail::dot;
+using detail::length;
+using detail::sub;
 
 // Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22). The error is divided by
 // the accumulated weight (area), as meshoptimizer does: a mean squared distance, which measured
@@ -125,6 +126,7 @@ struct Builder {
     const Vec3* pos = nullptr;
     const Vec3* vnormal = nullptr;
     Predicate predicate = Predicate::quadric;
+    detail::AttributeError attributes;  // the predicates' attribute term (inactive without attributes)
     std::vector<uint32_t> idx;  // current corners, rewritten by substitutions
     std::vector<uint8_t> dead;  // per triangle
     std::vector<uint8_t> kind;
@@ -259,15 +261,21 @@ struct Builder {
         adj.each(x, [&](uint32_t t) { mark[idx[3 * t]] = mark[idx[3 * t + 1]] = mark[idx[3 * t + 2]] = 1; });
     }
 
+    // the quadric predicate: geometric and attribute error accumulated in v, at u
+    float quadric_cost(uint32_t v, uint32_t u) const {
+        return float(evaluate(quadric[v], pos[u]) + attributes.accumulated(v, &pos[u].x, u));
+    }
+
     template <class Adj>
     float cost(const Adj& adj, uint32_t v, uint32_t u) const {
-        if (predicate == Predicate::quadric) return float(evaluate(quadric[v], pos[u]));
+        if (predicate == Predicate::quadric) return quadric_cost(v, u);
         // memoryless penalty (TOM paper section 4.1): volume swept by v's triangles, distance x area
         // change, rotation of the surviving triangles (inversion penalty), angle between vertex normals
         const Vec3 pv = pos[v], pu = pos[u];
         const Vec3 d = sub(pu, pv);
         const float dist = length(d);
         float volume = 0, area0 = 0, area1 = 0, rotation = 0;
+        double attribute = 0;  // area-weighted squared attribute error of u against v's fields
         adj.each(v, [&](uint32_t t) {
             uint32_t a, b;
             others(t, v, a, b);
@@ -275,6 +283,7 @@ struct Builder {
             const Vec3 n0 = cross(sub(pa, pv), sub(pb, pv));
             const float l0 = length(n0);
             area0 += 0.5f * l0;
+            if (attributes.active()) attribute += 0.5 * l0 * attributes.triangle_error(&pos[0].x, v, a, b, u);
             if (a == u || b == u) return;  // dies
             const Vec3 n1 = cross(sub(pa, pu), sub(pb, pu));
             const float l1 = length(n1);
@@ -283,7 +292,9 @@ struct Builder {
             if (l0 > 0 && l1 > 0) rotation += 0.5f * l0 * (1.0f - dot(n0, n1) / (l0 * l1));
         });
         const float normal_term = 1.0f - dot(vnormal[v], vnormal[u]);
-        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term;
+        // the attribute term in the penalty's units (length^3): RMS attribute error x area
+        const float attribute_term = area0 > 0 ? float(std::sqrt(attribute / area0)) * area0 : 0.0f;
+        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term + attribute_term;
     }
 
     // Best substitution of v, or false when v has none. With check_legal the best *legal* one
@@ -301,7 +312,7 @@ struct Builder {
             auto consider = [&](uint32_t u) {
                 if (stamp[u] == seen || removed[u]) return;
                 stamp[u] = seen;
-                const float c = evaluate(q, pos[u]);
+                const float c = float(evaluate(q, pos[u]) + attributes.accumulated(v, &pos[u].x, u));
                 if (!any || c < best.cost || (c == best.cost && u < best.u)) best = {c, v, u};
                 any = true;
             };
@@ -397,7 +408,10 @@ struct Builder {
         }
         removed_order.push_back(v);
         removed_target.push_back(u);
-        if (predicate == Predicate::quadric) add(quadric[u], quadric[v]);
+        if (predicate == Predicate::quadric) {
+            add(quadric[u], quadric[v]);
+            attributes.merge(u, v);
+        }
         if (kind[v] == kBorder || kind[v] == kSeam) {
             const uint32_t p = border_prev[v], q = border_next[v];
             if (u == q) {
@@ -764,7 +778,6 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                 if (b.predicate == Predicate::quadric) {
                     // a neighbour w keeps its candidate unless that was v; it gains u as a target,
                     // whose cost Q_w(p_u) is one evaluation
-                    const Vec3 pu = b.pos[c.u];
                     const uint32_t seen = b.next_visit();
                     adj.each(c.v, [&](uint32_t t) {
                         for (int k = 0; k < 3; ++k) {
@@ -776,7 +789,7 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                                 dirty[w] = 1;
                                 continue;
                             }
-                            const float cw = float(evaluate(b.quadric[w], pu));
+                            const float cw = b.quadric_cost(w, c.u);
                             if (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)) best[w] = {cw, w, c.u};
                         }
                     });
@@ -925,6 +938,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     // keep coincident copies locked
     classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
     if (b.predicate == Predicate::quadric) init_quadrics(b);
+    b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric);
     find_pairs(b, params.pair_threshold, stats);
 
     if (params.strategy == Strategy::heap)

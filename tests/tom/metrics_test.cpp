@@ -9,7 +9,9 @@
 #include "support.h"
 #include "tom/error_curve.h"
 #include "tom/format.h"
+#include "tom/extract.h"
 #include "tom/generate.h"
+#include "tom/import.h"
 #include "tom/metrics.h"
 #include "tom/report.h"
 
@@ -211,4 +213,89 @@ TEST_CASE("a report on a real mesh: levels, error growth, memory like Table 4, f
     CHECK(r.fit.mean.k > 0);
     CHECK(r.fit.max.k > r.fit.mean.k);
     CHECK(r.bbox_diagonal > 0);
+}
+
+TEST_CASE("attribute deviation: 0 against itself, the known angle and shift against altered copies", "[metrics][attributes]") {
+    // a grid with one UV chart (uv = xy) and normals +z, against copies whose normals are tilted
+    // by 10 degrees about x and whose UVs are shifted by (0.1, 0)
+    tom::Mesh a = tom::make_grid(20, 20);
+    a.normals.clear();
+    for (uint32_t v = 0; v < a.vertex_count(); ++v) {
+        a.normals.insert(a.normals.end(), {0.0f, 0.0f, 1.0f});
+        a.texcoords.insert(a.texcoords.end(), {a.positions[3 * v], a.positions[3 * v + 1]});
+    }
+    const tom::SurfaceAttributes aa{a.normals.data(), a.texcoords.data()};
+    const tom::MetroReference reference(surface(a), {}, aa);
+    tom::AttributeDeviation same;
+    reference.compare(surface(a), aa, same);
+    CHECK(same.normals);
+    CHECK(same.texcoords);
+    CHECK(same.samples >= 2 * a.triangle_count() - 20);
+    CHECK(same.normal_mean_degrees < 1e-3);
+    CHECK(same.uv_mean < 1e-6);
+    tom::Mesh b = a;
+    const double angle = 10.0 * 3.14159265358979 / 180.0;
+    for (size_t i = 0; i < b.normals.size(); i += 3) b.normals[i + 1] = float(std::sin(angle)), b.normals[i + 2] = float(std::cos(angle));
+    for (size_t i = 0; i < b.texcoords.size(); i += 2) b.texcoords[i] += 0.1f;
+    tom::AttributeDeviation moved;
+    reference.compare(surface(b), {b.normals.data(), b.texcoords.data()}, moved);
+    CHECK(moved.normal_mean_degrees == Approx(10.0).epsilon(1e-4));
+    CHECK(moved.normal_max_degrees == Approx(10.0).epsilon(1e-4));
+    CHECK(moved.uv_mean == Approx(0.1).epsilon(1e-4));
+    // without texture coordinates on one side, only normals are compared
+    tom::AttributeDeviation normals_only;
+    reference.compare(surface(b), {b.normals.data(), nullptr}, normals_only);
+    CHECK(normals_only.normals);
+    CHECK(!normals_only.texcoords);
+}
+
+namespace {
+
+// Metro mean error (relative), mean normal deviation and UV displacement of a level
+struct LevelError {
+    double geometry, normal_degrees, uv;
+};
+
+LevelError level_error(const tom::Mesh& original, const tom::TomMesh& t, double fraction) {
+    const tom::MeshView v = t.view();
+    const uint32_t n = tom::vertex_count_for_fraction(v, fraction);
+    std::vector<uint32_t> idx(size_t(v.triangle_count) * 3);
+    const tom::Extracted e = tom::extract(v, n, idx.data(), idx.size());
+    const tom::MetroReference reference(surface(original), {}, {original.normals.data(), original.texcoords.empty() ? nullptr : original.texcoords.data()});
+    tom::AttributeDeviation a;
+    const tom::Distance d = reference.compare({t.positions.data(), n, idx.data(), e.triangle_count},
+                                              {t.normals.data(), t.texcoords.empty() ? nullptr : t.texcoords.data()}, a);
+    return {std::max(d.forward.mean, d.backward.mean) / d.diagonal, a.normal_mean_degrees, a.uv_mean};
+}
+
+} // namespace
+
+TEST_CASE("the attribute term keeps shading and texture layout at little geometric cost", "[metrics][attributes][builder]") {
+    // fandisk: a CAD part whose creases carry the (computed) normals; ClearCoatTest: textured spheres
+    const tom::Mesh fandisk = test::real_meshes()[1].mesh;
+    REQUIRE(test::real_meshes()[1].name.find("fandisk") != std::string::npos);
+    for (const tom::Predicate predicate : {tom::Predicate::quadric, tom::Predicate::memoryless}) {
+        INFO(tom::to_string(predicate));
+        tom::BuildParams with, without;
+        with.predicate = without.predicate = predicate;
+        without.attribute_weight = 0.0f;
+        const LevelError a = level_error(fandisk, tom::build(fandisk, with), 0.25), g = level_error(fandisk, tom::build(fandisk, without), 0.25);
+        INFO("normal deviation " << a.normal_degrees << " vs " << g.normal_degrees << " degrees; geometry " << a.geometry << " vs " << g.geometry);
+        CHECK(a.normal_degrees < 0.1 * g.normal_degrees);
+        CHECK(a.geometry < 2.0 * g.geometry);
+    }
+    tom::ImportResult r = tom::import_file(test::sample("assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf"));
+    double uv_with = 0, uv_without = 0, geo_with = 0, geo_without = 0;
+    for (tom::Mesh& m : r.meshes) {
+        tom::clean_mesh(m);
+        if (m.texcoords.empty() || m.triangle_count() < 1000) continue;
+        tom::BuildParams without;
+        without.attribute_weight = 0.0f;
+        const LevelError a = level_error(m, tom::build(m), 0.02), g = level_error(m, tom::build(m, without), 0.02);
+        uv_with += a.uv, uv_without += g.uv, geo_with += a.geometry, geo_without += g.geometry;
+    }
+    INFO("UV displacement at 2% " << uv_with << " vs " << uv_without << "; geometry " << geo_with << " vs " << geo_without);
+    REQUIRE(uv_without > 0);
+    CHECK(uv_with < 0.75 * uv_without);
+    CHECK(geo_with < 1.1 * geo_without);
 }

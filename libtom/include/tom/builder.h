@@ -32,6 +32,9 @@ struct BuildParams {
     /// passes only: the share of the live vertices a pass may remove, in (0, 1].
     /// Smaller follows the greedy order more closely and takes more passes.
     float pass_fraction = 0.1f;
+    /// Weight of the attribute term in both predicates (normals, TEXCOORD_0, COLOR_0 against the
+    /// attribute fields of the surface a vertex leaves; see libtom/src/attribute_error.h). 0 = geometry only.
+    float attribute_weight = 1.0f;
 };
 
 /// What the builder did, for reports.

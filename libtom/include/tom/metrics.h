@@ -23,6 +23,22 @@ struct Surface {
     size_t triangle_count = 0;
 };
 
+/// Per-vertex attributes of a Surface, for the attribute deviation; null streams are absent.
+struct SurfaceAttributes {
+    const float* normals = nullptr;    ///< xyz per vertex
+    const float* texcoords = nullptr;  ///< uv per vertex
+};
+
+/// How far the simplified surface's attributes are from the original's: at area-uniform random
+/// points of the original's faces, the attributes interpolated there against those interpolated
+/// at the closest point of the simplified surface (only where both surfaces have the stream).
+struct AttributeDeviation {
+    uint64_t samples = 0;
+    bool normals = false, texcoords = false;            ///< which streams were compared
+    double normal_mean_degrees = 0, normal_max_degrees = 0;
+    double uv_mean = 0, uv_max = 0;                     ///< texture-coordinate units
+};
+
 struct DistanceParams {
     double samples_per_face = 10.0;  ///< total samples per direction = this x faces of the larger mesh
     uint64_t max_samples = 0;        ///< cap on that total per direction (0: none)
@@ -31,6 +47,7 @@ struct DistanceParams {
     bool edge_samples = true;
     bool face_samples = true;
     unsigned threads = 0;            ///< 0: every core
+    double attribute_samples_per_face = 2.0;  ///< attribute deviation: samples = this x faces of the original
 };
 
 /// One direction: from the samples of one surface to the closest points of the other.
@@ -56,14 +73,17 @@ Distance metro_distance(const Surface& original, const Surface& simplified, cons
 /// then compare() against any number of simplified versions (the levels of a report).
 class MetroReference {
 public:
-    /// `original` must outlive this object. \throw std::invalid_argument as metro_distance.
-    MetroReference(const Surface& original, const DistanceParams& params = {});
+    /// `original` (and its attribute streams) must outlive this object.
+    /// \throw std::invalid_argument as metro_distance.
+    MetroReference(const Surface& original, const DistanceParams& params = {}, const SurfaceAttributes& attributes = {});
     ~MetroReference();
     MetroReference(MetroReference&&) noexcept;
     MetroReference& operator=(MetroReference&&) noexcept;
 
     /// The same figures metro_distance(original, simplified, params) gives.
     Distance compare(const Surface& simplified) const;
+    /// The same, and the attribute deviation of `simplified` (whose attributes are given).
+    Distance compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const;
 
 private:
     struct Impl;

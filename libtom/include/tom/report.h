@@ -27,6 +27,7 @@ struct LevelReport {
     uint32_t vertices = 0, triangles = 0;
     double extract_seconds = 0;  ///< median of repeated extractions into a preallocated buffer
     Distance error;              ///< object units; error.percent() for Metro's relative figures
+    AttributeDeviation attributes;  ///< normal angle and texture-coordinate displacement against the original
     ChainStats chain;
     double mean_steps = 0;       ///< substitution steps per corner emitted
     double overhead = 0;         ///< extra distinct vertices walked over vertices sent (n): the paper's Fig. 6

@@ -259,39 +259,67 @@ struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
 };
 
-OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads) {
-    const size_t n = samples.points.size();
+// Visits every triangle within sqrt(radius2) of query: visit(triangle iterator, closest point).
+template <class Visit>
+struct WithinTraits {
+    V3 query;
+    double radius2;
+    Visit& visit;
+    bool go_further() const { return true; }
+    bool do_intersect(const Point&, const Node& node) const { return ClosestTraits::box_d2(node.bbox(), query) <= radius2; }
+    void intersection(const Point&, const Primitive& primitive) {
+        const Triangle& t = *primitive.id();
+        V3 q;
+        if (closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q) <= radius2) visit(primitive.id(), q);
+    }
+};
+
+// Runs work(chunk, begin, end) over [0, n) in chunks of kChunk on up to `threads` threads (0: every
+// core); results kept per chunk and combined in chunk order give the same figures for any count.
+template <class Work>
+size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
     const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<Partial> partial(chunks);
     std::atomic<size_t> next{0};
-    auto work = [&] {
-        for (size_t c; (c = next++) < chunks;) {
-            const size_t begin = c * kChunk, end = std::min(n, begin + kChunk);
-            Partial& r = partial[c];
-            TriangleIterator previous = target.triangles.begin();
-            for (size_t i = begin; i < end; ++i) {
-                // the previous sample's triangle is near: its distance bounds the search from the start
-                ClosestTraits traits;
-                traits.query = v3(samples.points[i]);
-                V3 q;
-                traits.best_d2 = closest_on_triangle(traits.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q) * (1 + 1e-12) + 1e-300;
-                traits.best = previous;
-                target.tree.traversal_with_priority(samples.points[i], traits);
-                previous = traits.best;
-                const double d2 = traits.best_d2;
-                const double d = std::sqrt(d2);
-                r.max = std::max(r.max, d);
-                r.sum += d;
-                r.sum_squares += d2;
-            }
-        }
+    auto run = [&] {
+        for (size_t c; (c = next++) < chunks;) work(c, c * kChunk, std::min(n, c * kChunk + kChunk));
     };
     if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
     threads = unsigned(std::min<size_t>(threads, std::max<size_t>(1, chunks)));
     std::vector<std::thread> pool;
-    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(work);
-    work();
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(run);
+    run();
     for (std::thread& t : pool) t.join();
+    return chunks;
+}
+
+// The closest triangle of `target` to p and the closest point on it; `previous` (the previous
+// sample's triangle, near in sample order) bounds the search from the start.
+TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2) {
+    ClosestTraits traits;
+    traits.query = v3(p);
+    V3 q;
+    traits.best_d2 = closest_on_triangle(traits.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q) * (1 + 1e-12) + 1e-300;
+    traits.best = previous;
+    target.tree.traversal_with_priority(p, traits);
+    d2 = traits.best_d2;
+    return traits.best;
+}
+
+OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads) {
+    const size_t n = samples.points.size();
+    std::vector<Partial> partial((n + kChunk - 1) / kChunk);
+    parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
+        Partial& r = partial[c];
+        TriangleIterator previous = target.triangles.begin();
+        for (size_t i = begin; i < end; ++i) {
+            double d2;
+            previous = closest(target, samples.points[i], previous, d2);
+            const double d = std::sqrt(d2);
+            r.max = std::max(r.max, d);
+            r.sum += d;
+            r.sum_squares += d2;
+        }
+    });
     OneSidedDistance out;
     double sum = 0, sum_squares = 0;
     for (const Partial& p : partial) {  // in order: the same figures whatever the thread count
@@ -333,14 +361,149 @@ uint64_t sample_target(const Surface& a, const Surface& b, const DistanceParams&
     return p.max_samples ? std::min(n, p.max_samples) : n;
 }
 
+// Attribute samples: area-uniform random points of the faces, kept as (face, barycentrics) so
+// the original's attributes can be interpolated there.
+struct FaceSample {
+    uint32_t face;
+    double u, v;  // weights of corners 1 and 2
+};
+
+std::vector<FaceSample> face_samples(const Surface& s, uint64_t target, uint64_t seed) {
+    std::vector<FaceSample> out;
+    const double area = surface_area(s);
+    if (!(area > 0)) return out;
+    Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
+    for (size_t t = 0; t < s.triangle_count; ++t) {
+        const double expected = double(target) * triangle_area(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2])) / area;
+        for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
+            double u = rng.uniform(), v = rng.uniform();
+            if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+            out.push_back({uint32_t(t), u, v});
+        }
+    }
+    return out;
+}
+
+// Barycentric weights of q (in the triangle's plane) in triangle (a, b, c).
+void barycentric(V3 q, V3 a, V3 b, V3 c, double w[3]) {
+    const V3 e0 = b - a, e1 = c - a, e2 = q - a;
+    const double d00 = dot(e0, e0), d01 = dot(e0, e1), d11 = dot(e1, e1), d20 = dot(e2, e0), d21 = dot(e2, e1);
+    const double den = d00 * d11 - d01 * d01;
+    if (!(std::fabs(den) > 0)) {
+        w[0] = 1, w[1] = w[2] = 0;
+        return;
+    }
+    w[1] = (d11 * d20 - d01 * d21) / den;
+    w[2] = (d00 * d21 - d01 * d20) / den;
+    w[0] = 1.0 - w[1] - w[2];
+}
+
+// An attribute of `width` floats interpolated in face t of s with weights w.
+void interpolate(const Surface& s, const float* attribute, int width, size_t t, const double w[3], double* out) {
+    for (int k = 0; k < width; ++k) {
+        out[k] = 0;
+        for (int c = 0; c < 3; ++c) out[k] += w[c] * attribute[size_t(width) * s.indices[3 * t + size_t(c)] + size_t(k)];
+    }
+}
+
+struct AttributePartial {
+    double normal_sum = 0, normal_max = 0, uv_sum = 0, uv_max = 0;
+    uint64_t normal_n = 0, uv_n = 0;
+};
+
+AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttributes& oa, const std::vector<FaceSample>& samples,
+                                      const Surface& simplified, const SurfaceAttributes& sa, const Mesh3& target, unsigned threads) {
+    AttributeDeviation out;
+    out.normals = oa.normals && sa.normals;
+    out.texcoords = oa.texcoords && sa.texcoords;
+    if (!out.normals && !out.texcoords) return out;
+    std::vector<AttributePartial> partial((samples.size() + kChunk - 1) / kChunk);
+    constexpr double degrees = 180.0 / 3.14159265358979323846;
+    parallel_chunks(samples.size(), threads, [&](size_t c, size_t begin, size_t end) {
+        AttributePartial& r = partial[c];
+        TriangleIterator previous = target.triangles.begin();
+        for (size_t i = begin; i < end; ++i) {
+            const FaceSample& fs = samples[i];
+            const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
+            const Point a = point(original, original.indices[3 * size_t(fs.face)]), b = point(original, original.indices[3 * size_t(fs.face) + 1]),
+                        cc = point(original, original.indices[3 * size_t(fs.face) + 2]);
+            const Point p = a + fs.u * (b - a) + fs.v * (cc - a);
+            double d2;
+            previous = closest(target, p, previous, d2);
+            const size_t t = size_t(previous - target.triangles.begin());
+            V3 q;
+            closest_on_triangle(v3(p), v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q);
+            double ws[3];
+            barycentric(q, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), ws);
+            if (out.normals) {
+                double n0[3], n1[3];
+                interpolate(original, oa.normals, 3, fs.face, wo, n0);
+                interpolate(simplified, sa.normals, 3, t, ws, n1);
+                const double l0 = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]), l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+                if (l0 > 0 && l1 > 0) {
+                    const double cosine = std::max(-1.0, std::min(1.0, (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]) / (l0 * l1)));
+                    const double angle = std::acos(cosine) * degrees;
+                    r.normal_sum += angle;
+                    r.normal_max = std::max(r.normal_max, angle);
+                    ++r.normal_n;
+                }
+            }
+            if (out.texcoords) {
+                // at the nearest point; but a displacement of more than a quarter of the texture
+                // there is a jump across a seam line that moved (the two charts meet along it), so
+                // then the nearest point within one triangle's reach (the nearest triangle's
+                // longest edge) with a displacement under that bound counts, if there is one
+                constexpr double jump = 0.25;
+                double t0[2], t1[2];
+                interpolate(original, oa.texcoords, 2, fs.face, wo, t0);
+                interpolate(simplified, sa.texcoords, 2, t, ws, t1);
+                double d = std::hypot(t0[0] - t1[0], t0[1] - t1[1]);
+                if (d > jump) {
+                    const Triangle& nearest = *previous;
+                    double reach2 = 0;
+                    for (int k = 0; k < 3; ++k) reach2 = std::max(reach2, CGAL::squared_distance(nearest[k], nearest[(k + 1) % 3]));
+                    const double radius = std::sqrt(d2) + std::sqrt(reach2);
+                    double best_d2 = INFINITY;
+                    auto consider = [&](TriangleIterator it, V3 at) {
+                        double w[3], tc[2];
+                        barycentric(at, v3((*it)[0]), v3((*it)[1]), v3((*it)[2]), w);
+                        interpolate(simplified, sa.texcoords, 2, size_t(it - target.triangles.begin()), w, tc);
+                        const double du = std::hypot(t0[0] - tc[0], t0[1] - tc[1]);
+                        const V3 off = at - v3(p);
+                        if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
+                    };
+                    WithinTraits<decltype(consider)> within{v3(p), radius * radius, consider};
+                    target.tree.traversal(p, within);
+                }
+                r.uv_sum += d;
+                r.uv_max = std::max(r.uv_max, d);
+                ++r.uv_n;
+            }
+        }
+    });
+    double normal_sum = 0, uv_sum = 0;
+    uint64_t normal_n = 0, uv_n = 0;
+    for (const AttributePartial& p : partial) {
+        normal_sum += p.normal_sum, uv_sum += p.uv_sum, normal_n += p.normal_n, uv_n += p.uv_n;
+        out.normal_max_degrees = std::max(out.normal_max_degrees, p.normal_max);
+        out.uv_max = std::max(out.uv_max, p.uv_max);
+    }
+    out.samples = samples.size();
+    out.normal_mean_degrees = normal_n ? normal_sum / double(normal_n) : 0.0;
+    out.uv_mean = uv_n ? uv_sum / double(uv_n) : 0.0;
+    return out;
+}
+
 } // namespace
 
 struct MetroReference::Impl {
     Surface original;
     DistanceParams params;
+    SurfaceAttributes attributes;
     Mesh3 mesh;
     mutable std::vector<std::pair<uint64_t, Samples>> samples;  // by target count
-    Impl(const Surface& s, const DistanceParams& p) : original(s), params(p), mesh(s) {}
+    mutable std::vector<FaceSample> attribute_samples;          // made on first use
+    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s) {}
     const Samples& samples_for(uint64_t target) const {
         for (const auto& [t, smp] : samples)
             if (t == target) return smp;
@@ -349,18 +512,31 @@ struct MetroReference::Impl {
     }
 };
 
-MetroReference::MetroReference(const Surface& original, const DistanceParams& params) {
+MetroReference::MetroReference(const Surface& original, const DistanceParams& params, const SurfaceAttributes& attributes) {
     validate(original, "original");
-    impl_ = std::make_unique<Impl>(original, params);
+    impl_ = std::make_unique<Impl>(original, params, attributes);
 }
 MetroReference::~MetroReference() = default;
 MetroReference::MetroReference(MetroReference&&) noexcept = default;
 MetroReference& MetroReference::operator=(MetroReference&&) noexcept = default;
 
 Distance MetroReference::compare(const Surface& simplified) const {
+    AttributeDeviation unused;
+    return compare(simplified, SurfaceAttributes{}, unused);
+}
+
+Distance MetroReference::compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const {
     validate(simplified, "simplified");
     const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
     const Mesh3 other(simplified);
+    if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
+        if (impl_->attribute_samples.empty())
+            impl_->attribute_samples = face_samples(impl_->original, uint64_t(std::llround(impl_->params.attribute_samples_per_face * double(impl_->original.triangle_count))),
+                                                    impl_->params.seed);
+        deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples, simplified, attributes, other, impl_->params.threads);
+    } else {
+        deviation = AttributeDeviation{};
+    }
     Distance d;
     d.forward = measure(impl_->samples_for(target), other, impl_->params.threads);
     d.backward = measure(sample_surface(simplified, target, impl_->params), impl_->mesh, impl_->params.threads);

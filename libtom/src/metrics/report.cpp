@@ -165,7 +165,11 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     r.triangles = built.triangle_count();
     r.memory = memory_of(built);
     const MeshView v = built.view();
-    const MetroReference reference(surface_of(original), params.distance);
+    const SurfaceAttributes original_attributes{original.normals.empty() ? nullptr : original.normals.data(),
+                                                original.texcoords.empty() ? nullptr : original.texcoords.data()};
+    const SurfaceAttributes level_attributes{built.normals.empty() ? nullptr : built.normals.data(),
+                                             built.texcoords.empty() ? nullptr : built.texcoords.data()};
+    const MetroReference reference(surface_of(original), params.distance, original_attributes);
     std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
     std::vector<double> tris, means, maxes;
     for (double f : params.levels) {
@@ -180,7 +184,7 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
         lr.mean_steps = lr.chain.corners ? double(lr.chain.steps) / double(lr.chain.corners) : 0.0;
         lr.overhead = overhead_distinct(v, n);
         if (l.e.triangle_count > 0) {
-            lr.error = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
+            lr.error = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count}, level_attributes, lr.attributes);
             r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
             tris.push_back(lr.triangles);
             means.push_back(std::max(lr.error.forward.mean, lr.error.backward.mean) / lr.error.diagonal);

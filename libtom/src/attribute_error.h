@@ -1,0 +1,48 @@
+#pragma once
+// The attribute term of the fairness predicates: how far a vertex's attributes (normal, TEXCOORD_0,
+// COLOR_0, each scaled to a length) are from the attribute fields of the surface it leaves.
+//
+// After Hoppe, "New quadric metric for simplifying meshes with appearance attributes" (1999):
+// over each triangle an attribute a is a linear field g.p + d (g in the triangle's plane); the
+// error of giving a point p the attribute value s is sum_t w_t (g_t.p + d_t - s)^2, a quadric in
+// (p, s) accumulated per vertex like the geometric one. Restricted to existing vertices it is
+// evaluated at (p_u, a_u) for a substitution v -> u, so a collapse along a region where the
+// attributes vary linearly (a smooth normal field, an undistorted UV chart) costs nothing, and
+// one across a crease, a UV fold or a colour edge costs what it smears.
+
+#include <cstdint>
+#include <vector>
+
+#include "tom/mesh.h"
+
+namespace tom::detail {
+
+class AttributeError {
+public:
+    /// Prepares the scaled attributes and, when `accumulate`, the per-vertex quadrics of the
+    /// input triangles. Scales: TEXCOORD_0 by sqrt(surface area / UV area) (texture units to
+    /// surface length), normals and colours by the mean edge length, each by a measured relative
+    /// weight (see the .cpp); all by `weight`.
+    /// Inactive (every cost 0) when weight <= 0 or the mesh has none of the streams.
+    void init(const Mesh& mesh, float weight, bool accumulate);
+    bool active() const noexcept { return channels_ > 0; }
+    int channels() const noexcept { return channels_; }
+
+    /// Accumulated error of v's quadric at u's position and attributes, per unit area (like the
+    /// geometric quadric), in length^2.
+    double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept;
+    /// v's quadric merges into u's (v -> u).
+    void merge(uint32_t u, uint32_t v) noexcept;
+
+    /// Squared attribute error of triangle (i0, i1, i2)'s fields at u's position and attributes,
+    /// summed over channels (for the memoryless predicate); 0 for a zero-area triangle.
+    double triangle_error(const float* positions, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t u) const noexcept;
+
+private:
+    int channels_ = 0;
+    std::vector<float> values_;    // channels_ per vertex, scaled
+    std::vector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
+    size_t stride_ = 0;
+};
+
+} // namespace tom::detail
