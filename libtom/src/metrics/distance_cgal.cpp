@@ -69,7 +69,38 @@ struct Samples {
     std::vector<Point> points;
     uint64_t vertex = 0, edge = 0, face = 0;
     double area = 0;
+    std::vector<uint32_t> order;  // the points in Morton order: consecutive queries are neighbours
 };
+
+// 21 bits per axis interleaved: a Z-order curve over the points' bounding box.
+uint64_t spread(uint64_t x) {
+    x &= 0x1FFFFF;
+    x = (x | x << 32) & 0x1F00000000FFFFULL;
+    x = (x | x << 16) & 0x1F0000FF0000FFULL;
+    x = (x | x << 8) & 0x100F00F00F00F00FULL;
+    x = (x | x << 4) & 0x10C30C30C30C30C3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+void morton_order(Samples& s) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (const Point& p : s.points)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    std::vector<std::pair<uint64_t, uint32_t>> keyed(s.points.size());
+    for (size_t i = 0; i < s.points.size(); ++i) {
+        uint64_t code = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double extent = hi[k] - lo[k];
+            const double t = extent > 0 ? (s.points[i][k] - lo[k]) / extent : 0.0;
+            code |= spread(uint64_t(t * 2097151.0)) << k;
+        }
+        keyed[i] = {code, uint32_t(i)};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    s.order.resize(keyed.size());
+    for (size_t i = 0; i < keyed.size(); ++i) s.order[i] = keyed[i].second;
+}
 
 double surface_area(const Surface& s) {
     double area = 0;
@@ -145,6 +176,7 @@ Samples sample_surface(const Surface& s, uint64_t target, const DistanceParams& 
         }
         out.face = out.points.size() - out.vertex - out.edge;
     }
+    morton_order(out);
     return out;
 }
 
@@ -292,34 +324,73 @@ size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
     return chunks;
 }
 
+// Nearest-triangle search down CGAL's AABB tree (its nodes, boxes and primitives), nearer child
+// first, and the farther one only if its box is still nearer than the best triangle found in the
+// nearer one (CGAL's traversal_with_priority decides both children before descending).
+struct Nearest {
+    V3 query;
+    double best_d2;
+    TriangleIterator best;
+
+    void leaf(const Primitive& primitive) {
+        const Triangle& t = *primitive.id();
+        V3 q;
+        const double d2 = closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q);
+        if (d2 < best_d2) best_d2 = d2, best = primitive.id();
+    }
+    void visit(const Node& node, size_t primitives) {
+        if (primitives == 2) {
+            leaf(node.left_data());
+            leaf(node.right_data());
+            return;
+        }
+        if (primitives == 3) {
+            leaf(node.left_data());
+            if (ClosestTraits::box_d2(node.right_child().bbox(), query) < best_d2) visit(node.right_child(), 2);
+            return;
+        }
+        const size_t left = primitives / 2, right = primitives - left;
+        const double dl = ClosestTraits::box_d2(node.left_child().bbox(), query), dr = ClosestTraits::box_d2(node.right_child().bbox(), query);
+        if (dl <= dr) {
+            if (dl < best_d2) visit(node.left_child(), left);
+            if (dr < best_d2) visit(node.right_child(), right);
+        } else {
+            if (dr < best_d2) visit(node.right_child(), right);
+            if (dl < best_d2) visit(node.left_child(), left);
+        }
+    }
+};
+
 // The closest triangle of `target` to p and the closest point on it; `previous` (the previous
 // sample's triangle, near in sample order) bounds the search from the start.
 TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2) {
-    ClosestTraits traits;
-    traits.query = v3(p);
+    Nearest search;
+    search.query = v3(p);
     V3 q;
-    traits.best_d2 = closest_on_triangle(traits.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q) * (1 + 1e-12) + 1e-300;
-    traits.best = previous;
-    target.tree.traversal_with_priority(p, traits);
-    d2 = traits.best_d2;
-    return traits.best;
+    search.best_d2 = closest_on_triangle(search.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q);
+    search.best = previous;
+    if (target.triangles.size() >= 2 && search.best_d2 > 0) search.visit(*target.tree.root_node(), target.triangles.size());
+    d2 = search.best_d2;
+    return search.best;
 }
 
 OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads) {
     const size_t n = samples.points.size();
-    std::vector<Partial> partial((n + kChunk - 1) / kChunk);
-    parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
-        Partial& r = partial[c];
+    // queries in Morton order (each starts from its predecessor's triangle), distances kept per
+    // sample and summed in sample order: the same figures whatever the thread count
+    std::vector<double> squared(n);
+    parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
         TriangleIterator previous = target.triangles.begin();
-        for (size_t i = begin; i < end; ++i) {
-            double d2;
-            previous = closest(target, samples.points[i], previous, d2);
-            const double d = std::sqrt(d2);
-            r.max = std::max(r.max, d);
-            r.sum += d;
-            r.sum_squares += d2;
-        }
+        for (size_t i = begin; i < end; ++i) previous = closest(target, samples.points[samples.order[i]], previous, squared[samples.order[i]]);
     });
+    std::vector<Partial> partial((n + kChunk - 1) / kChunk);
+    for (size_t i = 0; i < n; ++i) {
+        Partial& r = partial[i / kChunk];
+        const double d = std::sqrt(squared[i]);
+        r.max = std::max(r.max, d);
+        r.sum += d;
+        r.sum_squares += squared[i];
+    }
     OneSidedDistance out;
     double sum = 0, sum_squares = 0;
     for (const Partial& p : partial) {  // in order: the same figures whatever the thread count
