@@ -261,31 +261,12 @@ inline double closest_on_triangle(V3 p, V3 a, V3 b, V3 c, V3& out) {
 
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
 
-// Traversal traits for CGAL's AABB tree: prune every box farther than the best triangle so
-// far, visit the nearer child first, measure leaves with closest_on_triangle().
-struct ClosestTraits {
-    V3 query;
-    double best_d2;
-    TriangleIterator best;
-    using Priority = double;
-    bool go_further() const { return true; }
-    static double axis(double lo, double hi, double x) { return x < lo ? lo - x : (x > hi ? x - hi : 0.0); }
-    static double box_d2(const CGAL::Bbox_3& b, V3 p) {
-        const double dx = axis(b.xmin(), b.xmax(), p.x), dy = axis(b.ymin(), b.ymax(), p.y), dz = axis(b.zmin(), b.zmax(), p.z);
-        return dx * dx + dy * dy + dz * dz;
-    }
-    bool do_intersect(const Point&, const Node& node) const { return box_d2(node.bbox(), query) < best_d2; }
-    std::pair<bool, double> do_intersect_with_priority(const Point&, const Node& node) const {
-        const double d = box_d2(node.bbox(), query);
-        return {d < best_d2, -d};
-    }
-    void intersection(const Point&, const Primitive& primitive) {
-        const Triangle& t = *primitive.id();
-        V3 q;
-        const double d2 = closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q);
-        if (d2 < best_d2) best_d2 = d2, best = primitive.id();
-    }
-};
+// Squared distance from p to an axis-aligned box (0 inside).
+inline double axis_gap(double lo, double hi, double x) { return x < lo ? lo - x : (x > hi ? x - hi : 0.0); }
+inline double box_d2(const CGAL::Bbox_3& b, V3 p) {
+    const double dx = axis_gap(b.xmin(), b.xmax(), p.x), dy = axis_gap(b.ymin(), b.ymax(), p.y), dz = axis_gap(b.zmin(), b.zmax(), p.z);
+    return dx * dx + dy * dy + dz * dz;
+}
 
 struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
@@ -298,7 +279,7 @@ struct WithinTraits {
     double radius2;
     Visit& visit;
     bool go_further() const { return true; }
-    bool do_intersect(const Point&, const Node& node) const { return ClosestTraits::box_d2(node.bbox(), query) <= radius2; }
+    bool do_intersect(const Point&, const Node& node) const { return box_d2(node.bbox(), query) <= radius2; }
     void intersection(const Point&, const Primitive& primitive) {
         const Triangle& t = *primitive.id();
         V3 q;
@@ -346,11 +327,11 @@ struct Nearest {
         }
         if (primitives == 3) {
             leaf(node.left_data());
-            if (ClosestTraits::box_d2(node.right_child().bbox(), query) < best_d2) visit(node.right_child(), 2);
+            if (box_d2(node.right_child().bbox(), query) < best_d2) visit(node.right_child(), 2);
             return;
         }
         const size_t left = primitives / 2, right = primitives - left;
-        const double dl = ClosestTraits::box_d2(node.left_child().bbox(), query), dr = ClosestTraits::box_d2(node.right_child().bbox(), query);
+        const double dl = box_d2(node.left_child().bbox(), query), dr = box_d2(node.right_child().bbox(), query);
         if (dl <= dr) {
             if (dl < best_d2) visit(node.left_child(), left);
             if (dr < best_d2) visit(node.right_child(), right);
