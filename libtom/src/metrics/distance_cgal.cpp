@@ -6,10 +6,10 @@
 // relative to the bounding-box diagonal). P. Alliez, S. Tayeb, C. Wormser. 3D Fast
 // Intersection and Distance Computation, CGAL manual (AABB tree, closest point with a hint).
 //
-// Speed: samples are generated face by face, so consecutive samples are close; each query
-// passes the previous answer as CGAL's hint, which bounds the search from the start. Samples
-// are processed in fixed chunks combined in order, so the figures do not depend on the number
-// of threads.
+// Speed: queries run in Morton order of the samples, each starting from its predecessor's
+// triangle (which bounds the search from the start), down CGAL's tree nearer child first.
+// Distances are kept per sample and summed in sample order, so the figures do not depend on the
+// number of threads.
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
