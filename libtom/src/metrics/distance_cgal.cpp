@@ -72,6 +72,13 @@ struct Samples {
     double area = 0;
 };
 
+double surface_area(const Surface& s) {
+    double area = 0;
+    for (size_t t = 0; t < s.triangle_count; ++t)
+        area += triangle_area(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2]));
+    return area;
+}
+
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
 Samples sample_surface(const Surface& s, uint64_t target, const DistanceParams& p) {
