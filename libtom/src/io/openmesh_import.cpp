@@ -2,6 +2,10 @@
 // give non-manifold faces vertices of their own). OpenMesh reports problems on its omerr()
 // stream; that stream is captured here so the reasons reach the caller instead of stderr.
 
+// GCC 12 reports -Wmaybe-uninitialized inside OpenMesh's PropertyT<Vec3f>::push_back (a
+// value-initialised vector it cannot see through); the warning is about OpenMesh's header code,
+// instantiated in this file.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
