@@ -135,6 +135,10 @@ void Renderer::render(const float view[16], const float projection[16], const st
         glEnableVertexAttribArray(0);
         glEnableVertexAttribArray(1);
         glUniformMatrix4fv(impl_->u_model, 1, GL_FALSE, d.model);
+        // a mirroring transform (glTF scenes have them) turns counter-clockwise front faces clockwise
+        const float* m = d.model;
+        const float det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[4] * (m[1] * m[10] - m[2] * m[9]) + m[8] * (m[1] * m[6] - m[2] * m[5]);
+        glFrontFace(det < 0 ? GL_CW : GL_CCW);
         glUniform3fv(impl_->u_color, 1, d.color);
         glDrawElements(GL_TRIANGLES, GLsizei(d.index_count), GL_UNSIGNED_INT, reinterpret_cast<void*>(d.first * sizeof(uint32_t)));
     }
