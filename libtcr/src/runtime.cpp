@@ -169,10 +169,13 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     problem_.resize(n);
     coverage_.resize(n);
     problem_.m = params.m;
-    // model correction from the last frame's measurement (objects' part only)
+    // model correction from the last frame's measurement (objects' part only): the last
+    // prediction already carried the correction, so measured / predicted is the residual and
+    // correction x residual the factor the calibrated model should have had
     if (params.correct_model && params.previous_frame_ms > 0 && last_predicted_ms_ > model_.frame_fixed_ms()) {
-        const double ratio = (params.previous_frame_ms - model_.frame_fixed_ms() + model_.safety_ms) / (last_predicted_ms_ - model_.frame_fixed_ms());
-        if (std::isfinite(ratio) && ratio > 0) correction_ = std::min(2.0, std::max(0.5, 0.7 * correction_ + 0.3 * ratio));
+        const double residual = (params.previous_frame_ms - model_.frame_fixed_ms() + model_.safety_ms) / (last_predicted_ms_ - model_.frame_fixed_ms());
+        if (std::isfinite(residual) && residual > 0)
+            correction_ = std::min(2.0, std::max(0.5, 0.7 * correction_ + 0.3 * correction_ * residual));
     }
     if (!params.correct_model) correction_ = 1.0;
     report_.correction = correction_;

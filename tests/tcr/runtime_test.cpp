@@ -161,6 +161,33 @@ TEST_CASE("every selector holds the budget on a real scene, and levels extract a
     }
 }
 
+TEST_CASE("the model correction converges to the renderer's true factor", "[tcr][runtime]") {
+    // a renderer that takes `factor` times what the calibrated model says: after some frames the
+    // runtime's predictions match the measurements, whatever the factor
+    SceneFixture fx;
+    for (const double factor : {0.8, 1.25}) {
+        INFO("true factor " << factor);
+        tcr::Runtime rt(model(), tcr::SelectorKind::greedy);
+        fill_scene(rt, fx.file, 200);
+        const tcr::CostModel& m = model();
+        double measured = 0;
+        for (int frame = 0; frame < 40; ++frame) {
+            tcr::FrameParams f;
+            f.camera = camera_at(4.0f);
+            f.budget_ms = 6.0;
+            f.previous_frame_ms = measured;
+            const tcr::FrameReport& r = rt.plan_frame(f);
+            // what this plan really costs: the fixed part, then the objects at `factor` x the model
+            const double objects = (r.predicted_ms - m.frame_fixed_ms()) / r.correction;
+            measured = m.t_init_ms + m.t_final_ms + factor * objects;
+            if (frame == 39) {
+                CHECK(r.correction == Approx(factor).epsilon(0.02));
+                CHECK(measured == Approx(r.predicted_ms - m.safety_ms).epsilon(0.02));
+            }
+        }
+    }
+}
+
 TEST_CASE("error-bounded mode: every object at the smallest resolution within the bound", "[tcr][runtime][error]") {
     SceneFixture fx;
     tcr::Runtime rt(model(), tcr::SelectorKind::exact);

@@ -130,7 +130,7 @@ private:
     Plan plan_;
     FrameReport report_;
     double stress_ = 1.0;
-    double correction_ = 1.0;   // EMA of measured / predicted for the objects' part of the frame
+    double correction_ = 1.0;   // EMA of the factor (measured / model) for the objects' part of the frame
     double last_predicted_ms_ = 0;
     double last_fixed_c_ = 1.0;
     Camera last_camera_{};
