@@ -33,7 +33,7 @@ struct FrameParams {
     Camera camera;
     double budget_ms = 16.0;         ///< the whole frame
     double previous_frame_ms = 0;    ///< measured time of the last frame (stress selector, model correction); 0 if unknown
-    bool correct_model = true;       ///< scale the objects' predicted cost by the recent measured / predicted ratio
+    bool correct_model = true;       ///< scale the objects' modelled cost by the recent measured / modelled factor
     double deadline_ms = 0;          ///< optimiser deadline (barrier, exact); 0 for none
     double m = 1.0;                  ///< accuracy exponent: 0.5, 1 or 2
     double hysteresis = 0.0;         ///< relative dead band against the previous frame's choice
