@@ -151,11 +151,21 @@ Samples sample_surface(const Surface& s, uint64_t target, const DistanceParams& 
 
 struct Mesh3 {
     std::vector<Triangle> triangles;
+    std::vector<double> planes;  // per triangle: unit normal and offset (zero for a degenerate one)
     Tree tree;
     explicit Mesh3(const Surface& s) {
         triangles.reserve(s.triangle_count);
-        for (size_t t = 0; t < s.triangle_count; ++t)
-            triangles.emplace_back(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2]));
+        planes.reserve(4 * s.triangle_count);
+        for (size_t t = 0; t < s.triangle_count; ++t) {
+            const Point a = point(s, s.indices[3 * t]), b = point(s, s.indices[3 * t + 1]), c = point(s, s.indices[3 * t + 2]);
+            triangles.emplace_back(a, b, c);
+            const K::Vector_3 n = CGAL::cross_product(b - a, c - a);
+            const double len = std::sqrt(n.squared_length());
+            if (len > 0)
+                planes.insert(planes.end(), {n.x() / len, n.y() / len, n.z() / len, -(n.x() * a.x() + n.y() * a.y() + n.z() * a.z()) / len});
+            else
+                planes.insert(planes.end(), {0.0, 0.0, 0.0, 0.0});
+        }
         tree.insert(triangles.begin(), triangles.end());
         tree.build();
     }
@@ -281,8 +291,14 @@ struct Nearest {
     V3 query;
     double best_d2;
     TriangleIterator best;
+    TriangleIterator first;  // the target's triangles, for the index of a primitive
+    const double* planes;
 
     void leaf(const Primitive& primitive) {
+        // the distance to the triangle's plane bounds the distance to the triangle from below
+        const double* plane = planes + 4 * size_t(primitive.id() - first);
+        const double above = plane[0] * query.x + plane[1] * query.y + plane[2] * query.z + plane[3];
+        if (above * above >= best_d2) return;
         const Triangle& t = *primitive.id();
         V3 q;
         const double d2 = closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q);
@@ -316,6 +332,8 @@ struct Nearest {
 TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2) {
     Nearest search;
     search.query = v3(p);
+    search.first = target.triangles.begin();
+    search.planes = target.planes.data();
     V3 q;
     search.best_d2 = closest_on_triangle(search.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q);
     search.best = previous;
