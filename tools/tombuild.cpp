@@ -29,6 +29,7 @@ struct Options {
     float pair_threshold = 0.0f;
     float pass_fraction = 0.1f;
     float attribute_weight = tom::BuildParams{}.attribute_weight;
+    float max_rotation = tom::BuildParams{}.max_rotation_degrees;
     std::string index_size = "auto";
     bool progress = false;
     bool quiet = false;
@@ -196,6 +197,10 @@ int main(int argc, char** argv) {
                        std::to_string(tom::BuildParams{}.attribute_weight).substr(0, 4) + ")")
         ->check(CLI::NonNegativeNumber)
         ->group("Simplification");
+    app.add_option("--max-rotation", opt.max_rotation,
+                   "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
+        ->check(CLI::Range(1.0f, 90.0f))
+        ->group("Simplification");
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
@@ -226,6 +231,7 @@ int main(int argc, char** argv) {
         params.pair_threshold = opt.pair_threshold;
         params.pass_fraction = opt.pass_fraction;
         params.attribute_weight = opt.attribute_weight;
+        params.max_rotation_degrees = opt.max_rotation;
         tom::WriteOptions wopt;
         wopt.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
 

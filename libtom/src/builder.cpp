@@ -127,6 +127,7 @@ struct Builder {
     const Vec3* vnormal = nullptr;
     Predicate predicate = Predicate::quadric;
     detail::AttributeError attributes;  // the predicates' attribute term (inactive without attributes)
+    float min_cos2 = 0.0f;  // cos^2 of the largest rotation a surviving triangle's normal may take (0: flips only)
     std::vector<uint32_t> idx;  // current corners, rewritten by substitutions
     std::vector<uint8_t> dead;  // per triangle
     std::vector<uint8_t> kind;
@@ -183,7 +184,8 @@ struct Builder {
     }
 
     // The binary oracle's geometric and topological tests for v -> u:
-    // - no surviving triangle of v flips (or becomes zero-area);
+    // - no surviving triangle of v flips (or becomes zero-area), nor turns its normal by more
+    //   than the maximum rotation (BuildParams::max_rotation_degrees);
     // - link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
     //   otherwise edges v-w and u-w merge into a non-manifold edge;
     // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
@@ -202,7 +204,8 @@ struct Builder {
             const Vec3 pa = pos[a], pc = pos[c];
             const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
             const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
-            if (dot(n0, n1) <= 0.0f && dot(n0, n0) > 0.0f) bad = true;
+            const float d = dot(n0, n1), l0 = dot(n0, n0);
+            if (l0 > 0.0f && (d <= 0.0f || d * d <= min_cos2 * l0 * dot(n1, n1))) bad = true;
         });
         if (bad) return true;
         // link condition on the surface welded by position (seam copies are one point): every
@@ -927,6 +930,10 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
         b.vnormal = reinterpret_cast<const Vec3*>(normals_storage.data());
     }
     b.predicate = params.predicate;
+    {
+        const double c = std::cos(std::min(90.0, std::max(1.0, double(params.max_rotation_degrees))) * 3.14159265358979323846 / 180.0);
+        b.min_cos2 = float(c * c);
+    }
     b.idx = mesh.indices;
     b.dead.assign(b.m, 0);
     b.removed.assign(b.n, 0);
