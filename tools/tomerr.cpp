@@ -1,5 +1,6 @@
 // tomerr: Metro-style distance between two mesh files (OBJ, PLY, OFF, STL, glTF, GLB or .tom at a
-// chosen level), so other tools' outputs can be measured with the same yardstick.
+// chosen level), so other tools' outputs can be measured with the same yardstick; with the
+// attribute deviation (normals, texture coordinates) where both files have them.
 
 #include <cstdio>
 #include <optional>
@@ -17,10 +18,14 @@ namespace {
 
 // every triangle mesh of a file merged into one surface
 struct Loaded {
-    std::vector<float> positions;
+    std::vector<float> positions, normals, texcoords;  // normals / texcoords: empty unless every mesh has them
     std::vector<uint32_t> indices;
     size_t meshes = 0;
+    bool all_normals = true, all_texcoords = true;
     tom::Surface surface() const { return {positions.data(), uint32_t(positions.size() / 3), indices.data(), indices.size() / 3}; }
+    tom::SurfaceAttributes attributes() const {
+        return {all_normals && !normals.empty() ? normals.data() : nullptr, all_texcoords && !texcoords.empty() ? texcoords.data() : nullptr};
+    }
 };
 
 bool ends_with(const std::string& s, const std::string& suffix) {
@@ -29,9 +34,13 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 
 Loaded load(const std::string& path, std::optional<double> fraction) {
     Loaded out;
-    auto append = [&](const float* pos, uint32_t n, const uint32_t* idx, size_t tris) {
+    auto append = [&](const float* pos, const float* nrm, const float* uv, uint32_t n, const uint32_t* idx, size_t tris) {
         const uint32_t base = uint32_t(out.positions.size() / 3);
         out.positions.insert(out.positions.end(), pos, pos + size_t(n) * 3);
+        out.all_normals &= nrm != nullptr;
+        out.all_texcoords &= uv != nullptr;
+        if (nrm) out.normals.insert(out.normals.end(), nrm, nrm + size_t(n) * 3);
+        if (uv) out.texcoords.insert(out.texcoords.end(), uv, uv + size_t(n) * 2);
         for (size_t i = 0; i < tris * 3; ++i) out.indices.push_back(idx[i] + base);
         ++out.meshes;
     };
@@ -42,14 +51,15 @@ Loaded load(const std::string& path, std::optional<double> fraction) {
             const uint32_t n = fraction ? tom::vertex_count_for_fraction(m, *fraction) : m.vertex_count;
             std::vector<uint32_t> idx(size_t(m.triangle_count) * 3);
             const tom::Extracted e = tom::extract(m, n, idx.data(), idx.size());
-            append(m.positions, e.vertex_count, idx.data(), e.triangle_count);
+            append(m.positions, m.normals, m.texcoords, e.vertex_count, idx.data(), e.triangle_count);
         }
         return out;
     }
     tom::ImportResult r = tom::import_file(path);
     for (tom::Mesh& m : r.meshes) {
         tom::clean_mesh(m);
-        append(m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count());
+        append(m.positions.data(), m.normals.empty() ? nullptr : m.normals.data(), m.texcoords.empty() ? nullptr : m.texcoords.data(),
+               m.vertex_count(), m.indices.data(), m.triangle_count());
     }
     if (out.indices.empty()) throw tom::ImportError(path + ": no triangles");
     return out;
@@ -89,7 +99,9 @@ int main(int argc, char** argv) {
         p.vertex_samples = !no_vertex;
         p.edge_samples = !no_edge;
         p.face_samples = !no_face;
-        const tom::Distance d = tom::metro_distance(a.surface(), b.surface(), p);
+        const tom::MetroReference reference(a.surface(), p, a.attributes());
+        tom::AttributeDeviation attributes;
+        const tom::Distance d = reference.compare(b.surface(), b.attributes(), attributes);
         auto side = [&](const tom::OneSidedDistance& s) {
             return nlohmann::ordered_json{{"max", d.percent(s.max)},       {"mean", d.percent(s.mean)},       {"rms", d.percent(s.rms)},
                                           {"max_abs", s.max},              {"mean_abs", s.mean},              {"rms_abs", s.rms},
@@ -108,6 +120,11 @@ int main(int argc, char** argv) {
             j["hausdorff"] = d.percent(d.hausdorff);
             j["hausdorff_abs"] = d.hausdorff;
             j["mean"] = d.percent(std::max(d.forward.mean, d.backward.mean));
+            j["attributes"] = {{"samples", attributes.samples},
+                               {"normal_mean_degrees", attributes.normals ? nlohmann::json(attributes.normal_mean_degrees) : nlohmann::json()},
+                               {"normal_max_degrees", attributes.normals ? nlohmann::json(attributes.normal_max_degrees) : nlohmann::json()},
+                               {"uv_mean", attributes.texcoords ? nlohmann::json(attributes.uv_mean) : nlohmann::json()},
+                               {"uv_max", attributes.texcoords ? nlohmann::json(attributes.uv_max) : nlohmann::json()}};
             std::printf("%s\n", j.dump(2).c_str());
             return tools::exit_ok;
         }
@@ -121,6 +138,11 @@ int main(int argc, char** argv) {
                         static_cast<unsigned long long>(s->vertex_samples), static_cast<unsigned long long>(s->edge_samples),
                         static_cast<unsigned long long>(s->face_samples));
         std::printf("Hausdorff distance: %.6g (%.4f%% of the diagonal)\n", d.hausdorff, d.percent(d.hausdorff));
+        if (attributes.normals)
+            std::printf("normals: mean deviation %.3f degrees, max %.2f [%llu samples of the original's faces]\n", attributes.normal_mean_degrees,
+                        attributes.normal_max_degrees, static_cast<unsigned long long>(attributes.samples));
+        if (attributes.texcoords)
+            std::printf("texture coordinates: mean displacement %.5f, max %.4f\n", attributes.uv_mean, attributes.uv_max);
         return tools::exit_ok;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

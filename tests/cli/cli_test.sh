@@ -124,7 +124,7 @@ check "tominfo says so" bash -c "'$tools/tominfo' '$work/nc/fandisk.tom' --curve
 
 # tomerr: the same yardstick for any two files
 check "tomerr of a mesh and itself" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$data/meshes/fandisk.off" --json
-check "is 0" /usr/bin/python3 -c "import json; d=json.load(open('$work/stdout')); assert d['hausdorff'] < 1e-6 and d['forward']['samples'] >= 129000, d"
+check "is 0, normals included" /usr/bin/python3 -c "import json; d=json.load(open('$work/stdout')); assert d['hausdorff'] < 1e-6 and d['forward']['samples'] >= 129000 and d['attributes']['normal_mean_degrees'] < 1e-3 and d['attributes']['uv_mean'] is None, d"
 check "tomerr against a .tom level" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/r/fandisk.tom" --fraction 0.1 --json
 check "matches the report's figure for that level" /usr/bin/python3 -c "
 import json
