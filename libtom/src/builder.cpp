@@ -20,6 +20,7 @@
 #include "tom/builder.h"
 
 #include "attribute_error.h"
+#include "format_layout.h"
 #include "vec3.h"
 
 #include <algorithm>
@@ -310,12 +311,11 @@ struct Builder {
             // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
             const uint32_t seen = next_visit();
             stamp[v] = seen;
-            const Quadric& q = quadric[v];
             bool any = false;
             auto consider = [&](uint32_t u) {
                 if (stamp[u] == seen || removed[u]) return;
                 stamp[u] = seen;
-                const float c = float(evaluate(q, pos[u]) + attributes.accumulated(v, &pos[u].x, u));
+                const float c = quadric_cost(v, u);
                 if (!any || c < best.cost || (c == best.cost && u < best.u)) best = {c, v, u};
                 any = true;
             };
@@ -896,11 +896,10 @@ MeshView TomMesh::view() const noexcept {
     v.index_size = 4;
     v.material = material;
     v.positions = positions.data();
-    v.normals = normals.empty() ? nullptr : normals.data();
-    v.texcoords = texcoords.empty() ? nullptr : texcoords.data();
-    v.colors = colors.empty() ? nullptr : colors.data();
-    v.texcoords1 = texcoords1.empty() ? nullptr : texcoords1.data();
-    v.tangents = tangents.empty() ? nullptr : tangents.data();
+    int stream = 0;
+    for_each_attribute_stream(*this, [&](const std::vector<float>& values, size_t, const char*) {
+        v.*layout::attribute_streams[stream++].view = values.empty() ? nullptr : values.data();
+    });
     v.substitute = substitute.data();
     v.triangles = triangles.data();
     v.pair_bits = pair_bits.empty() ? nullptr : pair_bits.data();
@@ -980,11 +979,10 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
             std::memcpy(&dst[size_t(i) * width], &in[size_t(out.original_index[i]) * width], width * sizeof(float));
     };
     permute(mesh.positions, out.positions, 3);
-    permute(mesh.normals, out.normals, 3);
-    permute(mesh.texcoords, out.texcoords, 2);
-    permute(mesh.colors, out.colors, 4);
-    permute(mesh.texcoords1, out.texcoords1, 2);
-    permute(mesh.tangents, out.tangents, 4);
+    std::vector<const std::vector<float>*> inputs;  // the input's streams, in the order out's are visited
+    for_each_attribute_stream(mesh, [&](const std::vector<float>& values, size_t, const char*) { inputs.push_back(&values); });
+    size_t stream = 0;
+    for_each_attribute_stream(out, [&](std::vector<float>& dst, size_t width, const char*) { permute(*inputs[stream++], dst, width); });
 
     // triangle t is alive at resolution r >= key(t): key = n - step for a triangle killed by
     // substitution `step` (its removed vertex gets index n-1-step), s for the survivors.

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "tom/view.h"
+
 namespace tom::layout {
 
 constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'M', 0x0D, 0x0A, 0x1A, 0x0A};
@@ -35,16 +37,20 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
 /// The `mesh` field of file-level sections (MATL, INST).
 constexpr uint32_t file_level = 0xFFFFFFFFu;
 
-/// The optional f32 vertex streams: attribute flag, section type and name, floats per vertex.
+/// The optional f32 vertex streams, in the order of tom::for_each_attribute_stream: attribute
+/// flag, section type and name, floats per vertex, and the MeshView member that points at it.
 struct AttributeStream {
     uint32_t flag;
     uint32_t section;
     const char* name;
     uint32_t components;
+    const float* MeshView::*view;
 };
-constexpr AttributeStream attribute_streams[] = {{attr_normals, sec_normals, "NORM", 3},     {attr_texcoords, sec_texcoords, "TEX0", 2},
-                                                 {attr_colors, sec_colors, "COL0", 4},       {attr_texcoords1, sec_texcoords1, "TEX1", 2},
-                                                 {attr_tangents, sec_tangents, "TANG", 4}};
+constexpr AttributeStream attribute_streams[] = {{attr_normals, sec_normals, "NORM", 3, &MeshView::normals},
+                                                 {attr_texcoords, sec_texcoords, "TEX0", 2, &MeshView::texcoords},
+                                                 {attr_colors, sec_colors, "COL0", 4, &MeshView::colors},
+                                                 {attr_texcoords1, sec_texcoords1, "TEX1", 2, &MeshView::texcoords1},
+                                                 {attr_tangents, sec_tangents, "TANG", 4, &MeshView::tangents}};
 constexpr int attribute_stream_count = int(sizeof(attribute_streams) / sizeof(attribute_streams[0]));
 
 // little-endian loads and stores (the format is little-endian; so is every supported host)

@@ -204,10 +204,8 @@ void File::Impl::validate(const OpenOptions& options) {
         check_size(ms.substitute, nv * v.index_size, "SUBS");
         check_size(ms.triangles, nt * 3 * v.index_size, "TRIS");
         v.positions = reinterpret_cast<const float*>(data + ms.positions->offset);
-        static constexpr const float* MeshView::*view_stream[attribute_stream_count] = {&MeshView::normals, &MeshView::texcoords, &MeshView::colors,
-                                                                                         &MeshView::texcoords1, &MeshView::tangents};
         for (int k = 0; k < attribute_stream_count; ++k)
-            v.*view_stream[k] = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
+            v.*attribute_streams[k].view = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
         v.substitute = data + ms.substitute->offset;
         v.triangles = data + ms.triangles->offset;
         // rule 12: resolution range
