@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "glb.h"
 #include "tom/errors.h"
 #include "tom/export.h"
 #include "tom/extract.h"
@@ -211,23 +212,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
     doc["buffers"] = {{{"byteLength", w.bin.size()}}};
     doc["bufferViews"] = w.views;
     doc["accessors"] = w.accessors;
-    std::string text = doc.dump();
-    while (text.size() % 4) text.push_back(' ');
-    // GLB: header, JSON chunk, BIN chunk
-    std::vector<uint8_t> out;
-    auto put32 = [&](uint32_t v) {
-        for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
-    };
-    const uint32_t total = uint32_t(12 + 8 + text.size() + 8 + w.bin.size());
-    out.insert(out.end(), {'g', 'l', 'T', 'F'});
-    put32(2);
-    put32(total);
-    put32(uint32_t(text.size()));
-    put32(0x4E4F534A);  // JSON
-    out.insert(out.end(), text.begin(), text.end());
-    put32(uint32_t(w.bin.size()));
-    put32(0x004E4942);  // BIN
-    out.insert(out.end(), w.bin.begin(), w.bin.end());
+    const std::vector<uint8_t> out = detail::glb_bytes(doc.dump(), &w.bin);
     write_bytes_atomically(path, out.data(), out.size());
 }
 

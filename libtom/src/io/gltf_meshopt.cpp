@@ -4,6 +4,8 @@
 
 #include <cstring>
 
+#include "glb.h"
+
 #include <meshoptimizer.h>
 
 #include "tom/errors.h"
@@ -25,12 +27,6 @@ std::string zero_data_uri(uint64_t n) {
     return s;
 }
 
-uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
-
-void put32(std::vector<uint8_t>& out, uint32_t v) {
-    for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
-}
-
 } // namespace
 
 bool prepare_meshopt(json& doc, std::vector<uint8_t>& bytes, bool binary, const std::string& path) {
@@ -50,29 +46,23 @@ bool prepare_meshopt(json& doc, std::vector<uint8_t>& bytes, bool binary, const 
                               " bytes, more than this reader accepts (1 GiB)");
         b["uri"] = zero_data_uri(n);
     }
-    std::string text = doc.dump();
+    const std::string text = doc.dump();
     if (!binary) {
         bytes.assign(text.begin(), text.end());
         return true;
     }
-    // a new GLB: header, the changed JSON chunk, the original BIN chunk (if any) unchanged
-    const uint32_t old_json = le32(&bytes[12]);
-    const size_t bin_at = 20 + size_t(old_json);
+    // a new GLB: the changed JSON chunk, the original BIN chunk (if any) unchanged
+    const size_t bin_at = 20 + size_t(le32(&bytes[12]));
     std::vector<uint8_t> bin;
+    bool has_bin = false;
     if (bin_at + 8 <= bytes.size()) {
         const uint32_t bin_len = le32(&bytes[bin_at]);
-        if (bin_len <= bytes.size() - bin_at - 8) bin.assign(bytes.begin() + ptrdiff_t(bin_at), bytes.begin() + ptrdiff_t(bin_at + 8 + bin_len));
+        if (bin_len <= bytes.size() - bin_at - 8) {
+            bin.assign(bytes.begin() + ptrdiff_t(bin_at + 8), bytes.begin() + ptrdiff_t(bin_at + 8 + bin_len));
+            has_bin = true;
+        }
     }
-    while (text.size() % 4) text.push_back(' ');
-    std::vector<uint8_t> out;
-    out.insert(out.end(), {'g', 'l', 'T', 'F'});
-    put32(out, 2);
-    put32(out, uint32_t(12 + 8 + text.size() + bin.size()));
-    put32(out, uint32_t(text.size()));
-    put32(out, 0x4E4F534Au);
-    out.insert(out.end(), text.begin(), text.end());
-    out.insert(out.end(), bin.begin(), bin.end());
-    bytes.swap(out);
+    bytes = glb_bytes(text, has_bin ? &bin : nullptr);
     return true;
 }
 

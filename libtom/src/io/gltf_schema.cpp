@@ -10,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "gltf_schema.h"
+
+#include "glb.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
@@ -201,8 +203,6 @@ void check(const json& j, const Rule& rule, const std::string& path, const std::
         return;
     }
 }
-
-uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
 
 } // namespace
 
