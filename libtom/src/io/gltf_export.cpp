@@ -180,14 +180,14 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
     // its coarser levels follow it as nodes of their own listed by its MSFT_lod extension
     doc["nodes"] = json::array();
     json roots = json::array();
-    const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const Instance untransformed;  // its transform is the identity
     for (const Instance& inst : draw_list(scene, uint32_t(meshes.size()))) {
         const std::vector<int>& lm = level_mesh[inst.mesh];
         if (lm[0] < 0) continue;
         auto node_of = [&](int mesh, const std::string& name) {
             json node = {{"mesh", mesh}};
             if (!name.empty()) node["name"] = name;
-            if (!std::equal(inst.transform, inst.transform + 16, identity)) node["matrix"] = inst.transform;
+            if (!std::equal(inst.transform, inst.transform + 16, untransformed.transform)) node["matrix"] = inst.transform;
             return node;
         };
         const size_t index = doc["nodes"].size();

@@ -1,6 +1,7 @@
 // glTF materials and node tree -> tom::Scene (materials with texture references, instances
 // with world transforms).
 
+#include <array>
 #include <cmath>
 
 #include "gltf_model.h"
@@ -31,6 +32,24 @@ void texture_ref(const tinygltf::Model& model, int texture, int texcoord, Textur
     out.textures.push_back(std::move(ref));
 }
 
+// A material's five texture slots of the metallic-roughness model: texture index, TEXCOORD set,
+// the slot's extensions (KHR_texture_transform) and the role it plays.
+struct TextureSlot {
+    int index, texcoord;
+    const tinygltf::ExtensionMap* extensions;
+    TextureRole role;
+};
+
+std::array<TextureSlot, texture_role_count> texture_slots(const tinygltf::Material& m) {
+    const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    return {{{pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, &pbr.baseColorTexture.extensions, TextureRole::base_color},
+             {pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, &pbr.metallicRoughnessTexture.extensions,
+              TextureRole::metallic_roughness},
+             {m.normalTexture.index, m.normalTexture.texCoord, &m.normalTexture.extensions, TextureRole::normal},
+             {m.occlusionTexture.index, m.occlusionTexture.texCoord, &m.occlusionTexture.extensions, TextureRole::occlusion},
+             {m.emissiveTexture.index, m.emissiveTexture.texCoord, &m.emissiveTexture.extensions, TextureRole::emissive}}};
+}
+
 Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
     Material out;
     out.name = m.name;
@@ -42,11 +61,7 @@ Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
     out.alpha_mode = m.alphaMode == "MASK" ? AlphaMode::mask : m.alphaMode == "BLEND" ? AlphaMode::blend : AlphaMode::opaque;
     out.alpha_cutoff = float(m.alphaCutoff);
     out.double_sided = m.doubleSided;
-    texture_ref(model, pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, TextureRole::base_color, out);
-    texture_ref(model, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord, TextureRole::metallic_roughness, out);
-    texture_ref(model, m.normalTexture.index, m.normalTexture.texCoord, TextureRole::normal, out);
-    texture_ref(model, m.occlusionTexture.index, m.occlusionTexture.texCoord, TextureRole::occlusion, out);
-    texture_ref(model, m.emissiveTexture.index, m.emissiveTexture.texCoord, TextureRole::emissive, out);
+    for (const TextureSlot& slot : texture_slots(m)) texture_ref(model, slot.index, slot.texcoord, slot.role, out);
     // the specular-glossiness extension's diffuse colour and texture stand for the base colour
     const auto sg = m.extensions.find("KHR_materials_pbrSpecularGlossiness");
     if (sg != m.extensions.end() && sg->second.IsObject()) {
@@ -123,32 +138,22 @@ struct Flattener {
 
 std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh) {
     if (material < 0 || size_t(material) >= model.materials.size()) return "";
-    const tinygltf::Material& m = model.materials[size_t(material)];
-    struct Ref {
-        const tinygltf::ExtensionMap* ext;
-        int texcoord;
-    };
-    const Ref refs[] = {{&m.pbrMetallicRoughness.baseColorTexture.extensions, m.pbrMetallicRoughness.baseColorTexture.texCoord},
-                        {&m.pbrMetallicRoughness.metallicRoughnessTexture.extensions, m.pbrMetallicRoughness.metallicRoughnessTexture.texCoord},
-                        {&m.normalTexture.extensions, m.normalTexture.texCoord},
-                        {&m.occlusionTexture.extensions, m.occlusionTexture.texCoord},
-                        {&m.emissiveTexture.extensions, m.emissiveTexture.texCoord}};
     const tinygltf::Value* chosen = nullptr;
     int set = 0;
     bool disagree = false;
-    for (const Ref& r : refs) {
-        const auto it = r.ext->find("KHR_texture_transform");
-        if (it == r.ext->end() || !it->second.IsObject()) continue;
+    for (const TextureSlot& slot : texture_slots(model.materials[size_t(material)])) {
+        const auto it = slot.extensions->find("KHR_texture_transform");
+        if (it == slot.extensions->end() || !it->second.IsObject()) continue;
         if (!chosen) {
             chosen = &it->second;
-            set = it->second.Get("texCoord").IsNumber() ? it->second.Get("texCoord").GetNumberAsInt() : r.texcoord;
+            set = it->second.Get("texCoord").IsNumber() ? it->second.Get("texCoord").GetNumberAsInt() : slot.texcoord;
         } else if (!(it->second == *chosen)) {
             disagree = true;
         }
     }
-    if (!chosen) return "";
-    std::vector<float>& uv = set == 0 ? mesh.texcoords : set == 1 ? mesh.texcoords1 : mesh.texcoords;
-    if (set > 1 || uv.empty()) return "";
+    if (!chosen || set > 1) return "";
+    std::vector<float>& uv = set == 1 ? mesh.texcoords1 : mesh.texcoords;
+    if (uv.empty()) return "";
     auto pair = [&](const char* key, double a, double b, double out[2]) {
         out[0] = a, out[1] = b;
         const tinygltf::Value& v = chosen->Get(key);
@@ -177,8 +182,8 @@ Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uin
     const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
     if (size_t(which) < model.scenes.size()) {
         Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};
-        const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-        for (const int root : model.scenes[size_t(which)].nodes) f.visit(root, identity);
+        const Instance untransformed;  // its transform is the identity
+        for (const int root : model.scenes[size_t(which)].nodes) f.visit(root, untransformed.transform);
         for (const Instance& inst : scene.instances)
             for (const float x : inst.transform)
                 if (!std::isfinite(x)) throw ImportError(path + ": node " + std::to_string(inst.node) + " has a transform that is not finite");
