@@ -121,17 +121,13 @@ int main(int argc, char** argv) {
     uint32_t generated = 0;
     bool json = false;
     int repeats = 5;
-    std::string predicate = "quadric", strategy = "passes";
+    tools::BuildOptions build;
     CLI::App app{"tombench: TOM build and extraction throughput against meshopt_simplify and memcpy, measured in the same run"};
     app.set_version_flag("--version", "tombench 0.1.0");
     app.add_option("meshes", inputs, "Mesh files to measure");
     app.add_option("--generated", generated, "Also measure a generated bumpy sphere of about this many triangles (e.g. 2000000)");
     app.add_option("-r,--repeats", repeats, "Repeats per figure; medians are reported (default 5)")->check(CLI::Range(1, 1000));
-    app.add_option("--predicate", predicate, "quadric or memoryless")->check(CLI::IsMember({"quadric", "memoryless"}));
-    app.add_option("--strategy", strategy, "passes or heap")->check(CLI::IsMember({"passes", "heap"}));
-    float attribute_weight = tom::BuildParams{}.attribute_weight;
-    app.add_option("--attribute-weight", attribute_weight, "Weight of the predicates' attribute term (0: geometry only, as meshopt_simplify)")
-        ->check(CLI::NonNegativeNumber);
+    build.add_to(app, "Builder");
     app.add_flag("--json", json, "One JSON object per mesh (one per line) instead of the table");
     std::string meshopt_out;
     std::vector<double> meshopt_levels = {10, 5, 2, 1};
@@ -144,11 +140,7 @@ int main(int argc, char** argv) {
         return tools::exit_usage;
     }
     try {
-        tom::BuildParams params;
-        params.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
-        params.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
-        params.attribute_weight = attribute_weight;
-        return run(inputs, generated, json, repeats, params, meshopt_out, meshopt_levels);
+        return run(inputs, generated, json, repeats, build.params(), meshopt_out, meshopt_levels);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tools::exit_failed;
@@ -221,9 +213,7 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
             j["mesh"] = row.mesh;
             j["vertices"] = row.vertices;
             j["triangles"] = row.triangles;
-            j["predicate"] = tom::to_string(params.predicate);
-            j["strategy"] = tom::to_string(params.strategy);
-            j["attribute_weight"] = params.attribute_weight;
+            j.update(tools::build_params_json(params));
             j["build_ms"] = row.build_s * 1e3;
             j["meshopt_ms"] = row.meshopt_s * 1e3;
             j["meshopt_triangles"] = row.meshopt_triangles;

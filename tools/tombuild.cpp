@@ -24,12 +24,7 @@ struct Options {
     std::vector<std::string> inputs;
     std::string outdir;
     unsigned jobs = 1;
-    std::string predicate = "quadric";
-    std::string strategy = "passes";
-    float pair_threshold = 0.0f;
-    float pass_fraction = 0.1f;
-    float attribute_weight = tom::BuildParams{}.attribute_weight;
-    float max_rotation = tom::BuildParams{}.max_rotation_degrees;
+    tools::BuildOptions build;
     std::string index_size = "auto";
     bool progress = false;
     bool quiet = false;
@@ -138,8 +133,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
             doc["file"] = job.input;
             doc["output"] = job.output;
             doc["format"] = imported.format;
-            doc["predicate"] = tom::to_string(params.predicate);
-            doc["strategy"] = tom::to_string(params.strategy);
+            doc.update(tools::build_params_json(params));
             doc["conventions"] = tools::conventions_json(rparams);
             doc["skipped"] = imported.skipped;
             doc["meshes"] = json_meshes;
@@ -179,28 +173,7 @@ int main(int argc, char** argv) {
     app.add_flag("--progress", opt.progress, "Show a progress bar on stderr even when it is not a terminal")->group("Basics");
     app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group("Basics");
     app.add_flag("-v,--verbose", opt.verbose, "Per-mesh statistics, reader warnings")->group("Basics");
-    app.add_option("--predicate", opt.predicate, "Fairness predicate: quadric (default) or memoryless (the TOM paper's penalty)")
-        ->check(CLI::IsMember({"quadric", "memoryless"}))
-        ->group("Simplification");
-    app.add_option("--strategy", opt.strategy, "Greedy order: passes (default, independent substitutions per pass) or heap")
-        ->check(CLI::IsMember({"passes", "heap"}))
-        ->group("Simplification");
-    app.add_option("-t,--pair-threshold", opt.pair_threshold,
-                   "Also substitute non-edge vertex pairs closer than this, in object units (default 0: edges only)")
-        ->check(CLI::NonNegativeNumber)
-        ->group("Simplification");
-    app.add_option("--pass-fraction", opt.pass_fraction, "passes: share of live vertices one pass may remove, (0,1] (default 0.1)")
-        ->check(CLI::Range(0.0001f, 1.0f))
-        ->group("Simplification");
-    app.add_option("--attribute-weight", opt.attribute_weight,
-                   "Weight of the attribute term (normals, TEXCOORD_0, COLOR_0) in the predicates; 0 = geometry only (default " +
-                       std::to_string(tom::BuildParams{}.attribute_weight).substr(0, 4) + ")")
-        ->check(CLI::NonNegativeNumber)
-        ->group("Simplification");
-    app.add_option("--max-rotation", opt.max_rotation,
-                   "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
-        ->check(CLI::Range(1.0f, 90.0f))
-        ->group("Simplification");
+    opt.build.add_to(app, "Simplification");
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
@@ -225,13 +198,7 @@ int main(int argc, char** argv) {
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
 
     try {
-        tom::BuildParams params;
-        params.predicate = opt.predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
-        params.strategy = opt.strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
-        params.pair_threshold = opt.pair_threshold;
-        params.pass_fraction = opt.pass_fraction;
-        params.attribute_weight = opt.attribute_weight;
-        params.max_rotation_degrees = opt.max_rotation;
+        const tom::BuildParams params = opt.build.params();
         tom::WriteOptions wopt;
         wopt.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
 

@@ -12,6 +12,47 @@ namespace fs = std::filesystem;
 
 namespace tools {
 
+void BuildOptions::add_to(CLI::App& app, const std::string& group) {
+    app.add_option("--predicate", predicate, "Fairness predicate: quadric (default) or memoryless (the TOM paper's penalty)")
+        ->check(CLI::IsMember({"quadric", "memoryless"}))
+        ->group(group);
+    app.add_option("--strategy", strategy, "Greedy order: passes (default, independent substitutions per pass) or heap")
+        ->check(CLI::IsMember({"passes", "heap"}))
+        ->group(group);
+    app.add_option("-t,--pair-threshold", numbers.pair_threshold,
+                   "Also substitute non-edge vertex pairs closer than this, in object units (default 0: edges only)")
+        ->check(CLI::NonNegativeNumber)
+        ->group(group);
+    app.add_option("--pass-fraction", numbers.pass_fraction, "passes: share of live vertices one pass may remove, (0,1] (default 0.1)")
+        ->check(CLI::Range(0.0001f, 1.0f))
+        ->group(group);
+    app.add_option("--attribute-weight", numbers.attribute_weight,
+                   "Weight of the attribute term (normals, TEXCOORD_0, COLOR_0) in the predicates; 0 = geometry only, as meshopt_simplify "
+                   "(default " + std::to_string(tom::BuildParams{}.attribute_weight).substr(0, 4) + ")")
+        ->check(CLI::NonNegativeNumber)
+        ->group(group);
+    app.add_option("--max-rotation", numbers.max_rotation_degrees,
+                   "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
+        ->check(CLI::Range(1.0f, 90.0f))
+        ->group(group);
+}
+
+tom::BuildParams BuildOptions::params() const {
+    tom::BuildParams p = numbers;
+    p.predicate = predicate == "memoryless" ? tom::Predicate::memoryless : tom::Predicate::quadric;
+    p.strategy = strategy == "heap" ? tom::Strategy::heap : tom::Strategy::passes;
+    return p;
+}
+
+nlohmann::ordered_json build_params_json(const tom::BuildParams& params) {
+    return {{"predicate", tom::to_string(params.predicate)},
+            {"strategy", tom::to_string(params.strategy)},
+            {"pair_threshold", params.pair_threshold},
+            {"pass_fraction", params.pass_fraction},
+            {"attribute_weight", params.attribute_weight},
+            {"max_rotation_degrees", params.max_rotation_degrees}};
+}
+
 int parse(CLI::App& app, int argc, char** argv) {
     try {
         app.parse(argc, argv);

@@ -2,10 +2,13 @@
 // Helpers shared by the command-line tools: CLI11 exit handling, input discovery, formatting.
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "tom/builder.h"
 
 namespace tools {
 
@@ -15,6 +18,21 @@ enum Exit : int { exit_ok = 0, exit_failed = 1, exit_usage = 2 };
 /// CLI11 parse with the project's exit codes: --help/--version print and give 0, any other
 /// parse error prints CLI11's message and gives exit_usage. Returns -1 when parsing succeeded.
 int parse(CLI::App& app, int argc, char** argv);
+
+/// The builder's command-line options, shared by tombuild and tombench: --predicate, --strategy,
+/// -t/--pair-threshold, --pass-fraction, --attribute-weight and --max-rotation (defaults those of
+/// tom::BuildParams).
+struct BuildOptions {
+    std::string predicate = "quadric", strategy = "passes";
+    tom::BuildParams numbers;  // the numeric settings, bound to their options directly
+
+    void add_to(CLI::App& app, const std::string& group);
+    tom::BuildParams params() const;
+};
+
+/// The builder settings as JSON (reports and benchmark output): predicate, strategy,
+/// pair_threshold, pass_fraction, attribute_weight, max_rotation_degrees.
+nlohmann::ordered_json build_params_json(const tom::BuildParams& params);
 
 /// One input file and the output path it maps to.
 struct Job {
