@@ -535,6 +535,8 @@ int main(int argc, char** argv) {
             }
         }
         std::vector<nlohmann::ordered_json> out;
+        uint32_t shots[3];
+        walk::viewpoints(o.frames, shots);
         for (const Summary& s : summaries) {
             nlohmann::ordered_json j;
             j["selector"] = s.selector;
@@ -548,6 +550,7 @@ int main(int argc, char** argv) {
             j["visible_triangles_mean"] = s.visible;
             j["gap_mean"] = std::isnan(s.gap) ? nlohmann::json(nullptr) : nlohmann::json(s.gap);
             j["simulated"] = o.simulate;
+            j["viewpoint_frames"] = {{"A", shots[0]}, {"B", shots[1]}, {"C", shots[2]}};  // the screenshots' frames
             out.push_back(j);
         }
         if (o.json) {
