@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
         if (sections || json) {
             j["sections"] = nlohmann::json::array();
             for (const tom::SectionInfo& s : file.sections())
-                j["sections"].push_back({{"type", std::string(s.type)}, {"mesh", s.mesh == 0xFFFFFFFFu ? nlohmann::json("file") : nlohmann::json(s.mesh)},
+                j["sections"].push_back({{"type", std::string(s.type)}, {"mesh", s.mesh == tom::SectionInfo::file_level ? nlohmann::json("file") : nlohmann::json(s.mesh)},
                                          {"offset", s.offset}, {"bytes", s.bytes}});
         }
         if (json) {
@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
             std::printf("  sections:\n");
             for (const tom::SectionInfo& s : file.sections())
                 std::printf("    %-4s mesh %-4s offset %10llu  %12llu bytes  crc %08x\n", s.type,
-                            s.mesh == 0xFFFFFFFFu ? "file" : std::to_string(s.mesh).c_str(), static_cast<unsigned long long>(s.offset),
+                            s.mesh == tom::SectionInfo::file_level ? "file" : std::to_string(s.mesh).c_str(), static_cast<unsigned long long>(s.offset),
                             static_cast<unsigned long long>(s.bytes), s.checksum);
         }
         return tools::exit_ok;

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "tom/format.h"
 #include "tom/view.h"
 
 namespace tom::layout {
@@ -35,7 +36,7 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
                    sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
                    sec_instances = fourcc("INST");
 /// The `mesh` field of file-level sections (MATL, INST).
-constexpr uint32_t file_level = 0xFFFFFFFFu;
+constexpr uint32_t file_level = SectionInfo::file_level;
 
 /// The optional f32 vertex streams, in the order of tom::for_each_attribute_stream: attribute
 /// flag, section type and name, floats per vertex, and the MeshView member that points at it.

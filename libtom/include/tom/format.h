@@ -47,6 +47,7 @@ struct OpenOptions {
 
 /// One entry of the section table, for inspection (tominfo).
 struct SectionInfo {
+    static constexpr uint32_t file_level = 0xFFFFFFFFu;  ///< `mesh` of a section of the whole file (MATL, INST)
     char type[5] = {0, 0, 0, 0, 0};
     uint32_t mesh = 0;
     uint64_t offset = 0;
