@@ -184,58 +184,40 @@ inline double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline V3 v3(const Point& p) { return {p.x(), p.y(), p.z()}; }
 
 inline double closest_on_triangle(V3 p, V3 a, V3 b, V3 c, V3& out) {
+    auto at = [&](V3 q) {  // the answer: q, and its squared distance to p
+        out = q;
+        const V3 d = p - q;
+        return dot(d, d);
+    };
     const V3 ab = b - a, ac = c - a, ap = p - a;
     const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0) {
-        out = a;
-    } else {
-        const V3 bp = p - b;
-        const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-        if (d3 >= 0 && d4 <= d3) {
-            out = b;
-        } else {
-            const double vc = d1 * d4 - d3 * d2;
-            if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-                out = a + (d1 / (d1 - d3)) * ab;
-            } else {
-                const V3 cp = p - c;
-                const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-                if (d6 >= 0 && d5 <= d6) {
-                    out = c;
-                } else {
-                    const double vb = d5 * d2 - d1 * d6;
-                    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-                        out = a + (d2 / (d2 - d6)) * ac;
-                    } else {
-                        const double va = d3 * d6 - d5 * d4;
-                        if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-                            out = b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-                        } else {
-                            const double denom = va + vb + vc;
-                            if (denom == 0) {  // zero-area triangle: its longest edge decides
-                                V3 best = a;
-                                double best_d = dot(p - a, p - a);
-                                const V3 ends[3][2] = {{a, b}, {b, c}, {c, a}};
-                                for (const auto& e : ends) {
-                                    const V3 d = e[1] - e[0];
-                                    const double len2 = dot(d, d);
-                                    const double t = len2 > 0 ? std::min(1.0, std::max(0.0, dot(p - e[0], d) / len2)) : 0.0;
-                                    const V3 q = e[0] + t * d;
-                                    if (dot(p - q, p - q) < best_d) best = q, best_d = dot(p - q, p - q);
-                                }
-                                out = best;
-                            } else {
-                                const double v = vb / denom, w = vc / denom;
-                                out = a + v * ab + w * ac;
-                            }
-                        }
-                    }
-                }
-            }
-        }
+    if (d1 <= 0 && d2 <= 0) return at(a);  // vertex region a
+    const V3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return at(b);  // vertex region b
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(a + (d1 / (d1 - d3)) * ab);  // edge ab
+    const V3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return at(c);  // vertex region c
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(a + (d2 / (d2 - d6)) * ac);  // edge ac
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return at(b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b));  // edge bc
+    const double denom = va + vb + vc;
+    if (denom != 0) return at(a + (vb / denom) * ab + (vc / denom) * ac);  // the face
+    // zero-area triangle: its longest edge decides
+    V3 best = a;
+    double best_d = dot(p - a, p - a);
+    const V3 ends[3][2] = {{a, b}, {b, c}, {c, a}};
+    for (const auto& e : ends) {
+        const V3 d = e[1] - e[0];
+        const double len2 = dot(d, d);
+        const double t = len2 > 0 ? std::min(1.0, std::max(0.0, dot(p - e[0], d) / len2)) : 0.0;
+        const V3 q = e[0] + t * d;
+        if (dot(p - q, p - q) < best_d) best = q, best_d = dot(p - q, p - q);
     }
-    const V3 d = p - out;
-    return dot(d, d);
+    return at(best);
 }
 
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
