@@ -273,6 +273,7 @@ struct Nearest {
     V3 query;
     double best_d2;
     TriangleIterator best;
+    V3 best_point;
     TriangleIterator first;  // the target's triangles, for the index of a primitive
     const double* planes;
 
@@ -284,7 +285,7 @@ struct Nearest {
         const Triangle& t = *primitive.id();
         V3 q;
         const double d2 = closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q);
-        if (d2 < best_d2) best_d2 = d2, best = primitive.id();
+        if (d2 < best_d2) best_d2 = d2, best = primitive.id(), best_point = q;
     }
     void visit(const Node& node, size_t primitives) {
         if (primitives == 2) {
@@ -309,18 +310,19 @@ struct Nearest {
     }
 };
 
-// The closest triangle of `target` to p and the closest point on it; `previous` (the previous
-// sample's triangle, near in sample order) bounds the search from the start.
-TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2) {
+// The closest triangle of `target` to p, its squared distance `d2` and (when asked) the closest
+// point on it; `previous` (the previous sample's triangle, near in sample order) bounds the
+// search from the start.
+TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2, V3* point = nullptr) {
     Nearest search;
     search.query = v3(p);
     search.first = target.triangles.begin();
     search.planes = target.planes.data();
-    V3 q;
-    search.best_d2 = closest_on_triangle(search.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q);
+    search.best_d2 = closest_on_triangle(search.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), search.best_point);
     search.best = previous;
     if (target.triangles.size() >= 2 && search.best_d2 > 0) search.visit(*target.tree.root_node(), target.triangles.size());
     d2 = search.best_d2;
+    if (point) *point = search.best_point;
     return search.best;
 }
 
@@ -448,10 +450,9 @@ AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttr
                         cc = point(original, original.indices[3 * size_t(fs.face) + 2]);
             const Point p = a + fs.u * (b - a) + fs.v * (cc - a);
             double d2;
-            previous = closest(target, p, previous, d2);
-            const size_t t = size_t(previous - target.triangles.begin());
             V3 q;
-            closest_on_triangle(v3(p), v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), q);
+            previous = closest(target, p, previous, d2, &q);
+            const size_t t = size_t(previous - target.triangles.begin());
             double ws[3];
             barycentric(q, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), ws);
             if (out.normals) {
