@@ -9,6 +9,7 @@
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include <algorithm>
 #include <array>
 #include <map>
 #include <mutex>
@@ -26,6 +27,55 @@ struct Traits : OpenMesh::DefaultTraits {
     typedef OpenMesh::Vec4f Color;
 };
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+
+// OpenMesh's importer, with two things done differently:
+// - every attribute a file may leave out starts defined (OpenMesh's vectors default to
+//   uninitialised memory: an OBJ face without `vt` among faces with, or a vertex no face gives a
+//   normal, would carry whatever was there, and the output would change from run to run);
+// - a face's texture coordinates go to the corners they belong to, by vertex: OpenMesh writes
+//   them around the first triangle only, which misplaces them on a polygon it fans into
+//   triangles and on a non-manifold face it re-adds with fresh copies of its vertices.
+class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
+  public:
+    using Base = OpenMesh::IO::ImporterT<OmMesh>;
+    explicit Importer(OmMesh& mesh) : Base(mesh), mesh_(mesh) {}
+
+    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override { return defined(Base::add_vertex(p)); }
+    OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override { return defined(Base::add_vertex(p)); }
+    OpenMesh::VertexHandle add_vertex() override { return defined(Base::add_vertex()); }
+
+    OpenMesh::FaceHandle add_face(const VHandles& polygon) override {
+        first_face_ = mesh_.n_faces();
+        first_copy_ = mesh_.n_vertices();
+        polygon_ = polygon;
+        const OpenMesh::FaceHandle fh = Base::add_face(polygon);
+        for (size_t f = first_face_; f < mesh_.n_faces(); ++f)
+            for (auto h : mesh_.fh_range(OpenMesh::FaceHandle(int(f)))) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(0, 0));
+        return fh;
+    }
+    void add_face_texcoords(OpenMesh::FaceHandle, OpenMesh::VertexHandle, const std::vector<OpenMesh::Vec2f>& uv) override {
+        for (size_t f = first_face_; f < mesh_.n_faces(); ++f)
+            for (auto h : mesh_.fh_range(OpenMesh::FaceHandle(int(f)))) {
+                const OpenMesh::VertexHandle v = mesh_.to_vertex_handle(h);
+                // the polygon's own vertex, or the copy OpenMesh made of its corner (in order)
+                size_t corner = size_t(std::find(polygon_.begin(), polygon_.end(), v) - polygon_.begin());
+                if (corner == polygon_.size() && size_t(v.idx()) >= first_copy_) corner = size_t(v.idx()) - first_copy_;
+                if (corner < uv.size()) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(uv[corner][0], uv[corner][1]));
+            }
+    }
+
+  private:
+    OmMesh& mesh_;
+    size_t first_face_ = 0, first_copy_ = 0;
+    VHandles polygon_;
+    OpenMesh::VertexHandle defined(OpenMesh::VertexHandle v) {
+        if (!v.is_valid()) return v;
+        mesh_.set_normal(v, OmMesh::Normal(0, 0, 0));  // a zero normal is recomputed by clean_mesh
+        mesh_.set_texcoord2D(v, OmMesh::TexCoord2D(0, 0));
+        mesh_.set_color(v, OmMesh::Color(1, 1, 1, 1));
+        return v;
+    }
+};
 
 // OpenMesh's streams and reader registry are global: one reader at a time.
 std::mutex& openmesh_mutex() {
@@ -78,7 +128,8 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         }();
         (void)detached;
         ::omerr().connect(messages);
-        ok = OpenMesh::IO::read_mesh(om, path, opt);
+        Importer importer(om);
+        ok = OpenMesh::IO::IOManager().read(path, importer, opt);
         ::omerr().flush();
         ::omerr().disconnect(messages);
     }
@@ -138,24 +189,6 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
             for (auto h : om.fh_range(fh)) hs.push_back(h);
             std::vector<OmMesh::TexCoord2D> uv;
             for (auto h : hs) uv.push_back(om.texcoord2D(h));
-            // A face OpenMesh could only add with fresh copies of all its vertices (non-manifold
-            // input) gets its corners' coordinates one place off: OpenMesh looks for the file's
-            // first vertex, does not find it among the copies, and starts at the halfedge before
-            // the face's own. The copies are made in file order, so the file's first corner is the
-            // lowest copy: rotate back.
-            bool all_copies = true;
-            for (auto h : hs) all_copies &= om.status(om.to_vertex_handle(h)).fixed_nonmanifold();
-            if (all_copies) {
-                const auto start = om.prev_halfedge_handle(om.halfedge_handle(fh));
-                size_t at_start = 0, first = 0;
-                for (size_t k = 0; k < hs.size(); ++k) {
-                    if (hs[k] == start) at_start = k;
-                    if (om.to_vertex_handle(hs[k]).idx() < om.to_vertex_handle(hs[first]).idx()) first = k;
-                }
-                std::vector<OmMesh::TexCoord2D> fixed(uv.size());
-                for (size_t k = 0; k < hs.size(); ++k) fixed[(first + k) % hs.size()] = uv[(at_start + k) % hs.size()];
-                uv.swap(fixed);
-            }
             for (size_t k = 0; k < hs.size(); ++k) {
                 const std::array<float, 2> t{float(uv[k][0]), float(uv[k][1])};
                 const int v = om.to_vertex_handle(hs[k]).idx();
