@@ -155,14 +155,17 @@ struct Builder {
         return visit;
     }
 
+    // (both without branches: which corner holds v is a coin toss the predictor always loses)
     bool contains(uint32_t t, uint32_t v) const {
-        return idx[3 * t] == v || idx[3 * t + 1] == v || idx[3 * t + 2] == v;
+        const uint32_t* c = &idx[3 * t];
+        return (c[0] == v) | (c[1] == v) | (c[2] == v);
     }
     // the two other corners of t in winding order after v
     void others(uint32_t t, uint32_t v, uint32_t& a, uint32_t& b) const {
+        static constexpr uint8_t after[3] = {1, 2, 0}, before[3] = {2, 0, 1};
         const uint32_t* c = &idx[3 * t];
-        const int k = c[0] == v ? 0 : (c[1] == v ? 1 : 2);
-        a = c[(k + 1) % 3], b = c[(k + 2) % 3];
+        const uint32_t k = uint32_t(c[1] == v) + 2u * uint32_t(c[2] == v);  // v's corner
+        a = c[after[k]], b = c[before[k]];
     }
 
     // A border loop of three edges cannot lose a vertex (it would fold onto itself).
@@ -309,21 +312,15 @@ struct Builder {
         if (kind[v] == kLocked || removed[v]) return false;
         if (!check_legal && predicate == Predicate::quadric && kind[v] == kInterior && pairs.empty()) {
             // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
-            const uint32_t seen = next_visit();
-            stamp[v] = seen;
+            // an interior vertex's fan is closed and consistently oriented (every edge has one
+            // triangle on each side), so each neighbour follows v in exactly one triangle
             bool any = false;
-            auto consider = [&](uint32_t u) {
-                if (stamp[u] == seen || removed[u]) return;
-                stamp[u] = seen;
+            adj.each(v, [&](uint32_t t) {
+                uint32_t u, unused;
+                others(t, v, u, unused);
                 const float c = quadric_cost(v, u);
                 if (!any || c < best.cost || (c == best.cost && u < best.u)) best = {c, v, u};
                 any = true;
-            };
-            adj.each(v, [&](uint32_t t) {
-                uint32_t a, c;
-                others(t, v, a, c);
-                consider(a);
-                consider(c);
             });
             return any;
         }
