@@ -350,7 +350,7 @@ TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[forma
     const std::vector<uint8_t> good = tom::serialize({t});
     const tom::File f = tom::File::from_bytes(good.data(), good.size());
     REQUIRE(f.mesh(0).pair_bits != nullptr);
-    const Section& pairs = find(sections_of(good), "PAIR");
+    const Section pairs = find(sections_of(good), "PAIR");  // a copy: the list is a temporary
     std::vector<uint8_t> b = good;
     for (size_t k = 0; k < pairs.bytes; ++k) b[pairs.offset + k] = 0xFF;  // every bit: overlapping pairs
     fix_checksums(b);
