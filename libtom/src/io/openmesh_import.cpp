@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "import_backends.h"
+#include "mesh_file_check.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
@@ -108,6 +109,7 @@ std::string file_stem(const std::string& path) {
 }
 
 ImportResult import_openmesh(const std::string& path, const std::string& extension) {
+    check_mesh_file(path, extension);  // OpenMesh's readers trust what the file announces
     OmMesh om;
     om.request_vertex_normals();
     om.request_vertex_texcoords2D();

@@ -1,0 +1,478 @@
+// Structural checks of OFF, PLY, OBJ and STL files before OpenMesh reads them.
+//
+// OpenMesh's readers trust their input: a PLY header with an unknown type or a broken line makes
+// its format detection loop forever or crash, a face announcing a billion corners is read corner
+// by corner past the end of the file, an OBJ face naming a vertex the file does not have is
+// written out of bounds. One pass here finds those (counts against what the file can hold,
+// indices against what it defines, every announced number present) and names the line, so
+// OpenMesh only ever sees files it can read. It checks no more than the readers rely on:
+// values themselves (non-finite coordinates, degenerate faces) are cleaned later.
+
+#include "mesh_file_check.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <strings.h>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+#include "tom/errors.h"
+
+namespace tom::detail {
+
+namespace {
+
+// Whitespace-separated tokens of a text, with the line each one is on.
+class Tokens {
+  public:
+    Tokens(std::string_view text, size_t start = 0) : text_(text), at_(start) {}
+
+    // The next token on any line ('#' starts a comment to the end of its line when skip_comments).
+    bool next(std::string_view& token, bool skip_comments) {
+        for (;;) {
+            while (at_ < text_.size() && is_space(text_[at_])) {
+                if (text_[at_] == '\n') ++line_;
+                ++at_;
+            }
+            if (at_ >= text_.size()) return false;
+            if (skip_comments && text_[at_] == '#') {
+                while (at_ < text_.size() && text_[at_] != '\n') ++at_;
+                continue;
+            }
+            const size_t begin = at_;
+            while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
+            token = text_.substr(begin, at_ - begin);
+            return true;
+        }
+    }
+    // The rest of the current line, as tokens (comments dropped); moves to the next line.
+    std::vector<std::string_view> rest_of_line() {
+        std::vector<std::string_view> out;
+        while (at_ < text_.size() && text_[at_] != '\n') {
+            while (at_ < text_.size() && text_[at_] != '\n' && is_space(text_[at_])) ++at_;
+            if (at_ >= text_.size() || text_[at_] == '\n') break;
+            if (text_[at_] == '#') {
+                while (at_ < text_.size() && text_[at_] != '\n') ++at_;
+                break;
+            }
+            const size_t begin = at_;
+            while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
+            out.push_back(text_.substr(begin, at_ - begin));
+        }
+        if (at_ < text_.size()) ++at_, ++line_;
+        return out;
+    }
+    // The next line that is not empty or a comment, as tokens; false at the end.
+    bool line(std::vector<std::string_view>& out) {
+        while (at_ < text_.size()) {
+            out = rest_of_line();
+            if (!out.empty()) return true;
+        }
+        return false;
+    }
+    size_t line_number() const { return line_; }
+    size_t offset() const { return at_; }
+
+  private:
+    static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+    std::string_view text_;
+    size_t at_ = 0;
+    size_t line_ = 1;
+};
+
+bool parse_integer(std::string_view s, long long& value) {
+    if (s.empty() || s.size() > 20) return false;
+    char buffer[24];
+    std::memcpy(buffer, s.data(), s.size());
+    buffer[s.size()] = 0;
+    char* end = nullptr;
+    errno = 0;
+    value = std::strtoll(buffer, &end, 10);
+    return errno == 0 && end == buffer + s.size();
+}
+
+// A number as an input stream reads it into a float: decimal digits with an optional sign,
+// point and exponent, within float range (no nan, inf or hexadecimal: the stream stops there,
+// and OpenMesh's readers then read every later value from a failed stream).
+bool parse_number(std::string_view s) {
+    size_t i = 0;
+    auto digits = [&] {
+        const size_t start = i;
+        while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+        return i > start;
+    };
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    bool mantissa = digits();
+    if (i < s.size() && s[i] == '.') {
+        ++i;
+        mantissa |= digits();
+    }
+    if (!mantissa) return false;
+    if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+        ++i;
+        if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+        if (!digits()) return false;
+    }
+    if (i != s.size() || s.size() > 64) return false;
+    char buffer[72];
+    std::memcpy(buffer, s.data(), s.size());
+    buffer[s.size()] = 0;
+    errno = 0;
+    const float value = std::strtof(buffer, nullptr);
+    return errno != ERANGE && std::isfinite(value);
+}
+
+[[noreturn]] void fail(const std::string& path, size_t line, const std::string& problem) {
+    throw ImportError(path + ":" + std::to_string(line) + ": " + problem);
+}
+
+std::string quoted(std::string_view s) { return "'" + std::string(s.substr(0, 40)) + (s.size() > 40 ? "...'" : "'"); }
+
+// ---- OFF --------------------------------------------------------------------------------------
+
+// [ST][C][N]OFF [BINARY]: the variants OpenMesh reads (it refuses 4OFF and nOFF)
+struct OffHeader {
+    bool texcoords = false, colors = false, normals = false, binary = false;
+};
+
+bool parse_off_keyword(std::string_view k, OffHeader& h, bool& other_dimension) {
+    size_t i = 0;
+    auto take = [&](std::string_view prefix) {
+        if (k.substr(i, prefix.size()) != prefix) return false;
+        i += prefix.size();
+        return true;
+    };
+    h.texcoords = take("ST");
+    h.colors = take("C");
+    h.normals = take("N");
+    other_dimension = take("4");
+    other_dimension |= take("n");
+    return take("OFF") && i == k.size();
+}
+
+void check_off(const std::string& path, std::string_view text) {
+    Tokens in(text);
+    std::vector<std::string_view> words;
+    if (!in.line(words)) fail(path, 1, "no OFF header");
+    OffHeader h;
+    bool other_dimension = false;
+    if (!parse_off_keyword(words[0], h, other_dimension)) fail(path, in.line_number() - 1, "expected an OFF header keyword, found " + quoted(words[0]));
+    if (other_dimension) fail(path, in.line_number() - 1, quoted(words[0]) + ": only three-dimensional vertices are supported");
+    h.binary = words.size() > 1 && words[1] == "BINARY";
+    if (h.binary) {
+        // 32-bit little-endian counts and values after the header line
+        size_t at = in.offset();
+        auto word = [&](uint32_t& v) {
+            if (at + 4 > text.size()) return false;
+            std::memcpy(&v, text.data() + at, 4);
+            at += 4;
+            return true;
+        };
+        uint32_t nv = 0, nf = 0, ne = 0;
+        if (!word(nv) || !word(nf) || !word(ne)) fail(path, in.line_number(), "the file ends before the binary counts");
+        const uint64_t per_vertex = 12 + (h.normals ? 12 : 0) + (h.colors ? 12 : 0) + (h.texcoords ? 8 : 0);
+        const uint64_t left = text.size() - at;
+        if (uint64_t(nv) * per_vertex + uint64_t(nf) * 16 > left)
+            fail(path, in.line_number(), std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces cannot fit in the " + std::to_string(left) + " bytes that follow");
+        if (h.colors) return;  // colour sizes vary: the counts are all that can be checked
+        at += size_t(uint64_t(nv) * per_vertex);
+        for (uint32_t f = 0; f < nf; ++f) {
+            uint32_t n = 0, index = 0;
+            if (!word(n)) fail(path, in.line_number(), "the data ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+            if (n < 1 || n > nv || uint64_t(n) * 4 > text.size() - at) fail(path, in.line_number(), "binary face " + std::to_string(f) + " announces " + std::to_string(n) + " corners");
+            for (uint32_t k = 0; k < n; ++k)
+                if (word(index) && index >= nv) fail(path, in.line_number(), "binary face " + std::to_string(f) + " refers to vertex " + std::to_string(index) + ", the file has " + std::to_string(nv));
+        }
+        return;
+    }
+    // the counts may follow the keyword on its line or come on the next one
+    std::vector<std::string_view> counts(words.begin() + 1, words.end());
+    if (counts.empty() && !in.line(counts)) fail(path, in.line_number(), "the file ends before the vertex, face and edge counts");
+    const size_t count_line = in.line_number() - 1;
+    long long nv = 0, nf = 0;
+    if (counts.size() < 2 || !parse_integer(counts[0], nv) || !parse_integer(counts[1], nf) || nv < 0 || nf < 0)
+        fail(path, count_line, "expected the vertex, face and edge counts");
+    // every vertex and face takes at least a few bytes of text
+    if (uint64_t(nv) > text.size() / 4 || uint64_t(nf) > text.size() / 4)
+        fail(path, count_line, std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces cannot fit in a file of " + std::to_string(text.size()) + " bytes");
+    const size_t per_vertex = 3 + (h.normals ? 3 : 0) + (h.texcoords ? 2 : 0);
+    for (long long v = 0; v < nv; ++v) {
+        if (!in.line(words)) fail(path, in.line_number(), "the file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
+        if (words.size() < per_vertex) fail(path, in.line_number() - 1, "vertex " + std::to_string(v) + " has " + std::to_string(words.size()) + " numbers, expected at least " + std::to_string(per_vertex));
+        for (std::string_view w : words)
+            if (!parse_number(w)) fail(path, in.line_number() - 1, "vertex " + std::to_string(v) + ": " + quoted(w) + " is not a number");
+    }
+    for (long long f = 0; f < nf; ++f) {
+        std::string_view t;
+        if (!in.next(t, true)) fail(path, in.line_number(), "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+        const size_t line = in.line_number();
+        long long n = 0;
+        if (!parse_integer(t, n) || n < 1 || n > nv) fail(path, line, "face " + std::to_string(f) + " announces " + quoted(t) + " corners, the file has " + std::to_string(nv) + " vertices");
+        for (long long k = 0; k < n; ++k) {
+            long long index = 0;
+            if (!in.next(t, true)) fail(path, in.line_number(), "the file ends inside face " + std::to_string(f));
+            if (!parse_integer(t, index) || index < 0 || index >= nv)
+                fail(path, in.line_number(), "face " + std::to_string(f) + " refers to vertex " + quoted(t) + ", the file has " + std::to_string(nv));
+        }
+        if (in.line_number() == line) in.rest_of_line();  // a colour may follow the corners
+    }
+}
+
+// ---- PLY --------------------------------------------------------------------------------------
+
+int ply_type_size(std::string_view t) {
+    static const std::map<std::string_view, int> sizes = {{"char", 1},   {"uchar", 1},  {"int8", 1},   {"uint8", 1},    {"short", 2},
+                                                          {"ushort", 2}, {"int16", 2},  {"uint16", 2}, {"int", 4},      {"uint", 4},
+                                                          {"int32", 4},  {"uint32", 4}, {"float", 4},  {"float32", 4},  {"double", 8},
+                                                          {"float64", 8}};
+    const auto it = sizes.find(t);
+    return it == sizes.end() ? 0 : it->second;
+}
+
+bool ply_type_is_integer(std::string_view t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
+
+struct PlyProperty {
+    std::string name;
+    std::string type;        // scalar type, or the list's item type
+    std::string count_type;  // empty for a scalar
+};
+struct PlyElement {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+    size_t line = 0;
+};
+
+void check_ply(const std::string& path, std::string_view text) {
+    Tokens in(text);
+    std::vector<std::string_view> w;
+    if (!in.line(w) || w.size() != 1 || w[0] != "ply") fail(path, 1, "expected 'ply' on the first line");
+    std::string format;
+    std::vector<PlyElement> elements;
+    for (;;) {
+        if (in.offset() > (size_t(1) << 20)) fail(path, in.line_number(), "no end_header in the first megabyte");
+        if (!in.line(w)) fail(path, in.line_number(), "the file ends before end_header");
+        const size_t line = in.line_number() - 1;
+        if (w[0] == "end_header") break;
+        if (w[0] == "comment" || w[0] == "obj_info") continue;
+        if (w[0] == "format") {
+            if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian") || w[2] != "1.0")
+                fail(path, line, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+            format = std::string(w[1]);
+        } else if (w[0] == "element") {
+            long long count = 0;
+            if (w.size() != 3 || !parse_integer(w[2], count) || count < 0) fail(path, line, "expected 'element NAME COUNT'");
+            elements.push_back({std::string(w[1]), uint64_t(count), {}, line});
+        } else if (w[0] == "property") {
+            if (elements.empty()) fail(path, line, "a property before any element");
+            if (w.size() == 3 && ply_type_size(w[1]) > 0) {
+                elements.back().properties.push_back({std::string(w[2]), std::string(w[1]), ""});
+            } else if (w.size() == 5 && w[1] == "list" && ply_type_size(w[2]) > 0 && ply_type_is_integer(w[2]) && ply_type_size(w[3]) > 0) {
+                elements.back().properties.push_back({std::string(w[4]), std::string(w[3]), std::string(w[2])});
+            } else {
+                fail(path, line, "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with known types, found " + quoted(w.size() > 1 ? w[1] : w[0]));
+            }
+        }
+        // other lines (an exporter's note without 'comment') are skipped, as OpenMesh does
+    }
+    if (format.empty()) fail(path, in.line_number(), "the header has no format line");
+    uint64_t vertices = 0;
+    for (const PlyElement& e : elements)
+        if (e.name == "vertex") vertices = e.count;
+    auto is_face_list = [](const PlyElement& e, const PlyProperty& p) {
+        return e.name == "face" && !p.count_type.empty() && (p.name == "vertex_indices" || p.name == "vertex_index");
+    };
+    if (format == "ascii") {
+        for (const PlyElement& e : elements) {
+            // one instance per line; counts bounded by the lines the file can hold
+            if (e.count > text.size() / 2) fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements cannot fit in a file of " + std::to_string(text.size()) + " bytes");
+            for (uint64_t i = 0; i < e.count; ++i) {
+                if (!in.line(w)) fail(path, in.line_number(), "the file ends after " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " elements");
+                const size_t line = in.line_number() - 1;
+                size_t k = 0;
+                for (const PlyProperty& p : e.properties) {
+                    if (k >= w.size()) fail(path, line, e.name + " " + std::to_string(i) + ": no value for " + p.name);
+                    if (p.count_type.empty()) {
+                        long long integer = 0;  // an integer property read as a float would shift every later value
+                        if (ply_type_is_integer(p.type) ? !parse_integer(w[k], integer) : !parse_number(w[k]))
+                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + " is not " + (ply_type_is_integer(p.type) ? "an integer" : "a number"));
+                        ++k;
+                        continue;
+                    }
+                    long long n = 0;
+                    if (!parse_integer(w[k++], n) || n < 0 || uint64_t(n) > w.size() - k)
+                        fail(path, line, e.name + " " + std::to_string(i) + ": the list " + p.name + " announces " + quoted(w[k - 1]) + " items, the line holds " + std::to_string(w.size() - k));
+                    for (long long j = 0; j < n; ++j, ++k) {
+                        long long index = 0;
+                        if (is_face_list(e, p) ? !parse_integer(w[k], index) || index < 0 || uint64_t(index) >= vertices : !parse_number(w[k]))
+                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + (is_face_list(e, p) ? " is not a vertex of the " + std::to_string(vertices) : " is not a number"));
+                    }
+                }
+            }
+        }
+        return;
+    }
+    // binary: walk the elements by their sizes, reading list counts (and face indices)
+    const bool little = format == "binary_little_endian";
+    size_t at = in.offset();
+    auto read = [&](std::string_view type, uint64_t& value, double* real) {
+        const int size = ply_type_size(type);
+        if (at + size_t(size) > text.size()) return false;
+        uint8_t b[8];
+        std::memcpy(b, text.data() + at, size_t(size));
+        at += size_t(size);
+        if (!little) std::reverse(b, b + size);
+        uint64_t u = 0;
+        std::memcpy(&u, b, size_t(size));
+        const bool is_signed = type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
+        if (is_signed && size < 8 && (u >> (8 * size - 1)) & 1) u |= ~uint64_t(0) << (8 * size);  // sign-extend
+        value = u;
+        if (real) *real = is_signed ? double(int64_t(u)) : double(u);
+        return true;
+    };
+    for (const PlyElement& e : elements) {
+        uint64_t fixed = 0;  // bytes of the scalar properties
+        for (const PlyProperty& p : e.properties) fixed += p.count_type.empty() ? uint64_t(ply_type_size(p.type)) : uint64_t(ply_type_size(p.count_type));
+        if (fixed > 0 && e.count > (text.size() - at) / fixed)
+            fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements of at least " + std::to_string(fixed) + " bytes cannot fit in the " + std::to_string(text.size() - at) + " bytes left");
+        bool scalars_only = true;
+        for (const PlyProperty& p : e.properties) scalars_only &= p.count_type.empty();
+        if (scalars_only) {
+            at += size_t(fixed * e.count);
+            continue;
+        }
+        for (uint64_t i = 0; i < e.count; ++i)
+            for (const PlyProperty& p : e.properties) {
+                uint64_t value = 0;
+                if (p.count_type.empty()) {
+                    if (!read(p.type, value, nullptr)) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
+                    continue;
+                }
+                double n = 0;
+                if (!read(p.count_type, value, &n)) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
+                const uint64_t item = uint64_t(ply_type_size(p.type));
+                if (n < 0 || uint64_t(n) > (text.size() - at) / item)
+                    fail(path, e.line, e.name + " " + std::to_string(i) + ": the list " + p.name + " announces " + std::to_string(int64_t(n)) + " items, the file holds fewer");
+                for (uint64_t j = 0; j < uint64_t(n); ++j) {
+                    double index = 0;
+                    read(p.type, value, &index);
+                    if (is_face_list(e, p) && (index < 0 || index >= double(vertices)))
+                        fail(path, e.line, e.name + " " + std::to_string(i) + " refers to vertex " + std::to_string(int64_t(index)) + ", the file has " + std::to_string(vertices));
+                }
+            }
+    }
+}
+
+// ---- OBJ --------------------------------------------------------------------------------------
+
+void check_obj(const std::string& path, std::string_view text) {
+    // totals first: OpenMesh reads every v, vt and vn before the faces
+    uint64_t v = 0, vt = 0, vn = 0;
+    {
+        Tokens in(text);
+        std::vector<std::string_view> w;
+        while (in.line(w)) {
+            if (w[0] == "v") ++v;
+            else if (w[0] == "vt") ++vt;
+            else if (w[0] == "vn") ++vn;
+        }
+    }
+    Tokens in(text);
+    std::vector<std::string_view> w;
+    // an OBJ index: 1-based, or negative from the end of what is defined so far
+    uint64_t seen_v = 0, seen_vt = 0, seen_vn = 0;
+    auto check_index = [&](std::string_view s, uint64_t total, uint64_t seen, const char* what, size_t line) {
+        long long i = 0;
+        if (!parse_integer(s, i) || i == 0 || (i > 0 && uint64_t(i) > total) || (i < 0 && uint64_t(-i) > seen))
+            fail(path, line, std::string("a face refers to ") + what + " " + quoted(s) + ", the file has " + std::to_string(total));
+    };
+    while (in.line(w)) {
+        const size_t line = in.line_number() - 1;
+        // values are OpenMesh's to read (it takes what parses, as "3.1+e2" -> 3.1); indices are
+        // what it would follow out of bounds
+        if (w[0] == "v") {
+            ++seen_v;
+        } else if (w[0] == "vt") {
+            ++seen_vt;
+        } else if (w[0] == "vn") {
+            ++seen_vn;
+        } else if (w[0] == "f") {
+            for (size_t k = 1; k < w.size(); ++k) {
+                const std::string_view c = w[k];
+                const size_t s1 = c.find('/');
+                check_index(c.substr(0, s1), v, seen_v, "vertex", line);
+                if (s1 == std::string_view::npos) continue;
+                const size_t s2 = c.find('/', s1 + 1);
+                const std::string_view t = c.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
+                if (!t.empty()) check_index(t, vt, seen_vt, "texture coordinate", line);
+                if (s2 != std::string_view::npos) check_index(c.substr(s2 + 1), vn, seen_vn, "normal", line);
+            }
+        }
+    }
+}
+
+// ---- STL --------------------------------------------------------------------------------------
+
+// OpenMesh takes a file whose first line starts with "solid" as ASCII, and any other as binary
+// when its size is 84 + 50 x the triangle count. In ASCII, every line with "outer" is followed
+// by three vertex lines it reads as a word and three numbers, and a "facet normal" line gives
+// three numbers: a line that is missing or does not parse leaves values uninitialised.
+void check_stl(const std::string& path, std::string_view text) {
+    // OpenMesh looks at the first non-empty line for "solid" past its spaces and tabs, and reads
+    // out of bounds when there is nothing else on it
+    size_t start = 0, first_line = 1;
+    while (start < text.size() && text[start] == '\n') ++start, ++first_line;
+    const size_t end = std::min(text.find('\n', start), text.size());
+    const size_t first = text.substr(start, end - start).find_first_not_of(" \t");
+    if (first == std::string_view::npos) fail(path, first_line, "the first line holds nothing but blanks");
+    start += first;
+    const bool ascii = text.size() - start >= 5 && strncasecmp(text.data() + start, "solid", 5) == 0;
+    if (!ascii) {
+        // binary: an 80-byte header, the triangle count, 50 bytes per triangle (the values
+        // themselves are cleaned later)
+        uint32_t n = 0;
+        if (text.size() >= 84) std::memcpy(&n, text.data() + 80, 4);
+        if (text.size() < 84 || uint64_t(text.size()) != 84 + 50 * uint64_t(n))
+            fail(path, 1, "neither ASCII STL (starting with 'solid') nor binary STL (84 bytes and 50 per triangle: " + std::to_string(n) + " triangles would take " +
+                              std::to_string(84 + 50 * uint64_t(n)) + " bytes, the file has " + std::to_string(text.size()) + ")");
+        return;
+    }
+    Tokens in(text);
+    std::vector<std::string_view> w;
+    while (in.line(w)) {
+        if (w.size() >= 2 && w[0] == "facet" && w[1] == "normal" && (w.size() < 5 || !parse_number(w[2]) || !parse_number(w[3]) || !parse_number(w[4])))
+            fail(path, in.line_number() - 1, "expected 'facet normal X Y Z'");
+        bool outer = false;
+        for (std::string_view t : w) outer |= t.find("outer") != std::string_view::npos || t.find("OUTER") != std::string_view::npos;
+        if (!outer) continue;
+        const size_t line = in.line_number() - 1;
+        for (int k = 0; k < 3; ++k) {
+            w = in.rest_of_line();
+            if (w.size() < 4 || !parse_number(w[1]) || !parse_number(w[2]) || !parse_number(w[3]))
+                fail(path, line + 1 + size_t(k), "expected 'vertex X Y Z' (corner " + std::to_string(k + 1) + " of the facet opened on line " + std::to_string(line) + ")");
+        }
+    }
+}
+
+} // namespace
+
+void check_mesh_file(const std::string& path, const std::string& extension) {
+    if (extension != "off" && extension != "ply" && extension != "obj" && extension != "stl") return;
+    std::ifstream f(path, std::ios::binary);
+    if (!f) throw IoError("cannot open '" + path + "'");
+    std::ostringstream buffer;
+    buffer << f.rdbuf();
+    const std::string text = buffer.str();
+    if (extension == "off") check_off(path, text);
+    else if (extension == "ply") check_ply(path, text);
+    else if (extension == "stl") check_stl(path, text);
+    else check_obj(path, text);
+}
+
+} // namespace tom::detail
