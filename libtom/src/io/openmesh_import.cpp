@@ -186,19 +186,14 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     corners.reserve(om.n_faces() * 3);
     if (corner_uv) {
         std::map<std::pair<int, std::array<float, 2>>, uint32_t> wedge_of;
-        for (auto fh : om.faces()) {
-            std::vector<OmMesh::HalfedgeHandle> hs;
-            for (auto h : om.fh_range(fh)) hs.push_back(h);
-            std::vector<OmMesh::TexCoord2D> uv;
-            for (auto h : hs) uv.push_back(om.texcoord2D(h));
-            for (size_t k = 0; k < hs.size(); ++k) {
-                const std::array<float, 2> t{float(uv[k][0]), float(uv[k][1])};
-                const int v = om.to_vertex_handle(hs[k]).idx();
+        for (auto fh : om.faces())
+            for (auto h : om.fh_range(fh)) {  // each corner with the coordinate the Importer put there
+                const std::array<float, 2> t{float(om.texcoord2D(h)[0]), float(om.texcoord2D(h)[1])};
+                const int v = om.to_vertex_handle(h).idx();
                 const auto [it, fresh] = wedge_of.emplace(std::make_pair(v, t), uint32_t(wedges.size()));
                 if (fresh) wedges.push_back({uint32_t(v), t});
                 corners.push_back(it->second);
             }
-        }
     } else {
         for (auto vh : om.vertices()) wedges.push_back({uint32_t(vh.idx()), {0.0f, 0.0f}});
         for (auto fh : om.faces())
