@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iterator>
 
 #include "gltf_meshopt.h"
@@ -222,12 +221,7 @@ const char* mode_name(int mode) {
 ImportResult import_gltf(const std::string& path, bool binary) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
-    std::vector<uint8_t> bytes;
-    {
-        std::ifstream in(path, std::ios::binary);
-        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
-    }
+    std::vector<uint8_t> bytes = read_whole_file(path);
     nlohmann::json doc = check_gltf_schema(bytes, binary, path);
     const bool meshopt = prepare_meshopt(doc, bytes, binary, path);
     tinygltf::Model model;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 #include <sys/stat.h>
 
@@ -25,6 +27,18 @@ std::string lower_extension(const std::string& path) {
 }
 
 } // namespace
+
+namespace detail {
+
+std::vector<uint8_t> read_whole_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::vector<uint8_t> bytes;
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
+    return bytes;
+}
+
+} // namespace detail
 
 bool is_importable(const std::string& path) {
     const std::string ext = lower_extension(path);

@@ -16,74 +16,68 @@
 #include <cstdlib>
 #include <cstring>
 #include <strings.h>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string_view>
 #include <vector>
 
+#include "import_backends.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
 
 namespace {
 
-// Whitespace-separated tokens of a text, with the line each one is on.
+// Whitespace-separated tokens of a text, line by line; '#' starts a comment to the end of its
+// line.
 class Tokens {
   public:
-    Tokens(std::string_view text, size_t start = 0) : text_(text), at_(start) {}
+    explicit Tokens(std::string_view text) : text_(text) {}
 
-    // The next token on any line ('#' starts a comment to the end of its line when skip_comments).
-    bool next(std::string_view& token, bool skip_comments) {
-        for (;;) {
-            while (at_ < text_.size() && is_space(text_[at_])) {
-                if (text_[at_] == '\n') ++line_;
-                ++at_;
-            }
+    // The next token on any line.
+    bool next(std::string_view& token) {
+        while (!on_line(token)) {
             if (at_ >= text_.size()) return false;
-            if (skip_comments && text_[at_] == '#') {
-                while (at_ < text_.size() && text_[at_] != '\n') ++at_;
-                continue;
-            }
-            const size_t begin = at_;
-            while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
-            token = text_.substr(begin, at_ - begin);
-            return true;
+            end_line();
         }
+        return true;
     }
-    // The rest of the current line, as tokens (comments dropped); moves to the next line.
-    std::vector<std::string_view> rest_of_line() {
-        std::vector<std::string_view> out;
-        while (at_ < text_.size() && text_[at_] != '\n') {
-            while (at_ < text_.size() && text_[at_] != '\n' && is_space(text_[at_])) ++at_;
-            if (at_ >= text_.size() || text_[at_] == '\n') break;
-            if (text_[at_] == '#') {
-                while (at_ < text_.size() && text_[at_] != '\n') ++at_;
-                break;
-            }
-            const size_t begin = at_;
-            while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
-            out.push_back(text_.substr(begin, at_ - begin));
-        }
-        if (at_ < text_.size()) ++at_, ++line_;
-        return out;
+    // The rest of the current line, as tokens; moves to the next line.
+    void rest_of_line(std::vector<std::string_view>& out) {
+        out.clear();
+        last_line_ = line_;
+        for (std::string_view t; on_line(t);) out.push_back(t);
+        end_line();
     }
     // The next line that is not empty or a comment, as tokens; false at the end.
     bool line(std::vector<std::string_view>& out) {
         while (at_ < text_.size()) {
-            out = rest_of_line();
+            rest_of_line(out);
             if (!out.empty()) return true;
         }
         return false;
     }
-    size_t line_number() const { return line_; }
+    size_t line_number() const { return line_; }     // where reading is now
+    size_t last_line() const { return last_line_; }  // of the last line() or rest_of_line()
     size_t offset() const { return at_; }
 
   private:
     static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+    // The next token before the end of the current line (a comment ends it); false at its end.
+    bool on_line(std::string_view& token) {
+        while (at_ < text_.size() && text_[at_] != '\n' && is_space(text_[at_])) ++at_;
+        if (at_ >= text_.size() || text_[at_] == '\n' || text_[at_] == '#') return false;
+        const size_t begin = at_;
+        while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
+        token = text_.substr(begin, at_ - begin);
+        return true;
+    }
+    void end_line() {
+        while (at_ < text_.size() && text_[at_] != '\n') ++at_;
+        if (at_ < text_.size()) ++at_, ++line_;
+    }
     std::string_view text_;
     size_t at_ = 0;
-    size_t line_ = 1;
+    size_t line_ = 1, last_line_ = 1;
 };
 
 bool parse_integer(std::string_view s, long long& value) {
@@ -162,8 +156,8 @@ void check_off(const std::string& path, std::string_view text) {
     if (!in.line(words)) fail(path, 1, "no OFF header");
     OffHeader h;
     bool other_dimension = false;
-    if (!parse_off_keyword(words[0], h, other_dimension)) fail(path, in.line_number() - 1, "expected an OFF header keyword, found " + quoted(words[0]));
-    if (other_dimension) fail(path, in.line_number() - 1, quoted(words[0]) + ": only three-dimensional vertices are supported");
+    if (!parse_off_keyword(words[0], h, other_dimension)) fail(path, in.last_line(), "expected an OFF header keyword, found " + quoted(words[0]));
+    if (other_dimension) fail(path, in.last_line(), quoted(words[0]) + ": only three-dimensional vertices are supported");
     h.binary = words.size() > 1 && words[1] == "BINARY";
     if (h.binary) {
         // 32-bit little-endian counts and values after the header line
@@ -194,7 +188,7 @@ void check_off(const std::string& path, std::string_view text) {
     // the counts may follow the keyword on its line or come on the next one
     std::vector<std::string_view> counts(words.begin() + 1, words.end());
     if (counts.empty() && !in.line(counts)) fail(path, in.line_number(), "the file ends before the vertex, face and edge counts");
-    const size_t count_line = in.line_number() - 1;
+    const size_t count_line = in.last_line();
     long long nv = 0, nf = 0;
     if (counts.size() < 2 || !parse_integer(counts[0], nv) || !parse_integer(counts[1], nf) || nv < 0 || nf < 0)
         fail(path, count_line, "expected the vertex, face and edge counts");
@@ -204,43 +198,49 @@ void check_off(const std::string& path, std::string_view text) {
     const size_t per_vertex = 3 + (h.normals ? 3 : 0) + (h.texcoords ? 2 : 0);
     for (long long v = 0; v < nv; ++v) {
         if (!in.line(words)) fail(path, in.line_number(), "the file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
-        if (words.size() < per_vertex) fail(path, in.line_number() - 1, "vertex " + std::to_string(v) + " has " + std::to_string(words.size()) + " numbers, expected at least " + std::to_string(per_vertex));
+        if (words.size() < per_vertex) fail(path, in.last_line(), "vertex " + std::to_string(v) + " has " + std::to_string(words.size()) + " numbers, expected at least " + std::to_string(per_vertex));
         for (std::string_view w : words)
-            if (!parse_number(w)) fail(path, in.line_number() - 1, "vertex " + std::to_string(v) + ": " + quoted(w) + " is not a number");
+            if (!parse_number(w)) fail(path, in.last_line(), "vertex " + std::to_string(v) + ": " + quoted(w) + " is not a number");
     }
     for (long long f = 0; f < nf; ++f) {
         std::string_view t;
-        if (!in.next(t, true)) fail(path, in.line_number(), "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
+        if (!in.next(t)) fail(path, in.line_number(), "the file ends after " + std::to_string(f) + " of " + std::to_string(nf) + " faces");
         const size_t line = in.line_number();
         long long n = 0;
         if (!parse_integer(t, n) || n < 1 || n > nv) fail(path, line, "face " + std::to_string(f) + " announces " + quoted(t) + " corners, the file has " + std::to_string(nv) + " vertices");
         for (long long k = 0; k < n; ++k) {
             long long index = 0;
-            if (!in.next(t, true)) fail(path, in.line_number(), "the file ends inside face " + std::to_string(f));
+            if (!in.next(t)) fail(path, in.line_number(), "the file ends inside face " + std::to_string(f));
             if (!parse_integer(t, index) || index < 0 || index >= nv)
                 fail(path, in.line_number(), "face " + std::to_string(f) + " refers to vertex " + quoted(t) + ", the file has " + std::to_string(nv));
         }
-        if (in.line_number() == line) in.rest_of_line();  // a colour may follow the corners
+        if (in.line_number() == line) in.rest_of_line(words);  // a colour may follow the corners
     }
 }
 
 // ---- PLY --------------------------------------------------------------------------------------
 
-int ply_type_size(std::string_view t) {
-    static const std::map<std::string_view, int> sizes = {{"char", 1},   {"uchar", 1},  {"int8", 1},   {"uint8", 1},    {"short", 2},
-                                                          {"ushort", 2}, {"int16", 2},  {"uint16", 2}, {"int", 4},      {"uint", 4},
-                                                          {"int32", 4},  {"uint32", 4}, {"float", 4},  {"float32", 4},  {"double", 8},
-                                                          {"float64", 8}};
-    const auto it = sizes.find(t);
-    return it == sizes.end() ? 0 : it->second;
-}
+// A PLY scalar type: its size in bytes (0: not a PLY type), whether it is signed and an integer.
+struct PlyType {
+    int size = 0;
+    bool is_signed = false, integer = true;
+};
 
-bool ply_type_is_integer(std::string_view t) { return t != "float" && t != "float32" && t != "double" && t != "float64"; }
+PlyType ply_type(std::string_view t) {
+    static const std::map<std::string_view, PlyType> types = {
+        {"char", {1, true, true}},     {"int8", {1, true, true}},     {"uchar", {1, false, true}},    {"uint8", {1, false, true}},
+        {"short", {2, true, true}},    {"int16", {2, true, true}},    {"ushort", {2, false, true}},   {"uint16", {2, false, true}},
+        {"int", {4, true, true}},      {"int32", {4, true, true}},    {"uint", {4, false, true}},     {"uint32", {4, false, true}},
+        {"float", {4, false, false}},  {"float32", {4, false, false}}, {"double", {8, false, false}},  {"float64", {8, false, false}}};
+    const auto it = types.find(t);
+    return it == types.end() ? PlyType{} : it->second;
+}
 
 struct PlyProperty {
     std::string name;
-    std::string type;        // scalar type, or the list's item type
-    std::string count_type;  // empty for a scalar
+    PlyType type;           // scalar type, or the list's item type
+    PlyType count;          // size 0 for a scalar
+    bool indices = false;   // the face element's vertex_indices list
 };
 struct PlyElement {
     std::string name;
@@ -258,7 +258,7 @@ void check_ply(const std::string& path, std::string_view text) {
     for (;;) {
         if (in.offset() > (size_t(1) << 20)) fail(path, in.line_number(), "no end_header in the first megabyte");
         if (!in.line(w)) fail(path, in.line_number(), "the file ends before end_header");
-        const size_t line = in.line_number() - 1;
+        const size_t line = in.last_line();
         if (w[0] == "end_header") break;
         if (w[0] == "comment" || w[0] == "obj_info") continue;
         if (w[0] == "format") {
@@ -271,10 +271,12 @@ void check_ply(const std::string& path, std::string_view text) {
             elements.push_back({std::string(w[1]), uint64_t(count), {}, line});
         } else if (w[0] == "property") {
             if (elements.empty()) fail(path, line, "a property before any element");
-            if (w.size() == 3 && ply_type_size(w[1]) > 0) {
-                elements.back().properties.push_back({std::string(w[2]), std::string(w[1]), ""});
-            } else if (w.size() == 5 && w[1] == "list" && ply_type_size(w[2]) > 0 && ply_type_is_integer(w[2]) && ply_type_size(w[3]) > 0) {
-                elements.back().properties.push_back({std::string(w[4]), std::string(w[3]), std::string(w[2])});
+            PlyElement& e = elements.back();
+            if (w.size() == 3 && ply_type(w[1]).size > 0) {
+                e.properties.push_back({std::string(w[2]), ply_type(w[1]), {}, false});
+            } else if (w.size() == 5 && w[1] == "list" && ply_type(w[2]).size > 0 && ply_type(w[2]).integer && ply_type(w[3]).size > 0) {
+                const bool indices = e.name == "face" && (w[4] == "vertex_indices" || w[4] == "vertex_index");
+                e.properties.push_back({std::string(w[4]), ply_type(w[3]), ply_type(w[2]), indices});
             } else {
                 fail(path, line, "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with known types, found " + quoted(w.size() > 1 ? w[1] : w[0]));
             }
@@ -285,23 +287,20 @@ void check_ply(const std::string& path, std::string_view text) {
     uint64_t vertices = 0;
     for (const PlyElement& e : elements)
         if (e.name == "vertex") vertices = e.count;
-    auto is_face_list = [](const PlyElement& e, const PlyProperty& p) {
-        return e.name == "face" && !p.count_type.empty() && (p.name == "vertex_indices" || p.name == "vertex_index");
-    };
     if (format == "ascii") {
         for (const PlyElement& e : elements) {
             // one instance per line; counts bounded by the lines the file can hold
             if (e.count > text.size() / 2) fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements cannot fit in a file of " + std::to_string(text.size()) + " bytes");
             for (uint64_t i = 0; i < e.count; ++i) {
                 if (!in.line(w)) fail(path, in.line_number(), "the file ends after " + std::to_string(i) + " of " + std::to_string(e.count) + " " + e.name + " elements");
-                const size_t line = in.line_number() - 1;
+                const size_t line = in.last_line();
                 size_t k = 0;
                 for (const PlyProperty& p : e.properties) {
                     if (k >= w.size()) fail(path, line, e.name + " " + std::to_string(i) + ": no value for " + p.name);
-                    if (p.count_type.empty()) {
+                    if (p.count.size == 0) {
                         long long integer = 0;  // an integer property read as a float would shift every later value
-                        if (ply_type_is_integer(p.type) ? !parse_integer(w[k], integer) : !parse_number(w[k]))
-                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + " is not " + (ply_type_is_integer(p.type) ? "an integer" : "a number"));
+                        if (p.type.integer ? !parse_integer(w[k], integer) : !parse_number(w[k]))
+                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + " is not " + (p.type.integer ? "an integer" : "a number"));
                         ++k;
                         continue;
                     }
@@ -310,8 +309,8 @@ void check_ply(const std::string& path, std::string_view text) {
                         fail(path, line, e.name + " " + std::to_string(i) + ": the list " + p.name + " announces " + quoted(w[k - 1]) + " items, the line holds " + std::to_string(w.size() - k));
                     for (long long j = 0; j < n; ++j, ++k) {
                         long long index = 0;
-                        if (is_face_list(e, p) ? !parse_integer(w[k], index) || index < 0 || uint64_t(index) >= vertices : !parse_number(w[k]))
-                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + (is_face_list(e, p) ? " is not a vertex of the " + std::to_string(vertices) : " is not a number"));
+                        if (p.indices ? !parse_integer(w[k], index) || index < 0 || uint64_t(index) >= vertices : !parse_number(w[k]))
+                            fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + (p.indices ? " is not a vertex of the " + std::to_string(vertices) : " is not a number"));
                     }
                 }
             }
@@ -321,48 +320,51 @@ void check_ply(const std::string& path, std::string_view text) {
     // binary: walk the elements by their sizes, reading list counts (and face indices)
     const bool little = format == "binary_little_endian";
     size_t at = in.offset();
-    auto read = [&](std::string_view type, uint64_t& value, double* real) {
-        const int size = ply_type_size(type);
-        if (at + size_t(size) > text.size()) return false;
+    auto read = [&](PlyType type, double& value) {  // an integer's value (a float's is not needed)
+        if (at + size_t(type.size) > text.size()) return false;
         uint8_t b[8];
-        std::memcpy(b, text.data() + at, size_t(size));
-        at += size_t(size);
-        if (!little) std::reverse(b, b + size);
+        std::memcpy(b, text.data() + at, size_t(type.size));
+        at += size_t(type.size);
+        if (!little) std::reverse(b, b + type.size);
         uint64_t u = 0;
-        std::memcpy(&u, b, size_t(size));
-        const bool is_signed = type == "char" || type == "int8" || type == "short" || type == "int16" || type == "int" || type == "int32";
-        if (is_signed && size < 8 && (u >> (8 * size - 1)) & 1) u |= ~uint64_t(0) << (8 * size);  // sign-extend
-        value = u;
-        if (real) *real = is_signed ? double(int64_t(u)) : double(u);
+        std::memcpy(&u, b, size_t(type.size));
+        if (type.is_signed && type.size < 8 && (u >> (8 * type.size - 1)) & 1) u |= ~uint64_t(0) << (8 * type.size);  // sign-extend
+        value = type.is_signed ? double(int64_t(u)) : double(u);
         return true;
     };
     for (const PlyElement& e : elements) {
-        uint64_t fixed = 0;  // bytes of the scalar properties
-        for (const PlyProperty& p : e.properties) fixed += p.count_type.empty() ? uint64_t(ply_type_size(p.type)) : uint64_t(ply_type_size(p.count_type));
+        uint64_t fixed = 0;  // bytes of the scalars and list counts
+        bool scalars_only = true;
+        for (const PlyProperty& p : e.properties) {
+            fixed += uint64_t(p.count.size > 0 ? p.count.size : p.type.size);
+            scalars_only &= p.count.size == 0;
+        }
         if (fixed > 0 && e.count > (text.size() - at) / fixed)
             fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements of at least " + std::to_string(fixed) + " bytes cannot fit in the " + std::to_string(text.size() - at) + " bytes left");
-        bool scalars_only = true;
-        for (const PlyProperty& p : e.properties) scalars_only &= p.count_type.empty();
         if (scalars_only) {
             at += size_t(fixed * e.count);
             continue;
         }
         for (uint64_t i = 0; i < e.count; ++i)
             for (const PlyProperty& p : e.properties) {
-                uint64_t value = 0;
-                if (p.count_type.empty()) {
-                    if (!read(p.type, value, nullptr)) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
+                if (p.count.size == 0) {  // a scalar
+                    if (at + size_t(p.type.size) > text.size()) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
+                    at += size_t(p.type.size);
                     continue;
                 }
                 double n = 0;
-                if (!read(p.count_type, value, &n)) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
-                const uint64_t item = uint64_t(ply_type_size(p.type));
+                if (!read(p.count, n)) fail(path, e.line, "the data ends inside " + e.name + " " + std::to_string(i));
+                const uint64_t item = uint64_t(p.type.size);
                 if (n < 0 || uint64_t(n) > (text.size() - at) / item)
                     fail(path, e.line, e.name + " " + std::to_string(i) + ": the list " + p.name + " announces " + std::to_string(int64_t(n)) + " items, the file holds fewer");
+                if (!p.indices) {
+                    at += size_t(uint64_t(n) * item);
+                    continue;
+                }
                 for (uint64_t j = 0; j < uint64_t(n); ++j) {
                     double index = 0;
-                    read(p.type, value, &index);
-                    if (is_face_list(e, p) && (index < 0 || index >= double(vertices)))
+                    read(p.type, index);
+                    if (index < 0 || index >= double(vertices))
                         fail(path, e.line, e.name + " " + std::to_string(i) + " refers to vertex " + std::to_string(int64_t(index)) + ", the file has " + std::to_string(vertices));
                 }
             }
@@ -393,7 +395,7 @@ void check_obj(const std::string& path, std::string_view text) {
             fail(path, line, std::string("a face refers to ") + what + " " + quoted(s) + ", the file has " + std::to_string(total));
     };
     while (in.line(w)) {
-        const size_t line = in.line_number() - 1;
+        const size_t line = in.last_line();
         // values are OpenMesh's to read (it takes what parses, as "3.1+e2" -> 3.1); indices are
         // what it would follow out of bounds
         if (w[0] == "v") {
@@ -447,13 +449,13 @@ void check_stl(const std::string& path, std::string_view text) {
     std::vector<std::string_view> w;
     while (in.line(w)) {
         if (w.size() >= 2 && w[0] == "facet" && w[1] == "normal" && (w.size() < 5 || !parse_number(w[2]) || !parse_number(w[3]) || !parse_number(w[4])))
-            fail(path, in.line_number() - 1, "expected 'facet normal X Y Z'");
+            fail(path, in.last_line(), "expected 'facet normal X Y Z'");
         bool outer = false;
         for (std::string_view t : w) outer |= t.find("outer") != std::string_view::npos || t.find("OUTER") != std::string_view::npos;
         if (!outer) continue;
-        const size_t line = in.line_number() - 1;
+        const size_t line = in.last_line();
         for (int k = 0; k < 3; ++k) {
-            w = in.rest_of_line();
+            in.rest_of_line(w);
             if (w.size() < 4 || !parse_number(w[1]) || !parse_number(w[2]) || !parse_number(w[3]))
                 fail(path, line + 1 + size_t(k), "expected 'vertex X Y Z' (corner " + std::to_string(k + 1) + " of the facet opened on line " + std::to_string(line) + ")");
         }
@@ -464,11 +466,8 @@ void check_stl(const std::string& path, std::string_view text) {
 
 void check_mesh_file(const std::string& path, const std::string& extension) {
     if (extension != "off" && extension != "ply" && extension != "obj" && extension != "stl") return;
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw IoError("cannot open '" + path + "'");
-    std::ostringstream buffer;
-    buffer << f.rdbuf();
-    const std::string text = buffer.str();
+    const std::vector<uint8_t> bytes = read_whole_file(path);
+    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
     if (extension == "off") check_off(path, text);
     else if (extension == "ply") check_ply(path, text);
     else if (extension == "stl") check_stl(path, text);
