@@ -50,6 +50,8 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
         first_copy_ = mesh_.n_vertices();
         polygon_ = polygon;
         const OpenMesh::FaceHandle fh = Base::add_face(polygon);
+        for (size_t v = first_copy_; v < mesh_.n_vertices(); ++v)  // copies of the corners, in order
+            copies_.push_back({OpenMesh::VertexHandle(int(v)), polygon_[v - first_copy_]});
         for (size_t f = first_face_; f < mesh_.n_faces(); ++f)
             for (auto h : mesh_.fh_range(OpenMesh::FaceHandle(int(f)))) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(0, 0));
         return fh;
@@ -65,10 +67,15 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
             }
     }
 
+    // the vertices OpenMesh made for faces it could only add with vertices of their own
+    // (non-manifold input), each with the file's vertex it copies
+    const std::vector<std::pair<OpenMesh::VertexHandle, OpenMesh::VertexHandle>>& copies() const { return copies_; }
+
   private:
     OmMesh& mesh_;
     size_t first_face_ = 0, first_copy_ = 0;
     VHandles polygon_;
+    std::vector<std::pair<OpenMesh::VertexHandle, OpenMesh::VertexHandle>> copies_;
     OpenMesh::VertexHandle defined(OpenMesh::VertexHandle v) {
         if (!v.is_valid()) return v;
         mesh_.set_normal(v, OmMesh::Normal(0, 0, 0));  // a zero normal is recomputed by clean_mesh
@@ -115,10 +122,10 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     om.request_vertex_texcoords2D();
     om.request_halfedge_texcoords2D();  // OBJ: a texture coordinate per face corner (UV seams)
     om.request_vertex_colors();
-    om.request_vertex_status();  // marks the copies OpenMesh makes for non-manifold faces
     OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
                                 OpenMesh::IO::Options::FaceTexCoord | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
     std::ostringstream messages;
+    Importer importer(om);
     bool ok;
     {
         std::lock_guard<std::mutex> lock(openmesh_mutex());
@@ -130,7 +137,6 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         }();
         (void)detached;
         ::omerr().connect(messages);
-        Importer importer(om);
         ok = OpenMesh::IO::IOManager().read(path, importer, opt);
         ::omerr().flush();
         ::omerr().disconnect(messages);
@@ -151,33 +157,14 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     }
     if (om.n_faces() == 0) throw ImportError(path + ": no triangles or polygons in the file");
 
-    // OpenMesh gives a face it cannot add (non-manifold) vertices of its own, at the original's
-    // position but with uninitialised attributes: take them from the original vertex
-    {
-        std::map<std::array<float, 3>, OmMesh::VertexHandle> original;
-        for (auto vh : om.vertices())
-            if (!om.status(vh).fixed_nonmanifold()) {
-                const auto p = om.point(vh);
-                original.emplace(std::array<float, 3>{float(p[0]), float(p[1]), float(p[2])}, vh);
-            }
-        size_t copies = 0;
-        for (auto vh : om.vertices()) {
-            if (!om.status(vh).fixed_nonmanifold()) continue;
-            ++copies;
-            const auto p = om.point(vh);
-            auto it = original.find({float(p[0]), float(p[1]), float(p[2])});
-            if (it == original.end()) {
-                om.set_normal(vh, OmMesh::Normal(0, 0, 0));  // recomputed by clean_mesh
-                om.set_texcoord2D(vh, OmMesh::TexCoord2D(0, 0));
-                om.set_color(vh, OmMesh::Color(1, 1, 1, 1));
-                continue;
-            }
-            om.set_normal(vh, om.normal(it->second));
-            om.set_texcoord2D(vh, om.texcoord2D(it->second));
-            om.set_color(vh, om.color(it->second));
-        }
-        if (copies) result.warnings.push_back(std::to_string(copies) + " vertices duplicated for non-manifold faces");
+    // OpenMesh gives a face it cannot add (non-manifold) vertices of its own, with uninitialised
+    // attributes: they take their original's
+    for (const auto& [copy, original] : importer.copies()) {
+        om.set_normal(copy, om.normal(original));
+        om.set_texcoord2D(copy, om.texcoord2D(original));
+        om.set_color(copy, om.color(original));
     }
+    if (!importer.copies().empty()) result.warnings.push_back(std::to_string(importer.copies().size()) + " vertices duplicated for non-manifold faces");
     // Texture coordinates per face corner (OBJ's v/vt): a vertex with different ones on different
     // faces is split into one vertex per distinct coordinate (a UV seam), never smeared into one.
     const bool corner_uv = opt.check(OpenMesh::IO::Options::FaceTexCoord);
