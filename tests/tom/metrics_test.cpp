@@ -123,6 +123,94 @@ TEST_CASE("figures are repeatable: same seed and any thread count give identical
     CHECK(c.forward.mean == Approx(a.forward.mean).epsilon(0.02));      // ...the same figure within sampling noise
 }
 
+namespace {
+
+// Squared distance from p to triangle (a, b, c) by the Voronoi regions of its vertices, edges and
+// face (Ericson, Real-Time Collision Detection, 5.1.5): the reference for the search below.
+double reference_d2(const double p[3], const double a[3], const double b[3], const double c[3]) {
+    auto sub = [](const double* u, const double* v, double* out) { for (int k = 0; k < 3; ++k) out[k] = u[k] - v[k]; };
+    auto dot = [](const double* u, const double* v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+    double ab[3], ac[3], ap[3], bp[3], cp[3], q[3];
+    sub(b, a, ab), sub(c, a, ac), sub(p, a, ap), sub(p, b, bp), sub(p, c, cp);
+    auto at = [&](double s, double t) {  // q = a + s ab + t ac
+        for (int k = 0; k < 3; ++k) q[k] = a[k] + s * ab[k] + t * ac[k];
+        double d[3];
+        sub(p, q, d);
+        return dot(d, d);
+    };
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap), d3 = dot(ab, bp), d4 = dot(ac, bp), d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d1 <= 0 && d2 <= 0) return at(0, 0);
+    if (d3 >= 0 && d4 <= d3) return at(1, 0);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(d1 / (d1 - d3), 0);
+    if (d6 >= 0 && d5 <= d6) return at(0, 1);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(0, d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return at(1 - w, w);
+    }
+    const double denom = va + vb + vc;
+    return at(vb / denom, vc / denom);
+}
+
+} // namespace
+
+TEST_CASE("nearest distances equal a brute-force search, on, near and far from real surfaces", "[metrics][nearest]") {
+    const std::vector<test::NamedMesh> meshes = test::real_meshes();
+    for (const test::NamedMesh& nm : meshes) {
+        if (nm.mesh.triangle_count() > 20000) continue;  // brute force over every triangle: keep it quick
+        INFO(nm.name);
+        const tom::Mesh& m = nm.mesh;
+        const tom::Surface s = surface(m);
+        double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+        for (size_t i = 0; i < m.positions.size(); ++i) lo[i % 3] = std::min(lo[i % 3], double(m.positions[i])), hi[i % 3] = std::max(hi[i % 3], double(m.positions[i]));
+        const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        std::vector<double> points;
+        auto corner = [&](uint32_t t, int k, int axis) { return double(m.positions[3 * size_t(m.indices[3 * t + k]) + axis]); };
+        // points on random faces, then pushed off along the face normal by growing offsets: on the
+        // surface, near it (runs share candidate lists) and far (lists would be long)
+        for (double offset : {0.0, 1e-4, 1e-3, 1e-2, 0.1, 0.5}) {
+            for (int i = 0; i < 400; ++i) {
+                const uint32_t t = uint32_t(unit(rng) * double(m.triangle_count())) % m.triangle_count();
+                double u = unit(rng), v = unit(rng);
+                if (u + v > 1) u = 1 - u, v = 1 - v;
+                double e1[3], e2[3], n[3];
+                for (int k = 0; k < 3; ++k) e1[k] = corner(t, 1, k) - corner(t, 0, k), e2[k] = corner(t, 2, k) - corner(t, 0, k);
+                n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+                const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                const double side = (i % 2 ? 1.0 : -1.0) * offset * diag / (len > 0 ? len : 1.0);
+                for (int k = 0; k < 3; ++k) points.push_back(corner(t, 0, k) + u * e1[k] + v * e2[k] + side * n[k]);
+            }
+        }
+        for (int i = 0; i < 400; ++i)  // anywhere in the box, enlarged by half its diagonal
+            for (int k = 0; k < 3; ++k) points.push_back(lo[k] - 0.5 * diag + unit(rng) * (hi[k] - lo[k] + diag));
+        const size_t count = points.size() / 3;
+        std::vector<double> fast(count), two(count);
+        tom::nearest_squared_distances(s, points.data(), count, fast.data(), 1);
+        tom::nearest_squared_distances(s, points.data(), count, two.data(), 2);
+        CHECK(fast == two);
+        size_t wrong = 0;
+        double worst = 0;
+        for (size_t i = 0; i < count; ++i) {
+            double best = INFINITY;
+            for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+                double a[3], b[3], c[3];
+                for (int k = 0; k < 3; ++k) a[k] = corner(t, 0, k), b[k] = corner(t, 1, k), c[k] = corner(t, 2, k);
+                best = std::min(best, reference_d2(&points[3 * i], a, b, c));
+            }
+            const double error = std::fabs(std::sqrt(fast[i]) - std::sqrt(best));
+            worst = std::max(worst, error);
+            if (error > 1e-9 * diag) ++wrong;
+        }
+        INFO("worst difference " << worst << " of a diagonal of " << diag);
+        CHECK(wrong == 0);
+    }
+}
+
 TEST_CASE("the k/N fit recovers k from synthetic k/N data", "[metrics][fit]") {
     std::mt19937 rng(3);
     std::normal_distribution<double> noise(0.0, 0.05);

@@ -69,6 +69,12 @@ struct Distance {
 /// \throw std::invalid_argument when a surface has no triangle or an index out of range.
 Distance metro_distance(const Surface& original, const Surface& simplified, const DistanceParams& params = {});
 
+/// The exact squared distance from each of `count` points (xyz in `points`) to the nearest point
+/// of `target`, written to `squared_distances[i]` (the same search the distances above use:
+/// points grouped by grid cell, one candidate list per cell; both cores by default).
+/// \throw std::invalid_argument when the target has no triangle or an index out of range.
+void nearest_squared_distances(const Surface& target, const double* points, size_t count, double* squared_distances, unsigned threads = 0);
+
 /// The original side of many comparisons, prepared once: its AABB tree and its own samples,
 /// then compare() against any number of simplified versions (the levels of a report).
 class MetroReference {
@@ -80,7 +86,8 @@ public:
     MetroReference(MetroReference&&) noexcept;
     MetroReference& operator=(MetroReference&&) noexcept;
 
-    /// The same figures metro_distance(original, simplified, params) gives.
+    /// The same figures metro_distance(original, simplified, params) gives. Not safe to call
+    /// concurrently on one object (it keeps samples and buffers between calls).
     Distance compare(const Surface& simplified) const;
     /// The same, and the attribute deviation of `simplified` (whose attributes are given).
     Distance compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const;

@@ -6,11 +6,16 @@
 // relative to the bounding-box diagonal). P. Alliez, S. Tayeb, C. Wormser. 3D Fast
 // Intersection and Distance Computation, CGAL manual (AABB tree, closest point with a hint).
 //
-// Speed: samples are generated face by face, so consecutive samples are close; each query
-// starts from its predecessor's triangle (which bounds the search from the start) and goes down
-// CGAL's tree nearer child first. Samples are processed in fixed chunks combined in order, so the
-// figures do not depend on the number of threads. (Sorting the samples in Morton order was
-// measured: it cost more instructions than it saved.)
+// Speed: the samples of each side are sorted in Morton order once, and grouped by the cells of
+// an octree level chosen for the target (about kCellSamples samples a cell, cells at most
+// kCellTriangles target triangles wide). Per cell, one descent of CGAL's tree finds the centre's
+// nearest triangle and every triangle that can be the nearest of one of the cell's samples (the
+// distance to a surface is 1-Lipschitz); per sample, lower bounds (box, plane) of the distance to
+// all of those are computed four at a time with AVX, and the exact distance only for the few
+// under the best found. Exact: the figures are those of a full nearest search per sample. Samples
+// are processed in fixed chunks combined in order, so the figures do not depend on the number of
+// threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
+// from the previous sample's triangle.)
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -18,10 +23,15 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "tom/metrics.h"
@@ -54,6 +64,24 @@ double triangle_area(const Point& a, const Point& b, const Point& c) {
     return 0.5 * std::sqrt(n.squared_length());
 }
 
+// Runs work(chunk, begin, end) over [0, n) in chunks of kChunk on up to `threads` threads (0: every
+// core); results kept per chunk and combined in chunk order give the same figures for any count.
+template <class Work>
+size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    std::atomic<size_t> next{0};
+    auto run = [&] {
+        for (size_t c; (c = next++) < chunks;) work(c, c * kChunk, std::min(n, c * kChunk + kChunk));
+    };
+    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    threads = unsigned(std::min<size_t>(threads, std::max<size_t>(1, chunks)));
+    std::vector<std::thread> pool;
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(run);
+    run();
+    for (std::thread& t : pool) t.join();
+    return chunks;
+}
+
 // splitmix64: a small, portable generator, so samples are the same on every platform
 struct Random {
     uint64_t state;
@@ -68,9 +96,81 @@ struct Random {
 
 struct Samples {
     std::vector<Point> points;
+    std::vector<uint64_t> keys;  // per point: its Morton code; points are sorted by it
+    double extent = 0;           // the side of the Morton grid's cube
     uint64_t vertex = 0, edge = 0, face = 0;
     double area = 0;
 };
+
+// Morton codes of a 2^16-per-axis grid: 48-bit keys.
+constexpr int kMortonBits = 16;
+
+// The 16 low bits of x spread to every third bit.
+inline uint64_t spread_bits(uint64_t x) {
+    x &= 0xFFFF;
+    x = (x | x << 16) & 0x0000FF0000FFULL;
+    x = (x | x << 8) & 0x00F00F00F00FULL;
+    x = (x | x << 4) & 0x0C30C30C30C3ULL;
+    x = (x | x << 2) & 0x249249249249ULL;
+    return x;
+}
+
+// Sorts (key, index) pairs by key (keys below 2^48), equal keys in index order (as std::sort of
+// the pairs would order them): least-significant-digit radix sort, 12 bits a pass, passes where
+// every key has the same digit skipped.
+void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<std::pair<uint64_t, uint32_t>>& other) {
+    constexpr int kDigits = 4, kBuckets = 1 << 12;
+    const size_t n = items.size();
+    other.resize(n);
+    std::vector<size_t> counts(size_t(kDigits) * kBuckets, 0);
+    for (const auto& item : items)
+        for (int d = 0; d < kDigits; ++d) ++counts[size_t(d) * kBuckets + ((item.first >> (12 * d)) & (kBuckets - 1))];
+    for (int d = 0; d < kDigits; ++d) {
+        size_t* count = &counts[size_t(d) * kBuckets];
+        if (std::find(count, count + kBuckets, n) != count + kBuckets) continue;  // one digit for all
+        size_t sum = 0;
+        for (int b = 0; b < kBuckets; ++b) sum += std::exchange(count[b], sum);
+        for (const auto& item : items) other[count[(item.first >> (12 * d)) & (kBuckets - 1)]++] = item;
+        items.swap(other);
+    }
+}
+
+// Buffers order_morton() reuses from call to call (fresh ones of this size cost more in page
+// faults than the sort itself).
+struct MortonScratch {
+    std::vector<std::pair<uint64_t, uint32_t>> keyed, other;
+    std::vector<Point> sorted;
+};
+
+// Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube, so that the
+// points of every octree cell are a contiguous range (measure() groups them by cell); keys get
+// each point's code, extent the cube's side; `permutation`, when given, the order applied (new
+// position -> old). Deterministic.
+void order_morton(std::vector<Point>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, std::vector<uint32_t>* permutation = nullptr) {
+    const size_t n = points.size();
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (const Point& p : points)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+    extent = n ? std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) : 0.0;
+    const double scale = extent > 0 ? double((1u << kMortonBits) - 1) / extent : 0.0;
+    std::vector<std::pair<uint64_t, uint32_t>>& keyed = scratch.keyed;
+    keyed.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        uint64_t key = 0;
+        for (int k = 0; k < 3; ++k) key |= spread_bits(uint64_t((points[i][k] - lo[k]) * scale)) << (2 - k);
+        keyed[i] = {key, uint32_t(i)};
+    }
+    radix_sort(keyed, scratch.other);
+    std::vector<Point>& sorted = scratch.sorted;
+    sorted.resize(n);
+    keys.resize(n);
+    for (size_t i = 0; i < n; ++i) sorted[i] = points[keyed[i].second], keys[i] = keyed[i].first;
+    if (permutation) {
+        permutation->resize(n);
+        for (size_t i = 0; i < n; ++i) (*permutation)[i] = keyed[i].second;
+    }
+    points.swap(sorted);
+}
 
 double surface_area(const Surface& s) {
     double area = 0;
@@ -81,9 +181,12 @@ double surface_area(const Surface& s) {
 
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
-Samples sample_surface(const Surface& s, uint64_t target, const DistanceParams& p) {
-    Samples out;
+// Fills `out` (its buffers reused) with about `target` samples of s.
+void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch) {
+    out.points.clear();
+    out.vertex = out.edge = out.face = 0;
     out.area = surface_area(s);
+    out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
     const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
     if (p.vertex_samples) {
         std::vector<uint8_t> used(s.vertex_count, 0);
@@ -115,65 +218,56 @@ Samples sample_surface(const Surface& s, uint64_t target, const DistanceParams& 
     }
     const double remaining = double(target) - double(out.points.size());
     if (p.face_samples && remaining > 0 && out.area > 0) {
-        Random rng{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
+        // each face gets its expected share, the fraction rounded at random: area-uniform overall
+        Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
+        std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
         for (size_t t = 0; t < s.triangle_count; ++t) {
-            const Point a = point(s, s.indices[3 * t]), b = point(s, s.indices[3 * t + 1]), c = point(s, s.indices[3 * t + 2]);
-            // each face gets its expected share, the fraction rounded at random: area-uniform overall
-            const double expected = remaining * triangle_area(a, b, c) / out.area;
-            const uint64_t n = uint64_t(expected + rng.uniform());
-            // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
-            // triangles, one random point in each, visited row by row in serpentine order so
-            // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face
-            const uint64_t m = uint64_t(std::sqrt(double(n)));
-            auto random_in = [&](const Point& p0, const Point& p1, const Point& p2) {
-                double u = rng.uniform(), v = rng.uniform();
-                if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
-                out.points.push_back(p0 + u * (p1 - p0) + v * (p2 - p0));
-            };
-            auto grid = [&](uint64_t i, uint64_t j) { return a + (double(i) / double(m)) * (b - a) + (double(j) / double(m)) * (c - a); };
-            for (uint64_t i = 0; i < m; ++i) {
-                const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
-                for (uint64_t k = 0; k < cells; ++k) {
-                    const uint64_t cell = (i % 2 == 0) ? k : cells - 1 - k;
-                    const uint64_t j = cell / 2;
-                    if (cell % 2 == 0)
-                        random_in(grid(i, j), grid(i + 1, j), grid(i, j + 1));
-                    else
-                        random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
-                }
-            }
-            for (uint64_t i = m * m; i < n; ++i) random_in(a, b, c);
+            const double expected = remaining * triangle_area(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2])) / out.area;
+            first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
         }
+        const size_t base = out.points.size();
+        out.points.resize(base + first.back());
+        // faces in parallel, each with its own generator: the same points whatever the threads
+        parallel_chunks(first.back(), p.threads, [&](size_t, size_t begin, size_t end) {
+            // the faces whose first sample falls in [begin, end)
+            const size_t t0 = size_t(std::lower_bound(first.begin(), first.end() - 1, begin) - first.begin());
+            const size_t t1 = size_t(std::lower_bound(first.begin(), first.end() - 1, end) - first.begin());
+            for (size_t t = t0; t < t1; ++t) {
+                const uint64_t n = first[t + 1] - first[t];
+                if (n == 0) continue;
+                Random rng{(p.seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
+                Point* at = out.points.data() + base + first[t];
+                const Point a = point(s, s.indices[3 * t]), b = point(s, s.indices[3 * t + 1]), c = point(s, s.indices[3 * t + 2]);
+                // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
+                // triangles, one random point in each, visited row by row in serpentine order so
+                // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face
+                const uint64_t m = uint64_t(std::sqrt(double(n)));
+                auto random_in = [&](const Point& p0, const Point& p1, const Point& p2) {
+                    double u = rng.uniform(), v = rng.uniform();
+                    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+                    *at++ = p0 + u * (p1 - p0) + v * (p2 - p0);
+                };
+                auto grid = [&](uint64_t i, uint64_t j) { return a + (double(i) / double(m)) * (b - a) + (double(j) / double(m)) * (c - a); };
+                for (uint64_t i = 0; i < m; ++i) {
+                    const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
+                    for (uint64_t k = 0; k < cells; ++k) {
+                        const uint64_t cell = (i % 2 == 0) ? k : cells - 1 - k;
+                        const uint64_t j = cell / 2;
+                        if (cell % 2 == 0)
+                            random_in(grid(i, j), grid(i + 1, j), grid(i, j + 1));
+                        else
+                            random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
+                    }
+                }
+                for (uint64_t i = m * m; i < n; ++i) random_in(a, b, c);
+            }
+        });
         out.face = out.points.size() - out.vertex - out.edge;
     }
-    return out;
+    order_morton(out.points, out.keys, out.extent, scratch);
 }
 
-struct Mesh3 {
-    std::vector<Triangle> triangles;
-    std::vector<double> planes;  // per triangle: unit normal and offset (zero for a degenerate one)
-    Tree tree;
-    explicit Mesh3(const Surface& s) {
-        triangles.reserve(s.triangle_count);
-        planes.reserve(4 * s.triangle_count);
-        for (size_t t = 0; t < s.triangle_count; ++t) {
-            const Point a = point(s, s.indices[3 * t]), b = point(s, s.indices[3 * t + 1]), c = point(s, s.indices[3 * t + 2]);
-            triangles.emplace_back(a, b, c);
-            const K::Vector_3 n = CGAL::cross_product(b - a, c - a);
-            const double len = std::sqrt(n.squared_length());
-            if (len > 0)
-                planes.insert(planes.end(), {n.x() / len, n.y() / len, n.z() / len, -(n.x() * a.x() + n.y() * a.y() + n.z() * a.z()) / len});
-            else
-                planes.insert(planes.end(), {0.0, 0.0, 0.0, 0.0});
-        }
-        tree.insert(triangles.begin(), triangles.end());
-        tree.build();
-    }
-};
-
-// Closest point of triangle (a, b, c) to p, by the Voronoi regions of its vertices, edges and
-// face (Ericson, Real-Time Collision Detection, 5.1.5): a handful of dot products, no branches
-// into generic kernel code. Returns the squared distance.
+// Small vector arithmetic on plain doubles (the hot loops do not go through CGAL's kernel).
 struct V3 {
     double x, y, z;
 };
@@ -183,44 +277,163 @@ inline V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
 inline double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline V3 v3(const Point& p) { return {p.x(), p.y(), p.z()}; }
 
-inline double closest_on_triangle(V3 p, V3 a, V3 b, V3 c, V3& out) {
-    auto at = [&](V3 q) {  // the answer: q, and its squared distance to p
-        out = q;
-        const V3 d = p - q;
-        return dot(d, d);
-    };
-    const V3 ab = b - a, ac = c - a, ap = p - a;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0 && d2 <= 0) return at(a);  // vertex region a
-    const V3 bp = p - b;
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0 && d4 <= d3) return at(b);  // vertex region b
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) return at(a + (d1 / (d1 - d3)) * ab);  // edge ab
-    const V3 cp = p - c;
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0 && d5 <= d6) return at(c);  // vertex region c
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) return at(a + (d2 / (d2 - d6)) * ac);  // edge ac
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return at(b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b));  // edge bc
-    const double denom = va + vb + vc;
-    if (denom != 0) return at(a + (vb / denom) * ab + (vc / denom) * ac);  // the face
-    // zero-area triangle: its longest edge decides
-    V3 best = a;
-    double best_d = dot(p - a, p - a);
-    const V3 ends[3][2] = {{a, b}, {b, c}, {c, a}};
-    for (const auto& e : ends) {
-        const V3 d = e[1] - e[0];
-        const double len2 = dot(d, d);
-        const double t = len2 > 0 ? std::min(1.0, std::max(0.0, dot(p - e[0], d) / len2)) : 0.0;
-        const V3 q = e[0] + t * d;
-        if (dot(p - q, p - q) < best_d) best = q, best_d = dot(p - q, p - q);
+// A target triangle as the search reads it: plane first (the cheapest lower bound), then corner
+// a, the edges from a, their Gram matrix with its inverse determinant and the inverse squared
+// lengths of the three edges (what distance2() needs), then the bounding box.
+struct Flat {
+    V3 normal;  // unit normal (zero for a degenerate triangle)
+    double offset;
+    V3 a, e0, e1;              // a, b - a, c - a
+    double d00, d01, d11;      // e0.e0, e0.e1, e1.e1
+    double inverse;            // 1 / (d00 d11 - d01^2); NaN for a degenerate triangle (never inside)
+    double i00, i11, i22;      // 1 / |e|^2 of each edge, e2 = c - b (0 for a zero-length one)
+    V3 lo, hi;
+};
+
+inline Flat make_flat(V3 a, V3 b, V3 c) {
+    Flat f;
+    f.a = a;
+    f.e0 = b - a, f.e1 = c - a;
+    V3 n = {f.e0.y * f.e1.z - f.e0.z * f.e1.y, f.e0.z * f.e1.x - f.e0.x * f.e1.z, f.e0.x * f.e1.y - f.e0.y * f.e1.x};
+    const double len = std::sqrt(dot(n, n));
+    f.normal = len > 0 ? (1.0 / len) * n : V3{0, 0, 0};
+    f.offset = -dot(f.normal, a);
+    f.lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
+    f.hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
+    f.d00 = dot(f.e0, f.e0), f.d01 = dot(f.e0, f.e1), f.d11 = dot(f.e1, f.e1);
+    const double det = f.d00 * f.d11 - f.d01 * f.d01;
+    f.inverse = len > 0 && det > 0 ? 1.0 / det : std::numeric_limits<double>::quiet_NaN();
+    const double l22 = dot(c - b, c - b);
+    f.i00 = f.d00 > 0 ? 1.0 / f.d00 : 0.0, f.i11 = f.d11 > 0 ? 1.0 / f.d11 : 0.0, f.i22 = l22 > 0 ? 1.0 / l22 : 0.0;
+    return f;
+}
+
+// Squared distance from p to segment o + t e, t in [0, 1], given w = p - o, we = w.e, ie = 1/|e|^2.
+inline double segment_d2(V3 w, V3 e, double we, double ie) {
+    const double t = std::min(1.0, std::max(0.0, we * ie));
+    const V3 d = w - t * e;
+    return dot(d, d);
+}
+
+// Where p projects in the triangle's plane: weights (u, v) of e0 and e1; inside when u, v >= 0
+// and u + v <= 1 (never for a degenerate triangle: NaN).
+inline void project(const Flat& f, double w0, double w1, double& u, double& v) {
+    u = (f.d11 * w0 - f.d01 * w1) * f.inverse, v = (f.d00 * w1 - f.d01 * w0) * f.inverse;
+}
+
+// Squared distance from p to the triangle: when p projects inside it, its plane distance;
+// otherwise the nearest of its three edges. Few branches, no division.
+inline double distance2(const Flat& f, V3 p) {
+    const V3 w = p - f.a;
+    const double w0 = dot(f.e0, w), w1 = dot(f.e1, w);
+    double u, v;
+    project(f, w0, w1, u, v);
+    if (u >= 0 && v >= 0 && u + v <= 1) {
+        const double above = dot(f.normal, p) + f.offset;
+        return above * above;
     }
-    return at(best);
+    const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
+    return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
+}
+
+// The point of the triangle nearest to p (distance2()'s argument), and its barycentric weights.
+inline V3 nearest_point(const Flat& f, V3 p, double weights[3] = nullptr) {
+    const V3 w = p - f.a;
+    const double w0 = dot(f.e0, w), w1 = dot(f.e1, w);
+    double u, v;
+    project(f, w0, w1, u, v);
+    if (!(u >= 0 && v >= 0 && u + v <= 1)) {
+        const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
+        const double t0 = std::min(1.0, std::max(0.0, w0 * f.i00)), t1 = std::min(1.0, std::max(0.0, w1 * f.i11)),
+                     t2 = std::min(1.0, std::max(0.0, dot(e2, wb) * f.i22));
+        const V3 q0 = t0 * f.e0, q1 = t1 * f.e1, q2 = f.e0 + t2 * e2;  // relative to a
+        const double s0 = dot(w - q0, w - q0), s1 = dot(w - q1, w - q1), s2 = dot(w - q2, w - q2);
+        if (s0 <= s1 && s0 <= s2)
+            u = t0, v = 0;
+        else if (s1 <= s2)
+            u = 0, v = t1;
+        else
+            u = 1 - t2, v = t2;
+    }
+    if (weights) weights[0] = 1 - u - v, weights[1] = u, weights[2] = v;
+    return f.a + u * f.e0 + v * f.e1;
 }
 
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
+
+// A descent of CGAL's tree (its nodes, boxes and primitives): s.leaf(primitive) at the leaves;
+// of two children, the one with the smaller s.key(child) first, each entered when
+// s.enter(child, key) holds at its turn (so a bound found in the first can prune the second).
+template <class Search>
+void descend(Search& s, const Node& node, size_t primitives) {
+    if (primitives == 2) {
+        s.leaf(node.left_data());
+        s.leaf(node.right_data());
+        return;
+    }
+    if (primitives == 3) {
+        s.leaf(node.left_data());
+        if (s.enter(node.right_child(), s.key(node.right_child()))) descend(s, node.right_child(), 2);
+        return;
+    }
+    const Node& l = node.left_child();
+    const Node& r = node.right_child();
+    const size_t nl = primitives / 2, nr = primitives - nl;
+    const double kl = s.key(l), kr = s.key(r);
+    if (kl <= kr) {
+        if (s.enter(l, kl)) descend(s, l, nl);
+        if (s.enter(r, kr)) descend(s, r, nr);
+    } else {
+        if (s.enter(r, kr)) descend(s, r, nr);
+        if (s.enter(l, kl)) descend(s, l, nl);
+    }
+}
+
+
+// A target mesh: its triangles for CGAL's tree, and the same triangles as Flat records in the
+// order of the tree's leaves (a descent reads neighbouring records, not scattered ones).
+struct Mesh3 {
+    std::vector<Triangle> triangles;
+    std::vector<Flat> flat;              // in leaf order
+    std::vector<uint32_t> slot;          // triangle -> its record in flat
+    std::vector<uint32_t> triangle_of;   // record -> its triangle
+    Tree tree;
+    explicit Mesh3(const Surface& s) {
+        triangles.reserve(s.triangle_count);
+        for (size_t t = 0; t < s.triangle_count; ++t)
+            triangles.emplace_back(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2]));
+        tree.insert(triangles.begin(), triangles.end());
+        tree.build();
+        triangle_of.reserve(triangles.size());
+        if (triangles.size() == 1)
+            triangle_of.push_back(0);
+        else
+            enumerate(*tree.root_node(), triangles.size());
+        slot.resize(triangles.size());
+        flat.reserve(triangles.size());
+        double area = 0;
+        for (const Triangle& t : triangles) area += std::sqrt(t.squared_area());
+        scale = std::sqrt(area / double(triangles.size()));
+        for (uint32_t i = 0; i < triangle_of.size(); ++i) {
+            slot[triangle_of[i]] = i;
+            const Triangle& t = triangles[triangle_of[i]];
+            flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
+        }
+    }
+    uint32_t index(const Primitive& p) const { return uint32_t(p.id() - triangles.begin()); }
+    double scale = 0;  // the side of a square of a triangle's mean area
+
+private:
+    void enumerate(const Node& root, size_t primitives) {
+        struct Leaves {  // every leaf, left to right
+            Mesh3& mesh;
+            void leaf(const Primitive& p) { mesh.triangle_of.push_back(mesh.index(p)); }
+            double key(const Node&) const { return 0; }
+            bool enter(const Node&, double) const { return true; }
+        } leaves{*this};
+        descend(leaves, root, primitives);
+    }
+};
 
 // Squared distance from p to an axis-aligned box (0 inside).
 inline double axis_gap(double lo, double hi, double x) { return x < lo ? lo - x : (x > hi ? x - hi : 0.0); }
@@ -233,38 +446,20 @@ struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
 };
 
-// Visits every triangle within sqrt(radius2) of query: visit(triangle iterator, closest point).
+// Visits every triangle within sqrt(radius2) of query: visit(its record in flat).
 template <class Visit>
 struct WithinTraits {
     V3 query;
     double radius2;
+    const Mesh3& target;
     Visit& visit;
     bool go_further() const { return true; }
     bool do_intersect(const Point&, const Node& node) const { return box_d2(node.bbox(), query) <= radius2; }
     void intersection(const Point&, const Primitive& primitive) {
-        const Triangle& t = *primitive.id();
-        V3 q;
-        if (closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q) <= radius2) visit(primitive.id(), q);
+        const uint32_t t = target.slot[target.index(primitive)];
+        if (distance2(target.flat[t], query) <= radius2) visit(t);
     }
 };
-
-// Runs work(chunk, begin, end) over [0, n) in chunks of kChunk on up to `threads` threads (0: every
-// core); results kept per chunk and combined in chunk order give the same figures for any count.
-template <class Work>
-size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::atomic<size_t> next{0};
-    auto run = [&] {
-        for (size_t c; (c = next++) < chunks;) work(c, c * kChunk, std::min(n, c * kChunk + kChunk));
-    };
-    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-    threads = unsigned(std::min<size_t>(threads, std::max<size_t>(1, chunks)));
-    std::vector<std::thread> pool;
-    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(run);
-    run();
-    for (std::thread& t : pool) t.join();
-    return chunks;
-}
 
 // Nearest-triangle search down CGAL's AABB tree (its nodes, boxes and primitives), nearer child
 // first, and the farther one only if its box is still nearer than the best triangle found in the
@@ -272,74 +467,248 @@ size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
 struct Nearest {
     V3 query;
     double best_d2;
-    TriangleIterator best;
-    V3 best_point;
-    TriangleIterator first;  // the target's triangles, for the index of a primitive
-    const double* planes;
+    uint32_t best;  // a record of target.flat
+    const Mesh3* target;
 
     void leaf(const Primitive& primitive) {
+        const uint32_t t = target->slot[target->index(primitive)];
+        const Flat& f = target->flat[t];
         // the distance to the triangle's plane bounds the distance to the triangle from below
-        const double* plane = planes + 4 * size_t(primitive.id() - first);
-        const double above = plane[0] * query.x + plane[1] * query.y + plane[2] * query.z + plane[3];
+        const double above = dot(f.normal, query) + f.offset;
         if (above * above >= best_d2) return;
-        const Triangle& t = *primitive.id();
-        V3 q;
-        const double d2 = closest_on_triangle(query, v3(t[0]), v3(t[1]), v3(t[2]), q);
-        if (d2 < best_d2) best_d2 = d2, best = primitive.id(), best_point = q;
+        const double d2 = distance2(f, query);
+        if (d2 < best_d2) best_d2 = d2, best = t;
     }
-    void visit(const Node& node, size_t primitives) {
-        if (primitives == 2) {
-            leaf(node.left_data());
-            leaf(node.right_data());
-            return;
+    double key(const Node& node) const { return box_d2(node.bbox(), query); }
+    bool enter(const Node&, double key) const { return key < best_d2; }
+};
+
+// The record of the triangle of `target` nearest to p, and its squared distance `d2`; `hint` (a
+// triangle near p) bounds the search from the start.
+uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2) {
+    Nearest search{p, distance2(target.flat[hint], p), hint, &target};
+    if (target.triangles.size() >= 2 && search.best_d2 > 0) descend(search, *target.tree.root_node(), target.triangles.size());
+    d2 = search.best_d2;
+    return search.best;
+}
+
+// Squared distance between two axis-aligned boxes (0 when they overlap).
+inline double gap(double a, double b) { return std::max(std::max(a, b), 0.0); }
+inline double boxes_d2(V3 alo, V3 ahi, V3 blo, V3 bhi) {
+    const double dx = gap(blo.x - ahi.x, alo.x - bhi.x), dy = gap(blo.y - ahi.y, alo.y - bhi.y), dz = gap(blo.z - ahi.z, alo.z - bhi.z);
+    return dx * dx + dy * dy + dz * dz;
+}
+inline double point_box_d2(V3 p, V3 lo, V3 hi) {
+    const double dx = gap(lo.x - p.x, p.x - hi.x), dy = gap(lo.y - p.y, p.y - hi.y), dz = gap(lo.z - p.z, p.z - hi.z);
+    return dx * dx + dy * dy + dz * dz;
+}
+
+
+// The candidates of a run of samples (points of one grid cell, box [lo, hi], all within `spread`
+// of `centre`). For each sample p, d(p) <= d(centre) + spread (the distance to a surface is
+// 1-Lipschitz), and p's nearest triangle t has box distance to the run's box <= d(p); so the
+// triangles whose boxes lie within d(centre) + spread of the run's box contain every sample's
+// nearest. One descent of CGAL's tree, nearer child (to the centre) first, finds d(centre) and
+// those triangles together: the bound only shrinks while it runs, so what it collects is a
+// superset, filtered against the final bound at the end.
+struct Collect {
+    V3 lo, hi, centre;
+    double spread;
+    double nearest;     // d(centre) so far: an upper bound that shrinks to the exact value
+    uint32_t nearest_id;
+    const Mesh3& target;
+    std::vector<uint32_t>& out;
+    double reach2() const { return (nearest + spread) * (nearest + spread); }
+    void leaf(const Primitive& primitive) {
+        const uint32_t t = target.slot[target.index(primitive)];
+        const Flat& f = target.flat[t];
+        if (boxes_d2(lo, hi, f.lo, f.hi) > reach2()) return;
+        out.push_back(t);
+        if (point_box_d2(centre, f.lo, f.hi) < nearest * nearest) {
+            const double d = std::sqrt(distance2(f, centre));
+            if (d < nearest) nearest = d, nearest_id = t;
         }
-        if (primitives == 3) {
-            leaf(node.left_data());
-            if (box_d2(node.right_child().bbox(), query) < best_d2) visit(node.right_child(), 2);
-            return;
+    }
+    static V3 low(const CGAL::Bbox_3& b) { return {b.xmin(), b.ymin(), b.zmin()}; }
+    static V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
+    double key(const Node& node) const { return point_box_d2(centre, low(node.bbox()), high(node.bbox())); }
+    bool enter(const Node& node, double) const { return boxes_d2(lo, hi, low(node.bbox()), high(node.bbox())) <= reach2(); }
+};
+
+// Lower bounds of the squared distance from a point to each candidate of a run: the larger of
+// its squared distances to the candidate's box and plane, computed branch-free over separate
+// arrays padded to a multiple of four (padding: an empty box at infinite distance), four
+// candidates per instruction with AVX (checked at run time; a scalar loop otherwise). below()
+// keeps the candidates whose bound is under a given best: usually one or two of dozens.
+#if defined(__x86_64__) || defined(__i386__)
+__attribute__((target("avx"))) size_t below_avx(const double* column, size_t padded, V3 p, double best, uint32_t* hits) {
+    const double *lx = column, *ly = lx + padded, *lz = ly + padded, *hx = lz + padded, *hy = hx + padded, *hz = hy + padded, *nx = hz + padded,
+                 *ny = nx + padded, *nz = ny + padded, *off = nz + padded;
+    double* low = const_cast<double*>(off + padded);
+    const __m256d x = _mm256_set1_pd(p.x), y = _mm256_set1_pd(p.y), z = _mm256_set1_pd(p.z), zero = _mm256_setzero_pd(), limit = _mm256_set1_pd(best);
+    size_t count = 0;
+    for (size_t k = 0; k < padded; k += 4) {
+        const __m256d dx = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(lx + k), x), _mm256_sub_pd(x, _mm256_loadu_pd(hx + k))), zero);
+        const __m256d dy = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(ly + k), y), _mm256_sub_pd(y, _mm256_loadu_pd(hy + k))), zero);
+        const __m256d dz = _mm256_max_pd(_mm256_max_pd(_mm256_sub_pd(_mm256_loadu_pd(lz + k), z), _mm256_sub_pd(z, _mm256_loadu_pd(hz + k))), zero);
+        const __m256d above = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(nx + k), x), _mm256_mul_pd(_mm256_loadu_pd(ny + k), y)),
+                                            _mm256_add_pd(_mm256_mul_pd(_mm256_loadu_pd(nz + k), z), _mm256_loadu_pd(off + k)));
+        const __m256d box = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz));
+        const __m256d bound = _mm256_max_pd(box, _mm256_mul_pd(above, above));
+        _mm256_storeu_pd(low + k, bound);
+        for (int mask = _mm256_movemask_pd(_mm256_cmp_pd(bound, limit, _CMP_LT_OQ)); mask; mask &= mask - 1) hits[count++] = uint32_t(k) + uint32_t(__builtin_ctz(unsigned(mask)));
+    }
+    return count;
+}
+bool cpu_has_avx() {
+    static const bool has = __builtin_cpu_supports("avx");
+    return has;
+}
+#endif
+
+struct Bounds {
+    size_t m = 0, padded = 0;
+    std::vector<double> data;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off, low: `padded` each
+    std::vector<uint32_t> hits;
+    double* column(int c) { return data.data() + size_t(c) * padded; }
+    void fill(const Mesh3& target, const std::vector<uint32_t>& list) {
+        m = list.size();
+        padded = (m + 3) & ~size_t(3);
+        data.resize(11 * padded);
+        hits.resize(padded);
+        const double inf = std::numeric_limits<double>::infinity();
+        for (size_t k = 0; k < padded; ++k) {
+            const Flat* f = k < m ? &target.flat[list[k]] : nullptr;
+            column(0)[k] = f ? f->lo.x : inf, column(1)[k] = f ? f->lo.y : inf, column(2)[k] = f ? f->lo.z : inf;
+            column(3)[k] = f ? f->hi.x : -inf, column(4)[k] = f ? f->hi.y : -inf, column(5)[k] = f ? f->hi.z : -inf;
+            column(6)[k] = f ? f->normal.x : 0, column(7)[k] = f ? f->normal.y : 0, column(8)[k] = f ? f->normal.z : 0, column(9)[k] = f ? f->offset : 0;
         }
-        const size_t left = primitives / 2, right = primitives - left;
-        const double dl = box_d2(node.left_child().bbox(), query), dr = box_d2(node.right_child().bbox(), query);
-        if (dl <= dr) {
-            if (dl < best_d2) visit(node.left_child(), left);
-            if (dr < best_d2) visit(node.right_child(), right);
-        } else {
-            if (dr < best_d2) visit(node.right_child(), right);
-            if (dl < best_d2) visit(node.left_child(), left);
+    }
+    const double* low() { return column(10); }
+    // the candidates whose lower bound for p is under `best`, in hits[0, returned count)
+    size_t below(V3 p, double best) {
+#if defined(__x86_64__) || defined(__i386__)
+        if (cpu_has_avx()) return below_avx(data.data(), padded, p, best, hits.data());
+#endif
+        const double *lx = column(0), *ly = column(1), *lz = column(2), *hx = column(3), *hy = column(4), *hz = column(5), *nx = column(6),
+                     *ny = column(7), *nz = column(8), *off = column(9);
+        double* low = column(10);
+        size_t count = 0;
+        for (size_t k = 0; k < padded; ++k) {
+            const double dx = std::max({lx[k] - p.x, p.x - hx[k], 0.0}), dy = std::max({ly[k] - p.y, p.y - hy[k], 0.0}), dz = std::max({lz[k] - p.z, p.z - hz[k], 0.0});
+            const double above = nx[k] * p.x + ny[k] * p.y + nz[k] * p.z + off[k];
+            low[k] = std::max(dx * dx + dy * dy + dz * dz, above * above);
+            if (low[k] < best) hits[count++] = uint32_t(k);
         }
+        return count;
     }
 };
 
-// The closest triangle of `target` to p, its squared distance `d2` and (when asked) the closest
-// point on it; `previous` (the previous sample's triangle, near in sample order) bounds the
-// search from the start.
-TriangleIterator closest(const Mesh3& target, const Point& p, TriangleIterator previous, double& d2, V3* point = nullptr) {
-    Nearest search;
-    search.query = v3(p);
-    search.first = target.triangles.begin();
-    search.planes = target.planes.data();
-    search.best_d2 = closest_on_triangle(search.query, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), search.best_point);
-    search.best = previous;
-    if (target.triangles.size() >= 2 && search.best_d2 > 0) search.visit(*target.tree.root_node(), target.triangles.size());
-    d2 = search.best_d2;
-    if (point) *point = search.best_point;
-    return search.best;
+// Nearest triangles for runs of Morton-sorted points that share a grid cell, exactly. One
+// descent (Collect) per run finds every triangle that can be the nearest of one of its points;
+// then each point computes a lower bound of its distance to every candidate (box or plane, in a
+// loop over flat arrays that vectorises) and the exact distance only where the bound is below the
+// best found, starting from the previous point's nearest.
+struct RunSearch {
+    const Mesh3& target;
+    const Point* points;
+    uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
+    std::vector<uint32_t> all, list;
+    Bounds bounds;
+    RunSearch(const Mesh3& t, const Point* p) : target(t), points(p) {}
+
+    // one descent of the tree for each point of [b, e)
+    template <class Emit>
+    void each(size_t b, size_t e, Emit& emit) {
+        for (size_t i = b; i < e; ++i) {
+            double d2;
+            hint = nearest(target, v3(points[i]), hint, d2);
+            emit(i, d2, hint);
+        }
+    }
+
+    // run() on each range of [begin, end) whose keys agree above bit `shift` (one grid cell)
+    template <class Emit>
+    void runs(const uint64_t* keys, size_t begin, size_t end, int shift, Emit& emit) {
+        for (size_t i = begin; i < end;) {
+            size_t j = i + 1;
+            while (j < end && (keys[j] >> shift) == (keys[i] >> shift)) ++j;
+            run(i, j, emit);
+            i = j;
+        }
+    }
+
+    template <class Emit>
+    void run(size_t b, size_t e, Emit& emit) {
+        if (e - b < 4 || target.flat.size() < 8) return each(b, e, emit);
+        V3 lo = v3(points[b]), hi = lo;
+        for (size_t i = b + 1; i < e; ++i) {
+            const V3 p = v3(points[i]);
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        }
+        const V3 centre = 0.5 * (lo + hi);
+        double spread2 = 0;
+        for (size_t i = b; i < e; ++i) spread2 = std::max(spread2, dot(v3(points[i]) - centre, v3(points[i]) - centre));
+        all.clear();
+        Collect collect{lo, hi, centre, std::sqrt(spread2), std::sqrt(distance2(target.flat[hint], centre)), hint, target, all};
+        descend(collect, *target.tree.root_node(), target.triangles.size());
+        const double bound = (collect.nearest + collect.spread) * (1.0 + 1e-9);  // widened against rounding
+        list.clear();
+        for (uint32_t t : all)
+            if (boxes_d2(lo, hi, target.flat[t].lo, target.flat[t].hi) <= bound * bound) list.push_back(t);
+        const size_t m = list.size();
+        // cannot be empty (the centre's nearest is within the bound); with many candidates, every
+        // point is far from a fine surface and its own descent is cheaper than the scan
+        if (m == 0 || m > 1024) return each(b, e, emit);
+        bounds.fill(target, list);
+        size_t last = 0;
+        for (size_t k = 0; k < m; ++k)
+            if (list[k] == collect.nearest_id) last = k;
+        for (size_t i = b; i < e; ++i) {
+            const V3 p = v3(points[i]);
+            const size_t from = last;
+            double best = distance2(target.flat[list[from]], p);
+            const size_t count = bounds.below(p, best);
+            const double* low = bounds.low();
+            for (size_t h = 0; h < count; ++h) {
+                const uint32_t k = bounds.hits[h];
+                if (low[k] >= best || k == from) continue;
+                const double d2 = distance2(target.flat[list[k]], p);
+                if (d2 < best) best = d2, last = k;
+            }
+            emit(i, best, list[last]);
+        }
+        hint = list[last];
+    }
+};
+
+// Calls search.run on each run of samples of [begin, end) that share a grid cell. The grid is a
+// level of the samples' Morton octree: cells of about kCellSamples samples, but not wider than
+// kCellTriangles target triangles (where samples are sparse, a cell's candidates would be many).
+constexpr double kCellSamples = 128.0, kCellTriangles = 2.5;
+
+int cell_shift(const Samples& samples, const Mesh3& target) {
+    if (samples.points.empty() || !(samples.extent > 0)) return 63;
+    const double want = std::min(std::sqrt(kCellSamples * samples.area / double(samples.points.size())), kCellTriangles * target.scale);
+    const double level = std::round(std::log2(want * double(1u << kMortonBits) / samples.extent));
+    return 3 * int(std::max(0.0, std::min(double(kMortonBits), level)));
 }
 
 OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads) {
     const size_t n = samples.points.size();
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
+    const int shift = cell_shift(samples, target);
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
         Partial& r = partial[c];
-        TriangleIterator previous = target.triangles.begin();
-        for (size_t i = begin; i < end; ++i) {
-            double d2;
-            previous = closest(target, samples.points[i], previous, d2);
+        RunSearch search(target, samples.points.data());
+        auto emit = [&r](size_t, double d2, uint32_t) {
             const double d = std::sqrt(d2);
             r.max = std::max(r.max, d);
             r.sum += d;
             r.sum_squares += d2;
-        }
+        };
+        search.runs(samples.keys.data(), begin, end, shift, emit);
     });
     OneSidedDistance out;
     double sum = 0, sum_squares = 0;
@@ -389,34 +758,35 @@ struct FaceSample {
     double u, v;  // weights of corners 1 and 2
 };
 
-std::vector<FaceSample> face_samples(const Surface& s, uint64_t target, uint64_t seed) {
-    std::vector<FaceSample> out;
+struct FaceSamples {
+    std::vector<FaceSample> samples;
+    Samples at;  // their points, in the same (Morton) order
+};
+
+FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed) {
+    FaceSamples out;
     const double area = surface_area(s);
     if (!(area > 0)) return out;
+    std::vector<FaceSample> made;
     Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
     for (size_t t = 0; t < s.triangle_count; ++t) {
-        const double expected = double(target) * triangle_area(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2])) / area;
+        const Point a = point(s, s.indices[3 * t]), b = point(s, s.indices[3 * t + 1]), c = point(s, s.indices[3 * t + 2]);
+        const double expected = double(target) * triangle_area(a, b, c) / area;
         for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
             double u = rng.uniform(), v = rng.uniform();
             if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
-            out.push_back({uint32_t(t), u, v});
+            made.push_back({uint32_t(t), u, v});
+            out.at.points.push_back(a + u * (b - a) + v * (c - a));
         }
     }
+    out.at.area = area;
+    out.at.face = made.size();
+    MortonScratch scratch;
+    std::vector<uint32_t> permutation;
+    order_morton(out.at.points, out.at.keys, out.at.extent, scratch, &permutation);
+    out.samples.reserve(made.size());
+    for (uint32_t i : permutation) out.samples.push_back(made[i]);
     return out;
-}
-
-// Barycentric weights of q (in the triangle's plane) in triangle (a, b, c).
-void barycentric(V3 q, V3 a, V3 b, V3 c, double w[3]) {
-    const V3 e0 = b - a, e1 = c - a, e2 = q - a;
-    const double d00 = dot(e0, e0), d01 = dot(e0, e1), d11 = dot(e1, e1), d20 = dot(e2, e0), d21 = dot(e2, e1);
-    const double den = d00 * d11 - d01 * d01;
-    if (!(std::fabs(den) > 0)) {
-        w[0] = 1, w[1] = w[2] = 0;
-        return;
-    }
-    w[1] = (d11 * d20 - d01 * d21) / den;
-    w[2] = (d00 * d21 - d01 * d20) / den;
-    w[0] = 1.0 - w[1] - w[2];
 }
 
 // An attribute of `width` floats interpolated in face t of s with weights w.
@@ -432,29 +802,27 @@ struct AttributePartial {
     uint64_t normal_n = 0, uv_n = 0;
 };
 
-AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttributes& oa, const std::vector<FaceSample>& samples,
+AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttributes& oa, const FaceSamples& face_samples,
                                       const Surface& simplified, const SurfaceAttributes& sa, const Mesh3& target, unsigned threads) {
     AttributeDeviation out;
     out.normals = oa.normals && sa.normals;
     out.texcoords = oa.texcoords && sa.texcoords;
     if (!out.normals && !out.texcoords) return out;
+    const std::vector<FaceSample>& samples = face_samples.samples;
     std::vector<AttributePartial> partial((samples.size() + kChunk - 1) / kChunk);
     constexpr double degrees = 180.0 / 3.14159265358979323846;
+    const int shift = cell_shift(face_samples.at, target);
     parallel_chunks(samples.size(), threads, [&](size_t c, size_t begin, size_t end) {
         AttributePartial& r = partial[c];
-        TriangleIterator previous = target.triangles.begin();
-        for (size_t i = begin; i < end; ++i) {
+        RunSearch search(target, face_samples.at.points.data());
+        auto emit = [&](size_t i, double d2, uint32_t slot) {
             const FaceSample& fs = samples[i];
             const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
-            const Point a = point(original, original.indices[3 * size_t(fs.face)]), b = point(original, original.indices[3 * size_t(fs.face) + 1]),
-                        cc = point(original, original.indices[3 * size_t(fs.face) + 2]);
-            const Point p = a + fs.u * (b - a) + fs.v * (cc - a);
-            double d2;
-            V3 q;
-            previous = closest(target, p, previous, d2, &q);
-            const size_t t = size_t(previous - target.triangles.begin());
+            const Point& p = face_samples.at.points[i];
+            const Flat& nearest = target.flat[slot];
+            const size_t t = target.triangle_of[slot];
             double ws[3];
-            barycentric(q, v3((*previous)[0]), v3((*previous)[1]), v3((*previous)[2]), ws);
+            nearest_point(nearest, v3(p), ws);
             if (out.normals) {
                 double n0[3], n1[3];
                 interpolate(original, oa.normals, 3, fs.face, wo, n0);
@@ -479,27 +847,27 @@ AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttr
                 interpolate(simplified, sa.texcoords, 2, t, ws, t1);
                 double d = std::hypot(t0[0] - t1[0], t0[1] - t1[1]);
                 if (d > jump) {
-                    const Triangle& nearest = *previous;
-                    double reach2 = 0;
-                    for (int k = 0; k < 3; ++k) reach2 = std::max(reach2, CGAL::squared_distance(nearest[k], nearest[(k + 1) % 3]));
+                    const V3 e2 = nearest.e1 - nearest.e0;
+                    const double reach2 = std::max({nearest.d00, nearest.d11, dot(e2, e2)});
                     const double radius = std::sqrt(d2) + std::sqrt(reach2);
                     double best_d2 = INFINITY;
-                    auto consider = [&](TriangleIterator it, V3 at) {
+                    auto consider = [&](uint32_t record) {
                         double w[3], tc[2];
-                        barycentric(at, v3((*it)[0]), v3((*it)[1]), v3((*it)[2]), w);
-                        interpolate(simplified, sa.texcoords, 2, size_t(it - target.triangles.begin()), w, tc);
+                        const V3 at = nearest_point(target.flat[record], v3(p), w);
+                        interpolate(simplified, sa.texcoords, 2, target.triangle_of[record], w, tc);
                         const double du = std::hypot(t0[0] - tc[0], t0[1] - tc[1]);
                         const V3 off = at - v3(p);
                         if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
                     };
-                    WithinTraits<decltype(consider)> within{v3(p), radius * radius, consider};
+                    WithinTraits<decltype(consider)> within{v3(p), radius * radius, target, consider};
                     target.tree.traversal(p, within);
                 }
                 r.uv_sum += d;
                 r.uv_max = std::max(r.uv_max, d);
                 ++r.uv_n;
             }
-        }
+        };
+        search.runs(face_samples.at.keys.data(), begin, end, shift, emit);
     });
     double normal_sum = 0, uv_sum = 0;
     uint64_t normal_n = 0, uv_n = 0;
@@ -522,12 +890,15 @@ struct MetroReference::Impl {
     SurfaceAttributes attributes;
     Mesh3 mesh;
     mutable std::vector<std::pair<uint64_t, Samples>> samples;  // by target count
-    mutable std::vector<FaceSample> attribute_samples;          // made on first use
+    mutable FaceSamples attribute_samples;                       // made on first use
+    mutable Samples backward;                                    // the simplified side's, buffers reused
+    mutable MortonScratch scratch;
     Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s) {}
     const Samples& samples_for(uint64_t target) const {
         for (const auto& [t, smp] : samples)
             if (t == target) return smp;
-        samples.emplace_back(target, sample_surface(original, target, params));
+        samples.emplace_back(target, Samples{});
+        sample_surface(original, target, params, samples.back().second, scratch);
         return samples.back().second;
     }
 };
@@ -550,7 +921,7 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
     const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
     const Mesh3 other(simplified);
     if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
-        if (impl_->attribute_samples.empty())
+        if (impl_->attribute_samples.samples.empty())
             impl_->attribute_samples = face_samples(impl_->original, uint64_t(std::llround(impl_->params.attribute_samples_per_face * double(impl_->original.triangle_count))),
                                                     impl_->params.seed);
         deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples, simplified, attributes, other, impl_->params.threads);
@@ -558,11 +929,32 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
         deviation = AttributeDeviation{};
     }
     Distance d;
-    d.forward = measure(impl_->samples_for(target), other, impl_->params.threads);
-    d.backward = measure(sample_surface(simplified, target, impl_->params), impl_->mesh, impl_->params.threads);
+    const Samples& fs = impl_->samples_for(target);
+    d.forward = measure(fs, other, impl_->params.threads);
+    Samples& bs = impl_->backward;
+    sample_surface(simplified, target, impl_->params, bs, impl_->scratch);
+    d.backward = measure(bs, impl_->mesh, impl_->params.threads);
     d.hausdorff = std::max(d.forward.max, d.backward.max);
     d.diagonal = enlarged_union_diagonal(impl_->original, simplified);
     return d;
+}
+
+void nearest_squared_distances(const Surface& target, const double* points, size_t count, double* squared_distances, unsigned threads) {
+    validate(target, "target");
+    const Mesh3 mesh(target);
+    Samples s;
+    s.points.reserve(count);
+    for (size_t i = 0; i < count; ++i) s.points.emplace_back(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+    s.area = surface_area(target);  // the density of points on (or near) the target decides the cells
+    MortonScratch scratch;
+    std::vector<uint32_t> order;
+    order_morton(s.points, s.keys, s.extent, scratch, &order);
+    const int shift = cell_shift(s, mesh);
+    parallel_chunks(count, threads, [&](size_t, size_t begin, size_t end) {
+        RunSearch search(mesh, s.points.data());
+        auto emit = [&](size_t i, double d2, uint32_t) { squared_distances[order[i]] = d2; };
+        search.runs(s.keys.data(), begin, end, shift, emit);
+    });
 }
 
 Distance metro_distance(const Surface& original, const Surface& simplified, const DistanceParams& params) {
