@@ -1,0 +1,206 @@
+// Sample points of the Metro-style distance: vertices, edges, stratified faces, Morton order.
+
+#include "samples.h"
+
+#include <cmath>
+
+namespace tom::detail {
+
+namespace {
+
+// splitmix64: a small, portable generator, so samples are the same on every platform
+struct Random {
+    uint64_t state;
+    uint64_t next() {
+        uint64_t z = (state += 0x9E3779B97F4A7C15ULL);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+        return z ^ (z >> 31);
+    }
+    double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }
+};
+
+// The 16 low bits of x spread to every third bit.
+inline uint64_t spread_bits(uint64_t x) {
+    x &= 0xFFFF;
+    x = (x | x << 16) & 0x0000FF0000FFULL;
+    x = (x | x << 8) & 0x00F00F00F00FULL;
+    x = (x | x << 4) & 0x0C30C30C30C3ULL;
+    x = (x | x << 2) & 0x249249249249ULL;
+    return x;
+}
+
+// Sorts (key, index) pairs by key (keys below 2^48), equal keys in index order (as std::sort of
+// the pairs would order them): least-significant-digit radix sort, 12 bits a pass, passes where
+// every key has the same digit skipped.
+void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<std::pair<uint64_t, uint32_t>>& other) {
+    constexpr int kDigits = 4, kBuckets = 1 << 12;
+    const size_t n = items.size();
+    other.resize(n);
+    std::vector<size_t> counts(size_t(kDigits) * kBuckets, 0);
+    for (const auto& item : items)
+        for (int d = 0; d < kDigits; ++d) ++counts[size_t(d) * kBuckets + ((item.first >> (12 * d)) & (kBuckets - 1))];
+    for (int d = 0; d < kDigits; ++d) {
+        size_t* count = &counts[size_t(d) * kBuckets];
+        if (std::find(count, count + kBuckets, n) != count + kBuckets) continue;  // one digit for all
+        size_t sum = 0;
+        for (int b = 0; b < kBuckets; ++b) sum += std::exchange(count[b], sum);
+        for (const auto& item : items) other[count[(item.first >> (12 * d)) & (kBuckets - 1)]++] = item;
+        items.swap(other);
+    }
+}
+
+} // namespace
+
+double triangle_area(V3 a, V3 b, V3 c) {
+    return 0.5 * length(cross(b - a, c - a));
+}
+
+double surface_area(const Surface& s) {
+    double area = 0;
+    for (size_t t = 0; t < s.triangle_count; ++t)
+        area += triangle_area(vertex(s, s.indices[3 * t]), vertex(s, s.indices[3 * t + 1]), vertex(s, s.indices[3 * t + 2]));
+    return area;
+}
+
+// Vertices first, then points along the edges, then area-uniform random points on the faces,
+// about `target` in all (Metro's order and budget).
+
+void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, std::vector<uint32_t>* permutation) {
+    const size_t n = points.size();
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (V3 p : points)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], at(p, k)), hi[k] = std::max(hi[k], at(p, k));
+    extent = n ? std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) : 0.0;
+    const double scale = extent > 0 ? double((1u << kMortonBits) - 1) / extent : 0.0;
+    std::vector<std::pair<uint64_t, uint32_t>>& keyed = scratch.keyed;
+    keyed.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+        uint64_t key = 0;
+        for (int k = 0; k < 3; ++k) key |= spread_bits(uint64_t((at(points[i], k) - lo[k]) * scale)) << (2 - k);
+        keyed[i] = {key, uint32_t(i)};
+    }
+    radix_sort(keyed, scratch.other);
+    std::vector<V3>& sorted = scratch.sorted;
+    sorted.resize(n);
+    keys.resize(n);
+    for (size_t i = 0; i < n; ++i) sorted[i] = points[keyed[i].second], keys[i] = keyed[i].first;
+    if (permutation) {
+        permutation->resize(n);
+        for (size_t i = 0; i < n; ++i) (*permutation)[i] = keyed[i].second;
+    }
+    points.swap(sorted);
+}
+
+void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch) {
+    out.points.clear();
+    out.vertex = out.edge = out.face = 0;
+    out.area = surface_area(s);
+    out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
+    const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
+    if (p.vertex_samples) {
+        std::vector<uint8_t> used(s.vertex_count, 0);
+        for (size_t i = 0; i < s.triangle_count * 3; ++i) used[s.indices[i]] = 1;
+        for (uint32_t v = 0; v < s.vertex_count; ++v)
+            if (used[v]) out.points.push_back(vertex(s, v));
+        out.vertex = out.points.size();
+    }
+    if (p.edge_samples && per_area > 0) {
+        std::vector<std::pair<uint32_t, uint32_t>> edges;
+        edges.reserve(s.triangle_count * 3);
+        for (size_t t = 0; t < s.triangle_count; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
+                edges.push_back({std::min(a, b), std::max(a, b)});
+            }
+        std::sort(edges.begin(), edges.end());
+        edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+        const double per_length = std::sqrt(per_area);
+        for (const auto& [a, b] : edges) {
+            const V3 pa = vertex(s, a), pb = vertex(s, b);
+            const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
+            for (int i = 1; i <= n; ++i) {
+                const double t = double(i) / double(n + 1);
+                out.points.push_back(pa + t * (pb - pa));
+            }
+        }
+        out.edge = out.points.size() - out.vertex;
+    }
+    const double remaining = double(target) - double(out.points.size());
+    if (p.face_samples && remaining > 0 && out.area > 0) {
+        // each face gets its expected share, the fraction rounded at random: area-uniform overall
+        Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
+        std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
+        for (size_t t = 0; t < s.triangle_count; ++t) {
+            const double expected = remaining * triangle_area(vertex(s, s.indices[3 * t]), vertex(s, s.indices[3 * t + 1]), vertex(s, s.indices[3 * t + 2])) / out.area;
+            first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
+        }
+        const size_t base = out.points.size();
+        out.points.resize(base + first.back());
+        // faces in parallel, each with its own generator: the same points whatever the threads
+        parallel_chunks(first.back(), p.threads, [&](size_t, size_t begin, size_t end) {
+            // the faces whose first sample falls in [begin, end)
+            const size_t t0 = size_t(std::lower_bound(first.begin(), first.end() - 1, begin) - first.begin());
+            const size_t t1 = size_t(std::lower_bound(first.begin(), first.end() - 1, end) - first.begin());
+            for (size_t t = t0; t < t1; ++t) {
+                const uint64_t n = first[t + 1] - first[t];
+                if (n == 0) continue;
+                Random rng{(p.seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
+                V3* at = out.points.data() + base + first[t];
+                const V3 a = vertex(s, s.indices[3 * t]), b = vertex(s, s.indices[3 * t + 1]), c = vertex(s, s.indices[3 * t + 2]);
+                // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
+                // triangles, one random point in each, visited row by row in serpentine order so
+                // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face
+                const uint64_t m = uint64_t(std::sqrt(double(n)));
+                auto random_in = [&](V3 p0, V3 p1, V3 p2) {
+                    double u = rng.uniform(), v = rng.uniform();
+                    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+                    *at++ = p0 + u * (p1 - p0) + v * (p2 - p0);
+                };
+                auto grid = [&](uint64_t i, uint64_t j) { return a + (double(i) / double(m)) * (b - a) + (double(j) / double(m)) * (c - a); };
+                for (uint64_t i = 0; i < m; ++i) {
+                    const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
+                    for (uint64_t k = 0; k < cells; ++k) {
+                        const uint64_t cell = (i % 2 == 0) ? k : cells - 1 - k;
+                        const uint64_t j = cell / 2;
+                        if (cell % 2 == 0)
+                            random_in(grid(i, j), grid(i + 1, j), grid(i, j + 1));
+                        else
+                            random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
+                    }
+                }
+                for (uint64_t i = m * m; i < n; ++i) random_in(a, b, c);
+            }
+        });
+        out.face = out.points.size() - out.vertex - out.edge;
+    }
+    order_morton(out.points, out.keys, out.extent, scratch);
+}
+
+FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed) {
+    FaceSamples out;
+    const double area = surface_area(s);
+    if (!(area > 0)) return out;
+    std::vector<FaceSample> made;
+    Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
+    for (size_t t = 0; t < s.triangle_count; ++t) {
+        const V3 a = vertex(s, s.indices[3 * t]), b = vertex(s, s.indices[3 * t + 1]), c = vertex(s, s.indices[3 * t + 2]);
+        const double expected = double(target) * triangle_area(a, b, c) / area;
+        for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
+            double u = rng.uniform(), v = rng.uniform();
+            if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+            made.push_back({uint32_t(t), u, v});
+            out.at.points.push_back(a + u * (b - a) + v * (c - a));
+        }
+    }
+    out.at.area = area;
+    out.at.face = made.size();
+    MortonScratch scratch;
+    std::vector<uint32_t> permutation;
+    order_morton(out.at.points, out.at.keys, out.at.extent, scratch, &permutation);
+    out.samples.reserve(made.size());
+    for (uint32_t i : permutation) out.samples.push_back(made[i]);
+    return out;
+}
+
+} // namespace tom::detail

@@ -1,0 +1,88 @@
+#pragma once
+// The sample points of the Metro-style distance (metrics/distance_cgal.cpp): every vertex, points
+// along every edge, stratified area-uniform points on the faces, sorted in Morton order; and the
+// face samples of the attribute deviation. Internal to tom::metrics.
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "geometry.h"
+#include "tom/metrics.h"
+
+namespace tom::detail {
+
+constexpr size_t kChunk = 4096;
+
+// Runs work(chunk, begin, end) over [0, n) in chunks of kChunk on up to `threads` threads (0: every
+// core); results kept per chunk and combined in chunk order give the same figures for any count.
+template <class Work>
+size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    std::atomic<size_t> next{0};
+    auto run = [&] {
+        for (size_t c; (c = next++) < chunks;) work(c, c * kChunk, std::min(n, c * kChunk + kChunk));
+    };
+    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    threads = unsigned(std::min<size_t>(threads, std::max<size_t>(1, chunks)));
+    std::vector<std::thread> pool;
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(run);
+    run();
+    for (std::thread& t : pool) t.join();
+    return chunks;
+}
+
+inline V3 vertex(const Surface& s, uint32_t v) {
+    return {s.positions[3 * size_t(v)], s.positions[3 * size_t(v) + 1], s.positions[3 * size_t(v) + 2]};
+}
+inline double at(V3 p, int axis) { return axis == 0 ? p.x : (axis == 1 ? p.y : p.z); }
+
+double triangle_area(V3 a, V3 b, V3 c);
+double surface_area(const Surface& s);
+
+struct Samples {
+    std::vector<V3> points;
+    std::vector<uint64_t> keys;  // per point: its Morton code; points are sorted by it
+    double extent = 0;           // the side of the Morton grid's cube
+    uint64_t vertex = 0, edge = 0, face = 0;
+    double area = 0;
+};
+
+// Morton codes of a 2^16-per-axis grid: 48-bit keys.
+constexpr int kMortonBits = 16;
+
+// Buffers order_morton() reuses from call to call (fresh ones of this size cost more in page
+// faults than the sort itself).
+struct MortonScratch {
+    std::vector<std::pair<uint64_t, uint32_t>> keyed, other;
+    std::vector<V3> sorted;
+};
+
+// Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube, so that the
+// points of every octree cell are a contiguous range (measure() groups them by cell); keys get
+// each point's code, extent the cube's side; `permutation`, when given, the order applied (new
+// position -> old). Deterministic.
+void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, std::vector<uint32_t>* permutation = nullptr);
+
+// Fills `out` (its buffers reused) with about `target` samples of s.
+void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch);
+
+// Attribute samples: area-uniform random points of the faces, kept as (face, barycentrics) so
+// the original's attributes can be interpolated there.
+struct FaceSample {
+    uint32_t face;
+    double u, v;  // weights of corners 1 and 2
+};
+
+struct FaceSamples {
+    std::vector<FaceSample> samples;
+    Samples at;  // their points, in the same (Morton) order
+};
+
+FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed);
+
+} // namespace tom::detail
