@@ -509,7 +509,7 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
     if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
         if (impl_->attribute_samples.samples.empty())
             impl_->attribute_samples = face_samples(impl_->original, uint64_t(std::llround(impl_->params.attribute_samples_per_face * double(impl_->original.triangle_count))),
-                                                    impl_->params.seed);
+                                                    impl_->params.seed, impl_->params.threads);
         deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples, simplified, attributes, other, impl_->params.threads);
     } else {
         deviation = AttributeDeviation{};
@@ -534,7 +534,7 @@ void nearest_squared_distances(const Surface& target, const double* points, size
     s.area = surface_area(target);  // the density of points on (or near) the target decides the cells
     MortonScratch scratch;
     std::vector<uint32_t> order;
-    order_morton(s.points, s.keys, s.extent, scratch, &order);
+    order_morton(s.points, s.keys, s.extent, scratch, threads, &order);
     const int shift = cell_shift(s, mesh);
     parallel_chunks(count, threads, [&](size_t, size_t begin, size_t end) {
         RunSearch search(mesh, s.points.data());

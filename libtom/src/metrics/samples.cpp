@@ -66,25 +66,31 @@ double surface_area(const Surface& s) {
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
 
-void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, std::vector<uint32_t>* permutation) {
+void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
+                  std::vector<uint32_t>* permutation) {
     const size_t n = points.size();
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (V3 p : points)
-        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], at(p, k)), hi[k] = std::max(hi[k], at(p, k));
-    extent = n ? std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) : 0.0;
+    V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (V3 p : points) {
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    extent = n ? std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) : 0.0;
     const double scale = extent > 0 ? double((1u << kMortonBits) - 1) / extent : 0.0;
     std::vector<std::pair<uint64_t, uint32_t>>& keyed = scratch.keyed;
     keyed.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-        uint64_t key = 0;
-        for (int k = 0; k < 3; ++k) key |= spread_bits(uint64_t((at(points[i], k) - lo[k]) * scale)) << (2 - k);
-        keyed[i] = {key, uint32_t(i)};
-    }
+    parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            const V3 q = scale * (points[i] - lo);
+            keyed[i] = {spread_bits(uint64_t(q.x)) << 2 | spread_bits(uint64_t(q.y)) << 1 | spread_bits(uint64_t(q.z)), uint32_t(i)};
+        }
+    });
     radix_sort(keyed, scratch.other);
     std::vector<V3>& sorted = scratch.sorted;
     sorted.resize(n);
     keys.resize(n);
-    for (size_t i = 0; i < n; ++i) sorted[i] = points[keyed[i].second], keys[i] = keyed[i].first;
+    parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) sorted[i] = points[keyed[i].second], keys[i] = keyed[i].first;
+    });
     if (permutation) {
         permutation->resize(n);
         for (size_t i = 0; i < n; ++i) (*permutation)[i] = keyed[i].second;
@@ -174,10 +180,10 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         });
         out.face = out.points.size() - out.vertex - out.edge;
     }
-    order_morton(out.points, out.keys, out.extent, scratch);
+    order_morton(out.points, out.keys, out.extent, scratch, p.threads);
 }
 
-FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed) {
+FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsigned threads) {
     FaceSamples out;
     const double area = surface_area(s);
     if (!(area > 0)) return out;
@@ -197,7 +203,7 @@ FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed) {
     out.at.face = made.size();
     MortonScratch scratch;
     std::vector<uint32_t> permutation;
-    order_morton(out.at.points, out.at.keys, out.at.extent, scratch, &permutation);
+    order_morton(out.at.points, out.at.keys, out.at.extent, scratch, threads, &permutation);
     out.samples.reserve(made.size());
     for (uint32_t i : permutation) out.samples.push_back(made[i]);
     return out;

@@ -65,8 +65,9 @@ struct MortonScratch {
 // Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube, so that the
 // points of every octree cell are a contiguous range (measure() groups them by cell); keys get
 // each point's code, extent the cube's side; `permutation`, when given, the order applied (new
-// position -> old). Deterministic.
-void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, std::vector<uint32_t>* permutation = nullptr);
+// position -> old). Deterministic; `threads` as parallel_chunks.
+void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
+                  std::vector<uint32_t>* permutation = nullptr);
 
 // Fills `out` (its buffers reused) with about `target` samples of s.
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch);
@@ -83,6 +84,6 @@ struct FaceSamples {
     Samples at;  // their points, in the same (Morton) order
 };
 
-FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed);
+FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsigned threads);
 
 } // namespace tom::detail
