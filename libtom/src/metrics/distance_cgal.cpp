@@ -139,11 +139,7 @@ private:
 };
 
 // Squared distance from p to an axis-aligned box (0 inside).
-inline double axis_gap(double lo, double hi, double x) { return x < lo ? lo - x : (x > hi ? x - hi : 0.0); }
-inline double box_d2(const CGAL::Bbox_3& b, V3 p) {
-    const double dx = axis_gap(b.xmin(), b.xmax(), p.x), dy = axis_gap(b.ymin(), b.ymax(), p.y), dz = axis_gap(b.zmin(), b.zmax(), p.z);
-    return dx * dx + dy * dy + dz * dz;
-}
+inline double box_d2(const CGAL::Bbox_3& b, V3 p) { return point_box_d2(p, {b.xmin(), b.ymin(), b.zmin()}, {b.xmax(), b.ymax(), b.zmax()}); }
 
 struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
