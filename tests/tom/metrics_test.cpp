@@ -211,6 +211,27 @@ TEST_CASE("nearest distances equal a brute-force search, on, near and far from r
     }
 }
 
+TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {
+    // the triangle (0,0,0) (1,0,0) (0,1,0), and a collinear one along x from 2 to 4
+    const float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0, 3, 0, 0, 4, 0, 0};
+    const uint32_t one[] = {0, 1, 2}, flat[] = {3, 4, 5};
+    const double points[] = {0.25, 0.25, 2.0,    // above the face: its height
+                             -1.0, -1.0, 0.0,    // beyond corner a: to (0,0,0)
+                             0.5, -3.0, 4.0,     // beside edge ab: to (0.5,0,0)
+                             2.0, 2.0, 0.0};     // beyond edge bc: to (0.5,0.5,0)
+    double d2[4];
+    tom::nearest_squared_distances({positions, 6, one, 1}, points, 4, d2);
+    CHECK(d2[0] == Approx(4.0));
+    CHECK(d2[1] == Approx(2.0));
+    CHECK(d2[2] == Approx(25.0));
+    CHECK(d2[3] == Approx(4.5));
+    tom::nearest_squared_distances({positions, 6, flat, 1}, points, 4, d2);  // a segment from (2,0,0) to (4,0,0)
+    CHECK(d2[0] == Approx(1.75 * 1.75 + 0.25 * 0.25 + 4.0));
+    CHECK(d2[3] == Approx(4.0));
+    tom::nearest_squared_distances({positions, 6, one, 1}, points, 0, d2);  // nothing to do, nothing written
+    CHECK_THROWS_AS(tom::nearest_squared_distances({positions, 6, one, 0}, points, 4, d2), std::invalid_argument);
+}
+
 TEST_CASE("the k/N fit recovers k from synthetic k/N data", "[metrics][fit]") {
     std::mt19937 rng(3);
     std::normal_distribution<double> noise(0.0, 0.05);
