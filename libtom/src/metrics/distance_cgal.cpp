@@ -259,7 +259,9 @@ struct RunSearch {
 
     template <class Emit>
     void run(size_t b, size_t e, Emit& emit) {
-        if (e - b < 4 || target.flat.size() < 8) return each(b, e, emit);
+        // a few points (sparse samples): a descent each costs less than gathering candidates
+        // (measured on bunny00's error curve: 3.50G instructions with 4, 3.39G with 8 or 16)
+        if (e - b < 8 || target.flat.size() < 8) return each(b, e, emit);
         V3 lo = points[b], hi = lo;
         for (size_t i = b + 1; i < e; ++i) {
             const V3 p = points[i];
