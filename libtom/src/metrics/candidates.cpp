@@ -11,10 +11,10 @@ namespace tom::detail {
 namespace {
 
 #if defined(__x86_64__) || defined(__i386__)
-__attribute__((target("avx"))) size_t below_avx(const double* column, size_t padded, V3 p, double best, uint32_t* hits) {
+__attribute__((target("avx"))) size_t below_avx(double* column, size_t padded, V3 p, double best, uint32_t* hits) {
     const double *lx = column, *ly = lx + padded, *lz = ly + padded, *hx = lz + padded, *hy = hx + padded, *hz = hy + padded, *nx = hz + padded,
                  *ny = nx + padded, *nz = ny + padded, *off = nz + padded;
-    double* low = const_cast<double*>(off + padded);
+    double* low = column + 10 * padded;
     const __m256d x = _mm256_set1_pd(p.x), y = _mm256_set1_pd(p.y), z = _mm256_set1_pd(p.z), zero = _mm256_setzero_pd(), limit = _mm256_set1_pd(best);
     size_t count = 0;
     for (size_t k = 0; k < padded; k += 4) {
@@ -47,9 +47,8 @@ size_t CandidateBounds::below(V3 p, double best) {
     double* low = column(10);
     size_t count = 0;
     for (size_t k = 0; k < padded; ++k) {
-        const double dx = std::max({lx[k] - p.x, p.x - hx[k], 0.0}), dy = std::max({ly[k] - p.y, p.y - hy[k], 0.0}), dz = std::max({lz[k] - p.z, p.z - hz[k], 0.0});
         const double above = nx[k] * p.x + ny[k] * p.y + nz[k] * p.z + off[k];
-        low[k] = std::max(dx * dx + dy * dy + dz * dz, above * above);
+        low[k] = std::max(point_box_d2(p, {lx[k], ly[k], lz[k]}, {hx[k], hy[k], hz[k]}), above * above);
         if (low[k] < best) hits[count++] = uint32_t(k);
     }
     return count;

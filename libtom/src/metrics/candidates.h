@@ -15,12 +15,12 @@
 namespace tom::detail {
 
 struct CandidateBounds {
-    size_t m = 0, padded = 0;
+    size_t padded = 0;  // the candidates, rounded up to a multiple of 4
     std::vector<double> data;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off, low: `padded` each
     std::vector<uint32_t> hits;
     double* column(int c) { return data.data() + size_t(c) * padded; }
     void fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list) {
-        m = list.size();
+        const size_t m = list.size();
         padded = (m + 3) & ~size_t(3);
         data.resize(11 * padded);
         hits.resize(padded);

@@ -59,9 +59,6 @@ void validate(const Surface& s, const char* which) {
             throw std::invalid_argument(std::string(which) + " surface: index " + std::to_string(s.indices[i]) + " out of range");
 }
 
-
-
-
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
 
 // A descent of CGAL's tree (its nodes, boxes and primitives): s.leaf(primitive) at the leaves;
@@ -92,7 +89,6 @@ void descend(Search& s, const Node& node, size_t primitives) {
     }
 }
 
-
 // A target mesh: its triangles for CGAL's tree, and the same triangles as Flat records in the
 // order of the tree's leaves (a descent reads neighbouring records, not scattered ones).
 struct Mesh3 {
@@ -114,9 +110,7 @@ struct Mesh3 {
             enumerate(*tree.root_node(), triangles.size());
         slot.resize(triangles.size());
         flat.reserve(triangles.size());
-        double area = 0;
-        for (const Triangle& t : triangles) area += std::sqrt(t.squared_area());
-        scale = std::sqrt(area / double(triangles.size()));
+        scale = std::sqrt(surface_area(s) / double(triangles.size()));
         for (uint32_t i = 0; i < triangle_of.size(); ++i) {
             slot[triangle_of[i]] = i;
             const Triangle& t = triangles[triangle_of[i]];
@@ -138,8 +132,10 @@ private:
     }
 };
 
-// Squared distance from p to an axis-aligned box (0 inside).
-inline double box_d2(const CGAL::Bbox_3& b, V3 p) { return point_box_d2(p, {b.xmin(), b.ymin(), b.zmin()}, {b.xmax(), b.ymax(), b.zmax()}); }
+// The corners of a CGAL box, and the squared distance from p to it (0 inside).
+inline V3 low(const CGAL::Bbox_3& b) { return {b.xmin(), b.ymin(), b.zmin()}; }
+inline V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
+inline double box_d2(const CGAL::Bbox_3& b, V3 p) { return point_box_d2(p, low(b), high(b)); }
 
 struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
@@ -191,7 +187,6 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2) {
     return search.best;
 }
 
-// Squared distance between two axis-aligned boxes (0 when they overlap).
 // The candidates of a run of samples (points of one grid cell, box [lo, hi], all within `spread`
 // of `centre`). For each sample p, d(p) <= d(centre) + spread (the distance to a surface is
 // 1-Lipschitz), and p's nearest triangle t has box distance to the run's box <= d(p); so the
@@ -217,17 +212,15 @@ struct Collect {
             if (d < nearest) nearest = d, nearest_id = t;
         }
     }
-    static V3 low(const CGAL::Bbox_3& b) { return {b.xmin(), b.ymin(), b.zmin()}; }
-    static V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
-    double key(const Node& node) const { return point_box_d2(centre, low(node.bbox()), high(node.bbox())); }
+    double key(const Node& node) const { return box_d2(node.bbox(), centre); }
     bool enter(const Node& node, double) const { return boxes_d2(lo, hi, low(node.bbox()), high(node.bbox())) <= reach2(); }
 };
 
 // Nearest triangles for runs of Morton-sorted points that share a grid cell, exactly. One
 // descent (Collect) per run finds every triangle that can be the nearest of one of its points;
-// then each point computes a lower bound of its distance to every candidate (box or plane, in a
-// loop over flat arrays that vectorises) and the exact distance only where the bound is below the
-// best found, starting from the previous point's nearest.
+// then each point computes a lower bound of its distance to every candidate (box or plane, four
+// at a time: candidates.h) and the exact distance only where the bound is below the best found,
+// starting from the previous point's nearest.
 struct RunSearch {
     const Mesh3& target;
     const V3* points;
@@ -304,8 +297,8 @@ struct RunSearch {
     }
 };
 
-// Calls search.run on each run of samples of [begin, end) that share a grid cell. The grid is a
-// level of the samples' Morton octree: cells of about kCellSamples samples, but not wider than
+// The grid whose cells group samples into runs (RunSearch::runs takes keys >> this shift): a
+// level of the samples' Morton octree, cells of about kCellSamples samples but not wider than
 // kCellTriangles target triangles (where samples are sparse, a cell's candidates would be many).
 constexpr double kCellSamples = 128.0, kCellTriangles = 2.5;
 

@@ -48,10 +48,11 @@ inline Flat make_flat(V3 a, V3 b, V3 c) {
     return f;
 }
 
+inline double clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
+
 // Squared distance from p to segment o + t e, t in [0, 1], given w = p - o, we = w.e, ie = 1/|e|^2.
 inline double segment_d2(V3 w, V3 e, double we, double ie) {
-    const double t = std::min(1.0, std::max(0.0, we * ie));
-    const V3 d = w - t * e;
+    const V3 d = w - clamp01(we * ie) * e;
     return dot(d, d);
 }
 
@@ -84,8 +85,7 @@ inline V3 nearest_point(const Flat& f, V3 p, double weights[3] = nullptr) {
     project(f, w0, w1, u, v);
     if (!(u >= 0 && v >= 0 && u + v <= 1)) {
         const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
-        const double t0 = std::min(1.0, std::max(0.0, w0 * f.i00)), t1 = std::min(1.0, std::max(0.0, w1 * f.i11)),
-                     t2 = std::min(1.0, std::max(0.0, dot(e2, wb) * f.i22));
+        const double t0 = clamp01(w0 * f.i00), t1 = clamp01(w1 * f.i11), t2 = clamp01(dot(e2, wb) * f.i22);
         const V3 q0 = t0 * f.e0, q1 = t1 * f.e1, q2 = f.e0 + t2 * e2;  // relative to a
         const double s0 = dot(w - q0, w - q0), s1 = dot(w - q1, w - q1), s2 = dot(w - q2, w - q2);
         if (s0 <= s1 && s0 <= s2)
@@ -99,14 +99,13 @@ inline V3 nearest_point(const Flat& f, V3 p, double weights[3] = nullptr) {
     return f.a + u * f.e0 + v * f.e1;
 }
 
+// Squared distance between the axis-aligned boxes [alo, ahi] and [blo, bhi] (0 when they
+// overlap), and from point p to the box [lo, hi]; branch-free.
 inline double gap(double a, double b) { return std::max(std::max(a, b), 0.0); }
 inline double boxes_d2(V3 alo, V3 ahi, V3 blo, V3 bhi) {
     const double dx = gap(blo.x - ahi.x, alo.x - bhi.x), dy = gap(blo.y - ahi.y, alo.y - bhi.y), dz = gap(blo.z - ahi.z, alo.z - bhi.z);
     return dx * dx + dy * dy + dz * dz;
 }
-inline double point_box_d2(V3 p, V3 lo, V3 hi) {
-    const double dx = gap(lo.x - p.x, p.x - hi.x), dy = gap(lo.y - p.y, p.y - hi.y), dz = gap(lo.z - p.z, p.z - hi.z);
-    return dx * dx + dy * dy + dz * dz;
-}
+inline double point_box_d2(V3 p, V3 lo, V3 hi) { return boxes_d2(p, p, lo, hi); }
 
 } // namespace tom::detail

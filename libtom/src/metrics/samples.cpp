@@ -18,6 +18,11 @@ struct Random {
         return z ^ (z >> 31);
     }
     double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }
+    // area-uniform weights (u, v) of the edges from a triangle's first corner
+    void in_triangle(double& u, double& v) {
+        u = uniform(), v = uniform();
+        if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+    }
 };
 
 // The 16 low bits of x spread to every third bit.
@@ -52,19 +57,16 @@ void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<s
 
 } // namespace
 
-double triangle_area(V3 a, V3 b, V3 c) {
-    return 0.5 * length(cross(b - a, c - a));
+double face_area(const Surface& s, size_t t) {
+    const V3 a = corner(s, t, 0);
+    return 0.5 * length(cross(corner(s, t, 1) - a, corner(s, t, 2) - a));
 }
 
 double surface_area(const Surface& s) {
     double area = 0;
-    for (size_t t = 0; t < s.triangle_count; ++t)
-        area += triangle_area(vertex(s, s.indices[3 * t]), vertex(s, s.indices[3 * t + 1]), vertex(s, s.indices[3 * t + 2]));
+    for (size_t t = 0; t < s.triangle_count; ++t) area += face_area(s, t);
     return area;
 }
-
-// Vertices first, then points along the edges, then area-uniform random points on the faces,
-// about `target` in all (Metro's order and budget).
 
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation) {
@@ -98,10 +100,14 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
     points.swap(sorted);
 }
 
+// Vertices first, then points along the edges, then area-uniform random points on the faces,
+// about `target` in all (Metro's order and budget).
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch) {
     out.points.clear();
     out.vertex = out.edge = out.face = 0;
-    out.area = surface_area(s);
+    std::vector<double> areas(s.triangle_count);
+    out.area = 0;
+    for (size_t t = 0; t < s.triangle_count; ++t) out.area += areas[t] = face_area(s, t);
     out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
     const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
     if (p.vertex_samples) {
@@ -138,7 +144,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
         std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
         for (size_t t = 0; t < s.triangle_count; ++t) {
-            const double expected = remaining * triangle_area(vertex(s, s.indices[3 * t]), vertex(s, s.indices[3 * t + 1]), vertex(s, s.indices[3 * t + 2])) / out.area;
+            const double expected = remaining * areas[t] / out.area;
             first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
         }
         const size_t base = out.points.size();
@@ -153,14 +159,14 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
                 if (n == 0) continue;
                 Random rng{(p.seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
                 V3* at = out.points.data() + base + first[t];
-                const V3 a = vertex(s, s.indices[3 * t]), b = vertex(s, s.indices[3 * t + 1]), c = vertex(s, s.indices[3 * t + 2]);
+                const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
                 // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
                 // triangles, one random point in each, visited row by row in serpentine order so
                 // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face
                 const uint64_t m = uint64_t(std::sqrt(double(n)));
                 auto random_in = [&](V3 p0, V3 p1, V3 p2) {
-                    double u = rng.uniform(), v = rng.uniform();
-                    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+                    double u, v;
+                    rng.in_triangle(u, v);
                     *at++ = p0 + u * (p1 - p0) + v * (p2 - p0);
                 };
                 auto grid = [&](uint64_t i, uint64_t j) { return a + (double(i) / double(m)) * (b - a) + (double(j) / double(m)) * (c - a); };
@@ -190,11 +196,11 @@ FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsig
     std::vector<FaceSample> made;
     Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
     for (size_t t = 0; t < s.triangle_count; ++t) {
-        const V3 a = vertex(s, s.indices[3 * t]), b = vertex(s, s.indices[3 * t + 1]), c = vertex(s, s.indices[3 * t + 2]);
-        const double expected = double(target) * triangle_area(a, b, c) / area;
+        const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
+        const double expected = double(target) * face_area(s, t) / area;
         for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
-            double u = rng.uniform(), v = rng.uniform();
-            if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+            double u, v;
+            rng.in_triangle(u, v);
             made.push_back({uint32_t(t), u, v});
             out.at.points.push_back(a + u * (b - a) + v * (c - a));
         }

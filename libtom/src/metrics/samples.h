@@ -39,9 +39,10 @@ size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
 inline V3 vertex(const Surface& s, uint32_t v) {
     return {s.positions[3 * size_t(v)], s.positions[3 * size_t(v) + 1], s.positions[3 * size_t(v) + 2]};
 }
-inline double at(V3 p, int axis) { return axis == 0 ? p.x : (axis == 1 ? p.y : p.z); }
+// corner k of triangle t
+inline V3 corner(const Surface& s, size_t t, int k) { return vertex(s, s.indices[3 * t + size_t(k)]); }
 
-double triangle_area(V3 a, V3 b, V3 c);
+double face_area(const Surface& s, size_t t);
 double surface_area(const Surface& s);
 
 struct Samples {
