@@ -47,7 +47,7 @@ size_t CandidateBounds::below(V3 p, double best) {
     double* low = column(10);
     size_t count = 0;
     for (size_t k = 0; k < padded; ++k) {
-        const double above = nx[k] * p.x + ny[k] * p.y + nz[k] * p.z + off[k];
+        const double above = (nx[k] * p.x + ny[k] * p.y) + (nz[k] * p.z + off[k]);  // summed as the AVX path sums it
         low[k] = std::max(point_box_d2(p, {lx[k], ly[k], lz[k]}, {hx[k], hy[k], hz[k]}), above * above);
         if (low[k] < best) hits[count++] = uint32_t(k);
     }
