@@ -6,6 +6,8 @@
 
 #include "tom/extract.h"
 
+#include "coarse.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -25,8 +27,24 @@ inline uint32_t walk(const I* substitute, uint32_t v, uint32_t n) noexcept {
     return v;
 }
 
-template <class I>
-inline bool alive(const I* substitute, const I* tri, uint32_t n) noexcept {
+// The corners extraction reads: the stored full-resolution ones (TRIS), or, at resolutions up to
+// the COAR section's, the coarse corners stored already mapped to that resolution. A corner
+// mapped to R walks on from there to any n <= R: its chain passes through the stored value.
+struct Corners {
+    const void* data;
+    uint32_t index_size;  // bytes per corner
+    uint32_t triangles;   // how many are stored
+    uint32_t resolution;  // the resolution they are mapped to
+};
+
+inline Corners corners_for(const MeshView& m, uint32_t n) noexcept {
+    if (m.coarse_corners && n <= m.coarse_resolution)
+        return {m.coarse_corners, m.coarse_index_size, m.coarse_triangle_count, m.coarse_resolution};
+    return {m.triangles, m.index_size, m.triangle_count, m.vertex_count};
+}
+
+template <class I, class C>
+inline bool alive(const I* substitute, const C* tri, uint32_t n) noexcept {
     const uint32_t a = walk(substitute, tri[0], n), b = walk(substitute, tri[1], n), c = walk(substitute, tri[2], n);
     return a != b && b != c && a != c;
 }
@@ -38,17 +56,21 @@ inline uint32_t clamp_resolution(const MeshView& m, uint32_t n) noexcept {
     return m.splits_pair(n) ? n - 1 : n;
 }
 
-template <class I>
-uint32_t count_active(const MeshView& m, uint32_t n) noexcept {
-    if (n >= m.vertex_count) return m.triangle_count;
-    const I* sub = static_cast<const I*>(m.substitute);
-    const I* tri = static_cast<const I*>(m.triangles);
-    // alive(t, n) is true on a prefix of the triangles. Its end is close to n * T / N (about two
+// The active prefix at resolution n <= src.resolution, from the corners of `src`.
+template <class I, class C>
+uint32_t count_active(const I* sub, const Corners& src, uint32_t n) noexcept {
+    const C* tri = static_cast<const C*>(src.data);
+    // alive(t, n) is true on a prefix of the triangles. Its end is close to n * T / R (about two
     // triangles per vertex), so gallop from that guess, then binary search the bracket.
-    const uint32_t T = m.triangle_count;
+    const uint32_t T = src.triangles;
     if (T == 0) return 0;
+    if (n >= src.resolution) {
+        // the stored corners are the active ones of their resolution (all of TRIS at full
+        // resolution; COAR holds exactly the active ones)
+        return T;
+    }
     auto is_alive = [&](uint32_t t) { return alive(sub, tri + 3 * size_t(t), n); };
-    uint32_t guess = uint32_t(uint64_t(n) * T / m.vertex_count);
+    uint32_t guess = uint32_t(uint64_t(n) * T / src.resolution);
     guess = std::min(std::max(guess, 1u), T);
     uint32_t lo, hi;  // invariant: every t < lo is alive, every t >= hi is not
     if (is_alive(guess - 1)) {
@@ -88,8 +110,8 @@ uint32_t count_active(const MeshView& m, uint32_t n) noexcept {
     return lo;
 }
 
-template <class I, class O>
-void map_corners_scalar(const I* sub, const I* in, O* out, size_t count, uint32_t n) noexcept {
+template <class I, class C, class O>
+void map_corners_scalar(const I* sub, const C* in, O* out, size_t count, uint32_t n) noexcept {
     for (size_t i = 0; i < count; ++i) out[i] = O(walk(sub, uint32_t(in[i]), n));
 }
 
@@ -124,8 +146,8 @@ __attribute__((target("avx2"))) inline __m256i gather_substitutes(const I* sub, 
     return _mm256_blendv_epi8(v, _mm256_srli_epi32(words, 16), mask);
 }
 
-template <class I, class O>
-__attribute__((target("avx2"))) void map_corners_avx2(const I* sub, const I* in, O* out, size_t count, uint32_t n) noexcept {
+template <class I, class C, class O>
+__attribute__((target("avx2"))) void map_corners_avx2(const I* sub, const C* in, O* out, size_t count, uint32_t n) noexcept {
     const __m256i limit = _mm256_set1_epi32(int(n));
     size_t i = 0;
     // 32 corners per round trip: four independent gathers in flight, one exit branch
@@ -170,43 +192,68 @@ bool cpu_has_avx2() noexcept {
 }
 #endif
 
+// `range`: the corners read lie below it, and so does every substitute followed
+template <class I, class C, class O>
+void map_corners(uint32_t range, const I* sub, const C* in, O* dst, size_t corners, uint32_t n) noexcept {
+#ifdef TOM_HAVE_AVX2_PATH
+    // where about half the corners need a step, a per-corner branch is a coin flip: gather
+    // instead. At coarse resolutions nearly every corner walks and the branch is predictable:
+    // scalar walks of neighbouring corners overlap better than gather rounds, as long as the
+    // substitute array is in cache; beyond it (about L2), the gathers' many loads in flight win.
+    const bool large = uint64_t(range) * sizeof(I) > (512u << 10);
+    if ((large || uint64_t(n) * TOM_GATHER_BELOW >= range) && cpu_has_avx2()) {
+        map_corners_avx2(sub, in, dst, corners, n);
+        return;
+    }
+#else
+    (void)range;
+#endif
+    map_corners_scalar(sub, in, dst, corners, n);
+}
+
 template <class I, class O>
 Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t capacity) noexcept {
     Extracted r;
     r.vertex_count = clamp_resolution(m, vertex_count);
     const uint32_t n = r.vertex_count;
-    // the count costs O(log T) short walks: far less than checking every triangle for the end
-    r.triangle_count = uint32_t(std::min<size_t>(count_active<I>(m, n), capacity / 3));
-    const size_t corners = size_t(r.triangle_count) * 3;
     const I* sub = static_cast<const I*>(m.substitute);
-    const I* in = static_cast<const I*>(m.triangles);
+    const Corners src = corners_for(m, n);
+    // the count costs O(log T) short walks: far less than checking every triangle for the end
+    const uint32_t active = src.index_size == 2 ? count_active<I, uint16_t>(sub, src, n) : count_active<I, uint32_t>(sub, src, n);
+    r.triangle_count = uint32_t(std::min<size_t>(active, capacity / 3));
+    const size_t corners = size_t(r.triangle_count) * 3;
     if (n == m.vertex_count) {  // full resolution: every chain is empty
+        const I* in = static_cast<const I*>(m.triangles);
         if (sizeof(I) == sizeof(O))
             std::memcpy(dst, in, corners * sizeof(O));
         else
             for (size_t i = 0; i < corners; ++i) dst[i] = O(in[i]);
         return r;
     }
-#ifdef TOM_HAVE_AVX2_PATH
-    // where about half the corners need a step, a per-corner branch is a coin flip: gather
-    // instead. At coarse resolutions nearly every corner walks and the branch is predictable:
-    // scalar walks of neighbouring corners overlap better than gather rounds, as long as the
-    // substitute array is in cache; beyond it (about L2), the gathers' many loads in flight win.
-    const bool large = uint64_t(m.vertex_count) * sizeof(I) > (512u << 10);
-    if ((large || uint64_t(n) * TOM_GATHER_BELOW >= m.vertex_count) && cpu_has_avx2()) {
-        map_corners_avx2(sub, in, dst, corners, n);
-        return r;
-    }
-#endif
-    map_corners_scalar(sub, in, dst, corners, n);
+    if (src.index_size == 2)
+        map_corners(src.resolution, sub, static_cast<const uint16_t*>(src.data), dst, corners, n);
+    else
+        map_corners(src.resolution, sub, static_cast<const uint32_t*>(src.data), dst, corners, n);
     return r;
+}
+
+template <class I>
+uint32_t active_count(const MeshView& m, uint32_t n) noexcept {
+    const Corners src = corners_for(m, n);
+    const I* sub = static_cast<const I*>(m.substitute);
+    return src.index_size == 2 ? count_active<I, uint16_t>(sub, src, n) : count_active<I, uint32_t>(sub, src, n);
 }
 
 } // namespace
 
+namespace {
+uint32_t active_count_at(const MeshView& m, uint32_t n) noexcept {
+    return m.index_size == 2 ? active_count<uint16_t>(m, n) : active_count<uint32_t>(m, n);
+}
+} // namespace
+
 uint32_t active_triangle_count(const MeshView& m, uint32_t vertex_count) noexcept {
-    const uint32_t n = clamp_resolution(m, vertex_count);
-    return m.index_size == 2 ? count_active<uint16_t>(m, n) : count_active<uint32_t>(m, n);
+    return active_count_at(m, clamp_resolution(m, vertex_count));
 }
 
 uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) noexcept {
@@ -279,5 +326,32 @@ ChainStats chain_stats(const MeshView& m, uint32_t vertex_count) noexcept {
     s.corners = uint64_t(tris) * 3;
     return s;
 }
+
+namespace detail {
+
+uint32_t coarse_resolution(const MeshView& m) noexcept {
+    if (m.vertex_count < 4096) return 0;
+    const uint32_t r = std::min<uint32_t>(m.vertex_count / 64, 65536);
+    return r > m.min_vertex_count ? r : 0;
+}
+
+uint32_t map_corner(const MeshView& m, uint32_t c, uint32_t n) noexcept {
+    uint32_t v = m.corner(c);
+    while (v >= n) v = m.substitute_at(v);
+    return v;
+}
+
+bool triangle_active(const MeshView& m, uint32_t t, uint32_t n) noexcept {
+    const uint32_t a = map_corner(m, 3 * t, n), b = map_corner(m, 3 * t + 1, n), c = map_corner(m, 3 * t + 2, n);
+    return a != b && b != c && a != c;
+}
+
+uint32_t active_prefix(const MeshView& m, uint32_t n) noexcept {
+    MeshView plain = m;  // from TRIS only
+    plain.coarse_corners = nullptr;
+    return active_count_at(plain, n);
+}
+
+} // namespace detail
 
 } // namespace tom

@@ -24,6 +24,10 @@ constexpr uint32_t s_type = 0, s_mesh = 4, s_offset = 8, s_bytes = 16, s_checksu
 constexpr uint32_t m_vertex_count = 0, m_triangle_count = 4, m_min_vertex_count = 8, m_index_size = 12, m_material = 16,
                    m_attributes = 20, m_bounds_min = 24, m_bounds_max = 36, m_name_bytes = 48;
 
+// COAR header field offsets
+constexpr uint32_t coarse_header_bytes = 16;
+constexpr uint32_t c_resolution = 0, c_triangle_count = 4, c_index_size = 8;
+
 enum Attribute : uint32_t { attr_normals = 1, attr_texcoords = 2, attr_colors = 4, attr_texcoords1 = 8, attr_tangents = 16 };
 constexpr uint32_t known_attributes = attr_normals | attr_texcoords | attr_colors | attr_texcoords1 | attr_tangents;
 
@@ -34,7 +38,7 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
                    sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
                    sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
-                   sec_instances = fourcc("INST");
+                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR");
 /// The `mesh` field of file-level sections (MATL, INST).
 constexpr uint32_t file_level = SectionInfo::file_level;
 

@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "coarse.h"
 #include "format_layout.h"
 #include "scene_codec.h"
 #include "tom/errors.h"
@@ -71,6 +72,7 @@ struct MeshSections {
     const SectionInfo* triangles = nullptr;
     const SectionInfo* metadata = nullptr;
     const SectionInfo* pairs = nullptr;
+    const SectionInfo* coarse = nullptr;
 };
 
 } // namespace
@@ -141,7 +143,7 @@ void File::Impl::validate(const OpenOptions& options) {
         for (int k = 0; k < attribute_stream_count; ++k)
             if (type == attribute_streams[k].section) stream = k;
         if (type == sec_mesh || type == sec_positions || stream >= 0 || type == sec_substitute || type == sec_triangles ||
-            type == sec_metadata || type == sec_pairs) {
+            type == sec_metadata || type == sec_pairs || type == sec_coarse) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
             MeshSections& ms = per_mesh[s.mesh];
@@ -151,6 +153,7 @@ void File::Impl::validate(const OpenOptions& options) {
                  : type == sec_substitute ? &ms.substitute
                  : type == sec_triangles ? &ms.triangles
                  : type == sec_pairs     ? &ms.pairs
+                 : type == sec_coarse    ? &ms.coarse
                                          : &ms.metadata;
             if (*slot) fail(e, field, 9, "mesh " + std::to_string(s.mesh) + " has this section twice");
             *slot = &s;
@@ -273,6 +276,42 @@ void File::Impl::validate(const OpenOptions& options) {
     }
     if (instances_section)
         scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
+    // rule 19: coarse corners are exactly the active triangles' corners mapped to their resolution
+    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+        const SectionInfo* sec = per_mesh[mi].coarse;
+        if (!sec) continue;
+        MeshView& v = meshes[mi];
+        const std::string field = "mesh " + std::to_string(mi) + " COAR";
+        const uint8_t* p = data + sec->offset;
+        if (sec->bytes < coarse_header_bytes) fail(sec->offset, field, 19, "shorter than its 16-byte header");
+        const uint32_t resolution = load_u32(p + c_resolution), triangles = load_u32(p + c_triangle_count), index_size = load_u32(p + c_index_size);
+        if (resolution < v.min_vertex_count || resolution > v.vertex_count || resolution == 0)
+            fail(sec->offset + c_resolution, field + " resolution", 19,
+                 std::to_string(resolution) + " is not in [min_vertex_count, vertex_count] = [" + std::to_string(v.min_vertex_count) + ", " +
+                     std::to_string(v.vertex_count) + "]");
+        if (index_size != (resolution <= 65536 ? 2u : 4u))
+            fail(sec->offset + c_index_size, field + " index_size", 19, "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + (resolution <= 65536 ? "2" : "4"));
+        if (triangles > v.triangle_count)
+            fail(sec->offset + c_triangle_count, field + " triangle_count", 19, std::to_string(triangles) + " is more than the mesh's " + std::to_string(v.triangle_count));
+        if (sec->bytes != coarse_header_bytes + uint64_t(triangles) * 3 * index_size)
+            fail(sec->offset, field, 19, std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(coarse_header_bytes + uint64_t(triangles) * 3 * index_size));
+        const uint8_t* corners = p + coarse_header_bytes;
+        for (uint32_t c = 0; c < triangles * 3; ++c) {
+            const uint32_t stored = index_size == 2 ? uint32_t(reinterpret_cast<const uint16_t*>(corners)[c]) : reinterpret_cast<const uint32_t*>(corners)[c];
+            const uint32_t expected = detail::map_corner(v, c, resolution);
+            if (stored != expected)
+                fail(sec->offset + coarse_header_bytes + uint64_t(c) * index_size, field + " corner " + std::to_string(c), 19,
+                     "value " + std::to_string(stored) + " is not corner " + std::to_string(c) + " mapped to resolution " + std::to_string(resolution) + " (" + std::to_string(expected) + ")");
+        }
+        if ((triangles > 0 && !detail::triangle_active(v, triangles - 1, resolution)) ||
+            (triangles < v.triangle_count && detail::triangle_active(v, triangles, resolution)))
+            fail(sec->offset + c_triangle_count, field + " triangle_count", 19,
+                 std::to_string(triangles) + " is not the number of triangles active at resolution " + std::to_string(resolution));
+        v.coarse_corners = corners;
+        v.coarse_resolution = resolution;
+        v.coarse_triangle_count = triangles;
+        v.coarse_index_size = index_size;
+    }
 }
 
 File::File(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}

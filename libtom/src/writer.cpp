@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include "coarse.h"
 #include "format_layout.h"
 #include "scene_codec.h"
 #include "tom/errors.h"
@@ -64,6 +65,25 @@ std::vector<uint8_t> metadata_bytes(const std::vector<MetadataEntry>& entries) {
     return out;
 }
 
+// COAR: the corners of the triangles active at a coarse resolution, mapped to it (empty: none)
+std::vector<uint8_t> coarse_bytes(const TomMesh& mesh) {
+    const MeshView view = mesh.view();
+    const uint32_t resolution = detail::coarse_resolution(view);
+    if (resolution == 0) return {};
+    const uint32_t triangles = detail::active_prefix(view, resolution);
+    if (triangles == 0) return {};
+    const uint32_t index_size = resolution <= 65536 ? 2 : 4;
+    std::vector<uint32_t> corners(size_t(triangles) * 3);
+    for (uint32_t c = 0; c < corners.size(); ++c) corners[c] = detail::map_corner(view, c, resolution);
+    std::vector<uint8_t> out(coarse_header_bytes, 0);
+    store_u32(&out[c_resolution], resolution);
+    store_u32(&out[c_triangle_count], triangles);
+    store_u32(&out[c_index_size], index_size);
+    const std::vector<uint8_t> body = index_bytes(corners, index_size);
+    out.insert(out.end(), body.begin(), body.end());
+    return out;
+}
+
 uint32_t choose_index_size(const TomMesh& mesh, IndexSize requested) {
     if (requested == IndexSize::bits32) return 4;
     return mesh.vertex_count() <= 65536 ? 2 : 4;
@@ -111,6 +131,8 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
         for (PendingSection& section : streams) sections.push_back(std::move(section));
         sections.push_back({sec_substitute, mi, index_bytes(m.substitute, index_size)});
         sections.push_back({sec_triangles, mi, index_bytes(m.triangles, index_size)});
+        std::vector<uint8_t> coarse = coarse_bytes(m);
+        if (!coarse.empty()) sections.push_back({sec_coarse, mi, std::move(coarse)});
         if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});
         if (!m.pair_bits.empty()) sections.push_back({sec_pairs, mi, m.pair_bits});
     }

@@ -1,5 +1,6 @@
 // Extraction: 16- and 32-bit outputs, capacity limits, resolution queries, chain statistics.
 
+#include <algorithm>
 #include <array>
 #include <set>
 
@@ -51,6 +52,40 @@ TEST_CASE("16-bit and 32-bit storage and outputs agree with brute force at every
             REQUIRE(a[i] == expect[i]);
             REQUIRE(c[i] == expect[i]);
             REQUIRE(d[i] == expect[i]);
+        }
+    }
+}
+
+TEST_CASE("coarse corners (COAR): extraction through them equals brute force at every resolution up to theirs", "[extract][coarse]") {
+    const Built b = bunny();
+    tom::WriteOptions wide;
+    wide.index_size = tom::IndexSize::bits32;
+    const std::vector<uint8_t> bytes32 = tom::serialize({b.tom}, wide);
+    const tom::File f16 = tom::File::from_bytes(b.bytes.data(), b.bytes.size(), "bunny16.tom");
+    const tom::File f32 = tom::File::from_bytes(bytes32.data(), bytes32.size(), "bunny32.tom");
+    const tom::MeshView plain = b.tom.view();  // in memory: no coarse corners
+    REQUIRE(plain.coarse_corners == nullptr);
+    for (const tom::MeshView* m : {&f16.mesh(0), &f32.mesh(0)}) {
+        // 1/64 of the vertices, 16-bit: about 0.4% of the file
+        REQUIRE(m->coarse_corners != nullptr);
+        CHECK(m->coarse_resolution == m->vertex_count / 64);
+        CHECK(m->coarse_index_size == 2);
+        CHECK(m->coarse_triangle_count == test::brute_force_active(plain, m->coarse_resolution).size() / 3);
+        std::vector<uint32_t> got(size_t(plain.triangle_count) * 3);
+        std::vector<uint16_t> got16(got.size());
+        for (uint32_t n = plain.min_vertex_count; n <= m->coarse_resolution + 2; ++n) {
+            INFO("resolution " << n << ", " << m->index_size << "-byte storage");
+            const std::vector<uint32_t> expect = test::brute_force_active(plain, n);
+            REQUIRE(tom::active_triangle_count(*m, n) * 3 == expect.size());
+            const tom::Extracted r = tom::extract(*m, n, got.data(), got.size());
+            const tom::Extracted r16 = tom::extract(*m, n, got16.data(), got16.size());
+            REQUIRE(r.triangle_count * 3 == expect.size());
+            REQUIRE(r16.triangle_count == r.triangle_count);
+            REQUIRE(std::equal(expect.begin(), expect.end(), got.begin()));
+            REQUIRE(std::equal(expect.begin(), expect.end(), got16.begin()));
+            // a short buffer takes the first whole triangles
+            const tom::Extracted part = tom::extract(*m, n, got.data(), 3 * (r.triangle_count / 2) + 2);
+            REQUIRE(part.triangle_count == r.triangle_count / 2);
         }
     }
 }

@@ -362,6 +362,54 @@ TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[forma
     CHECK(rule_of(b) == 16);
 }
 
+TEST_CASE("rule 19: coarse corners are the active triangles' corners mapped to their resolution", "[format][corrupt][coarse]") {
+    // FORMAT.md, section COAR: u32 resolution, u32 triangle_count, u32 index_size, u32 reserved, corners
+    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    const tom::TomMesh t = tom::build(sphere);
+    REQUIRE(t.vertex_count() >= 4096);
+    const std::vector<uint8_t> good = tom::serialize({t});
+    const Section coarse = find(sections_of(good), "COAR");
+    const uint32_t resolution = get32(good, coarse.offset), triangles = get32(good, coarse.offset + 4);
+    CHECK(resolution == t.vertex_count() / 64);
+    CHECK(get32(good, coarse.offset + 8) == 2);
+    CHECK(coarse.bytes == 16 + 6 * uint64_t(triangles));
+    const tom::File f = tom::File::from_bytes(good.data(), good.size());
+    CHECK(f.mesh(0).coarse_triangle_count == triangles);
+    CHECK(triangles == tom::active_triangle_count(t.view(), resolution));
+    // a file without the section (as a 1.2 writer made it) reads, and extracts the same
+    tom::TomMesh tiny = small_mesh();
+    CHECK(tiny.vertex_count() < 4096);
+    for (const Section& s : sections_of(tom::serialize({tiny}))) CHECK(s.type != "COAR");
+
+    std::vector<uint8_t> b = good;
+    const size_t first = coarse.offset + 16;
+    uint16_t corner;
+    std::memcpy(&corner, &b[first], 2);
+    corner = uint16_t((corner + 1) % resolution);  // still in range, but not the mapped corner
+    std::memcpy(&b[first], &corner, 2);
+    fix_checksums(b);
+    CHECK(rule_of(b) == 19);
+    CHECK(message_of(b).find("mapped to resolution") != std::string::npos);
+    b = good;
+    put32(b, coarse.offset, t.vertex_count() + 1);  // resolution past the vertex count
+    fix_checksums(b);
+    CHECK(rule_of(b) == 19);
+    b = good;
+    put32(b, coarse.offset + 8, 4);  // 32-bit corners for a 16-bit resolution
+    fix_checksums(b);
+    CHECK(rule_of(b) == 19);
+    b = good;
+    put32(b, coarse.offset + 4, triangles + 1);  // more corners than the section holds
+    fix_checksums(b);
+    CHECK(rule_of(b) == 19);
+    CHECK(message_of(b).find("bytes where the counts require") != std::string::npos);
+    b = good;
+    put32(b, coarse.offset, resolution + 1);  // corners mapped to another resolution
+    fix_checksums(b);
+    CHECK(rule_of(b) == 19);
+}
+
 TEST_CASE("scenes: materials with texture references and instances survive the round trip; rules 17 and 18", "[format][scene]") {
     tom::TomMesh a = small_mesh(), b = small_mesh();
     a.material = 1;

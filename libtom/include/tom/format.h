@@ -14,7 +14,7 @@
 namespace tom {
 
 constexpr uint32_t format_version_major = 1;
-constexpr uint32_t format_version_minor = 2;
+constexpr uint32_t format_version_minor = 3;
 
 enum class IndexSize {
     automatic,  ///< 16-bit when every mesh of the file has <= 65536 vertices, else 32-bit (per mesh)

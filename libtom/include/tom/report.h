@@ -25,7 +25,7 @@ struct ReportParams {
 struct LevelReport {
     double fraction = 0;
     uint32_t vertices = 0, triangles = 0;
-    double extract_seconds = 0;  ///< median of repeated extractions into a preallocated buffer
+    double extract_seconds = 0;  ///< median of repeated extractions of the serialized mesh into a preallocated 32-bit buffer
     Distance error;              ///< object units; error.percent() for Metro's relative figures
     AttributeDeviation attributes;  ///< normal angle and texture-coordinate displacement against the original
     ChainStats chain;

@@ -33,6 +33,13 @@ struct MeshView {
     const uint8_t* metadata = nullptr; ///< metadata entries (FORMAT.md, section META)
     const uint8_t* pair_bits = nullptr;  ///< bit i: vertices i and i + 1 are a seam pair (section PAIR), or null
     size_t metadata_bytes = 0;
+    /// Optional extraction shortcut (section COAR): the corners of the triangles active at
+    /// resolution coarse_resolution, already mapped to it, so coarser resolutions walk on from
+    /// there instead of from the full-resolution corners. Null when absent.
+    const void* coarse_corners = nullptr;        ///< coarse_index_size bytes * 3 * coarse_triangle_count
+    uint32_t coarse_resolution = 0;
+    uint32_t coarse_triangle_count = 0;
+    uint32_t coarse_index_size = 2;
 
     uint32_t substitute_at(uint32_t i) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];
