@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <thread>
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
@@ -140,7 +141,9 @@ int main(int argc, char** argv) {
         return tools::exit_usage;
     }
     try {
-        return run(inputs, generated, json, repeats, build.params(), meshopt_out, meshopt_levels);
+        tom::BuildParams params = build.params();
+        if (params.threads == 0) params.threads = std::max(1u, std::thread::hardware_concurrency());
+        return run(inputs, generated, json, repeats, params, meshopt_out, meshopt_levels);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tools::exit_failed;
@@ -173,8 +176,10 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
         meshes.push_back(std::move(m));
     }
     if (!json) {
-        std::printf("build: %s/%s, attribute weight %g; meshopt = meshopt_simplify to 1%% of the triangles (reference); medians of %d\n",
-                    tom::to_string(params.predicate), tom::to_string(params.strategy), double(params.attribute_weight), repeats);
+        std::printf("build: %s/%s, attribute weight %g, %u thread%s; meshopt = meshopt_simplify to 1%% of the triangles (reference, 1 thread); "
+                    "medians of %d\n",
+                    tom::to_string(params.predicate), tom::to_string(params.strategy), double(params.attribute_weight), params.threads,
+                    params.threads == 1 ? "" : "s", repeats);
         std::printf("%-28s %10s %10s %10s %12s %8s | %s\n", "mesh", "triangles", "build ms", "meshopt ms", "build tri/s", "x meshopt",
                     "extract: fraction triangles Mtri/s memcpy-ratio");
     }
@@ -214,6 +219,7 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
             j["vertices"] = row.vertices;
             j["triangles"] = row.triangles;
             j.update(tools::build_params_json(params));
+            j["build_threads"] = params.threads;
             j["build_ms"] = row.build_s * 1e3;
             j["meshopt_ms"] = row.meshopt_s * 1e3;
             j["meshopt_triangles"] = row.meshopt_triangles;

@@ -198,7 +198,7 @@ int main(int argc, char** argv) {
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
 
     try {
-        const tom::BuildParams params = opt.build.params();
+        tom::BuildParams params = opt.build.params();
         tom::WriteOptions wopt;
         wopt.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
 
@@ -214,6 +214,7 @@ int main(int argc, char** argv) {
         const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && jobs.size() > 1;
         const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
         const tom::ReportParams rparams = report_params(opt, std::max(1u, hardware / std::max(1u, opt.jobs)));
+        if (params.threads == 0) params.threads = std::max(1u, hardware / std::max(1u, opt.jobs));
         std::vector<std::string> summary_rows(jobs.size());
         auto report_path_of = [&](const tools::Job& job) -> std::string {
             if (opt.report_json_dir.empty()) return "";

@@ -35,6 +35,11 @@ void BuildOptions::add_to(CLI::App& app, const std::string& group) {
                    "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
         ->check(CLI::Range(1.0f, 90.0f))
         ->group(group);
+    app.add_option("--build-threads", numbers.threads,
+                   "Threads that evaluate each mesh's substitutions (default 0: one per core, shared among -j jobs); "
+                   "the output is the same for any count")
+        ->check(CLI::Range(0u, 256u))
+        ->group(group);
 }
 
 tom::BuildParams BuildOptions::params() const {

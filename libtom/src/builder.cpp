@@ -24,10 +24,12 @@
 #include "vec3.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <thread>
 
 namespace tom {
 
@@ -121,6 +123,21 @@ struct Candidate {
     uint32_t v, u;
 };
 
+// What one thread needs to evaluate substitutions: visit stamps per vertex (deduplication in
+// O(1)) and the candidate targets of one vertex.
+struct Scratch {
+    std::vector<uint32_t> stamp;  // per vertex: the visit that last saw it
+    uint32_t visit = 0;
+    std::vector<Candidate> targets;
+    uint32_t next_visit() {
+        if (++visit == 0) {  // wrapped: clear and start again
+            std::fill(stamp.begin(), stamp.end(), 0u);
+            visit = 1;
+        }
+        return visit;
+    }
+};
+
 // Shared state of one build: current triangles, vertex classes, removal record.
 struct Builder {
     uint32_t n = 0, m = 0;
@@ -144,16 +161,7 @@ struct Builder {
     std::vector<std::vector<uint32_t>> pairs;
     std::vector<uint32_t> removed_order, removed_target;
     std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
-    std::vector<Candidate> scratch;    // candidate targets of one vertex
-    mutable std::vector<uint32_t> stamp;  // per vertex: the visit that last saw it (deduplication in O(1))
-    mutable uint32_t visit = 0;
-    uint32_t next_visit() const {
-        if (++visit == 0) {  // wrapped: clear and start again
-            std::fill(stamp.begin(), stamp.end(), 0u);
-            visit = 1;
-        }
-        return visit;
-    }
+    Scratch scratch;  // the calling thread's; workers bring their own
 
     // (both without branches: which corner holds v is a coin toss the predictor always loses)
     bool contains(uint32_t t, uint32_t v) const {
@@ -194,7 +202,8 @@ struct Builder {
     //   otherwise edges v-w and u-w merge into a non-manifold edge;
     // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
     template <class Adj>
-    bool illegal(const Adj& adj, uint32_t v, uint32_t u) const {
+    bool illegal(const Adj& adj, uint32_t v, uint32_t u, Scratch& sc) const {
+        std::vector<uint32_t>& stamp = sc.stamp;
         const Vec3 pv = pos[v], pu = pos[u];
         uint32_t opposite[8];
         size_t co = 0;
@@ -215,7 +224,7 @@ struct Builder {
         // link condition on the surface welded by position (seam copies are one point): every
         // class adjacent to both v's and u's must be opposite a triangle joining them, otherwise
         // two edges merge into a non-manifold one
-        const uint32_t mark = next_visit();
+        const uint32_t mark = sc.next_visit();
         auto is_opposite = [&](uint32_t w) {
             for (size_t i = 0; i < co; ++i)
                 if (opposite[i] == w) return true;
@@ -308,7 +317,7 @@ struct Builder {
     // (cheapest first through the oracle); without, the cheapest by cost alone, to be checked
     // by the caller when it is about to be applied.
     template <class Adj>
-    bool best_target(const Adj& adj, uint32_t v, Candidate& best, bool check_legal = true) {
+    bool best_target(const Adj& adj, uint32_t v, Candidate& best, bool check_legal, Scratch& sc) const {
         if (kind[v] == kLocked || removed[v]) return false;
         if (!check_legal && predicate == Predicate::quadric && kind[v] == kInterior && pairs.empty()) {
             // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
@@ -324,14 +333,16 @@ struct Builder {
             });
             return any;
         }
-        scratch.clear();
-        const uint32_t seen = next_visit();
+        std::vector<Candidate>& targets = sc.targets;
+        std::vector<uint32_t>& stamp = sc.stamp;
+        targets.clear();
+        const uint32_t seen = sc.next_visit();
         stamp[v] = seen;
         auto offer = [&](uint32_t u) {
             if (stamp[u] == seen || removed[u]) return;
             stamp[u] = seen;
             if (!border_move_allowed(v, u)) return;
-            scratch.push_back({0.0f, v, u});
+            targets.push_back({0.0f, v, u});
         };
         if (kind[v] == kSeam) {
             for (const uint32_t u : {border_next[v], border_prev[v]}) {
@@ -339,7 +350,7 @@ struct Builder {
                 stamp[u] = seen;
                 const uint32_t u2 = seam_target(v, u);
                 if (u2 == kNone || !border_move_allowed(v, u) || !border_move_allowed(partner[v], u2)) continue;
-                scratch.push_back({0.0f, v, u});
+                targets.push_back({0.0f, v, u});
             }
         } else if (kind[v] == kBorder) {
             offer(border_next[v]);
@@ -356,25 +367,25 @@ struct Builder {
             for (const uint32_t u : pairs[v])
                 if (stamp[u] != seen && !removed[u]) {
                     stamp[u] = seen;
-                    scratch.push_back({0.0f, v, u});
+                    targets.push_back({0.0f, v, u});
                 }
-        if (scratch.empty()) return false;
-        for (Candidate& c : scratch) {
+        if (targets.empty()) return false;
+        for (Candidate& c : targets) {
             c.cost = cost(adj, v, c.u);
             if (kind[v] == kSeam) c.cost += cost(adj, partner[v], seam_target(v, c.u));  // both copies move
         }
         if (!check_legal) {
-            best = scratch[0];
-            for (const Candidate& c : scratch)
+            best = targets[0];
+            for (const Candidate& c : targets)
                 if (c.cost < best.cost || (c.cost == best.cost && c.u < best.u)) best = c;
             return true;
         }
         // check legality cheapest first; neighbourhoods are small
-        std::sort(scratch.begin(), scratch.end(), [](const Candidate& a, const Candidate& b) {
+        std::sort(targets.begin(), targets.end(), [](const Candidate& a, const Candidate& b) {
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
-        for (const Candidate& c : scratch)
-            if (!illegal(adj, v, c.u) && (kind[v] != kSeam || !illegal(adj, partner[v], seam_target(v, c.u)))) {
+        for (const Candidate& c : targets)
+            if (!illegal(adj, v, c.u, sc) && (kind[v] != kSeam || !illegal(adj, partner[v], seam_target(v, c.u), sc))) {
                 best = c;
                 return true;
             }
@@ -708,7 +719,29 @@ void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candi
     items.insert(items.end(), rest.begin(), rest.end());
 }
 
-void run_passes(Builder& b, float fraction, BuildStats& stats) {
+// Runs f(i, scratch) for i in [0, count) on up to 1 + helpers.size() threads (the caller's with
+// `own`, each helper thread with its own scratch), in blocks taken in turn. f must only write
+// state that belongs to i.
+template <class F>
+void parallel_for(size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
+    constexpr size_t block = 512;
+    const size_t threads = std::min<size_t>(1 + helpers.size(), (count + block - 1) / block);
+    if (threads <= 1) {
+        for (size_t i = 0; i < count; ++i) f(i, own);
+        return;
+    }
+    std::atomic<size_t> next{0};
+    auto work = [&](Scratch& sc) {
+        for (size_t begin; (begin = next.fetch_add(block)) < count;)
+            for (size_t i = begin, end = std::min(count, begin + block); i < end; ++i) f(i, sc);
+    };
+    std::vector<std::thread> pool;
+    for (size_t k = 1; k < threads; ++k) pool.emplace_back(work, std::ref(helpers[k - 1]));
+    work(own);
+    for (std::thread& t : pool) t.join();
+}
+
+void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats) {
     // adjacency as corner lists that substitutions splice: nothing is rebuilt between passes
     ListAdjacency adj;
     adj.build(b);
@@ -723,18 +756,26 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
     std::vector<uint8_t> has(b.n, 0), dirty(b.n, 1), needs_oracle(b.n, 0);
     std::vector<Candidate> candidates, tmp, rest;
     std::vector<uint32_t> pass_mark(b.n, 0);
+    // the vertices to evaluate in a pass are independent: each reads the shared state and writes
+    // only its own list, best[], has[] and dirty[] (results do not depend on the thread count)
+    std::vector<uint32_t> evaluate;
+    std::vector<Scratch> helpers(threads > 1 ? threads - 1 : 0);
+    for (Scratch& h : helpers) h.stamp.assign(b.n, 0);
     uint32_t alive_count = b.n;
     bool full_rescan_done = false;
     for (uint32_t pass = 1;; ++pass) {
         candidates.clear();
-        for (uint32_t v : live_vertices) {
-            if (dirty[v]) {
-                adj.compact(v);
-                has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0);
-                dirty[v] = 0;
-            }
+        evaluate.clear();
+        for (uint32_t v : live_vertices)
+            if (dirty[v]) evaluate.push_back(v);
+        parallel_for(evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch& sc) {
+            const uint32_t v = evaluate[i];
+            adj.compact(v);
+            has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0, sc);
+            dirty[v] = 0;
+        });
+        for (uint32_t v : live_vertices)
             if (has[v]) candidates.push_back(best[v]);
-        }
         size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
         // independence rejects many candidates: the cheapest 4 x quota are enough to fill a pass
         sort_cheapest(candidates, quota * 4, tmp, rest);
@@ -751,7 +792,7 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                     // both copies move, each to the copy of the target on its side
                     const uint32_t v2 = b.partner[c.v], u2 = b.seam_target(c.v, c.u);
                     if (b.removed[c.v] || b.removed[c.u] || v2 == kNone || u2 == kNone || pass_mark[v2] == pass || pass_mark[u2] == pass ||
-                        !b.border_move_allowed(c.v, c.u) || !b.border_move_allowed(v2, u2) || b.illegal(adj, c.v, c.u) || b.illegal(adj, v2, u2)) {
+                        !b.border_move_allowed(c.v, c.u) || !b.border_move_allowed(v2, u2) || b.illegal(adj, c.v, c.u, b.scratch) || b.illegal(adj, v2, u2, b.scratch)) {
                         dirty[c.v] = 1;
                         needs_oracle[c.v] = 1;
                         continue;
@@ -768,7 +809,7 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                     executed += 2;
                     continue;
                 }
-                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u)) {
+                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u, b.scratch)) {
                     dirty[c.v] = 1;  // look again next pass, through the oracle
                     needs_oracle[c.v] = 1;
                     continue;
@@ -778,12 +819,13 @@ void run_passes(Builder& b, float fraction, BuildStats& stats) {
                 if (b.predicate == Predicate::quadric) {
                     // a neighbour w keeps its candidate unless that was v; it gains u as a target,
                     // whose cost Q_w(p_u) is one evaluation
-                    const uint32_t seen = b.next_visit();
+                    const uint32_t seen = b.scratch.next_visit();
+                    std::vector<uint32_t>& stamp = b.scratch.stamp;
                     adj.each(c.v, [&](uint32_t t) {
                         for (int k = 0; k < 3; ++k) {
                             const uint32_t w = b.idx[3 * t + k];
-                            if (b.stamp[w] == seen) continue;
-                            b.stamp[w] = seen;
+                            if (stamp[w] == seen) continue;
+                            stamp[w] = seen;
                             if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) continue;
                             if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {  // borders, seams: look again
                                 dirty[w] = 1;
@@ -837,7 +879,7 @@ void run_heap(Builder& b) {
     auto evaluate_vertex = [&](uint32_t v) {
         ++stamp[v];
         Candidate c;
-        if (b.best_target(adj, v, c)) {
+        if (b.best_target(adj, v, c, true, b.scratch)) {
             heap.push_back({c.cost, v, c.u, stamp[v]});
             std::push_heap(heap.begin(), heap.end());
         }
@@ -845,7 +887,7 @@ void run_heap(Builder& b) {
     for (uint32_t v = 0; v < b.n; ++v)
         if (b.kind[v] != kLocked) {
             Candidate c;
-            if (b.best_target(adj, v, c)) heap.push_back({c.cost, v, c.u, stamp[v]});
+            if (b.best_target(adj, v, c, true, b.scratch)) heap.push_back({c.cost, v, c.u, stamp[v]});
         }
     std::make_heap(heap.begin(), heap.end());
     std::vector<uint32_t> ring;
@@ -933,7 +975,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     b.idx = mesh.indices;
     b.dead.assign(b.m, 0);
     b.removed.assign(b.n, 0);
-    b.stamp.assign(b.n, 0);
+    b.scratch.stamp.assign(b.n, 0);
     b.death_step.assign(b.m, kNone);
     b.removed_order.reserve(b.n);
     b.removed_target.reserve(b.n);
@@ -947,7 +989,8 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     if (params.strategy == Strategy::heap)
         run_heap(b);
     else
-        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), stats);
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)),
+                   params.threads ? params.threads : std::max(1u, std::thread::hardware_concurrency()), stats);
 
     // total order: survivors first (in input order), then removed vertices, last removed first
     const uint32_t n = b.n, m = b.m;

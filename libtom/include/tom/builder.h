@@ -39,6 +39,9 @@ struct BuildParams {
     /// (degrees, 1..90; 90 forbids flips only, the TOM paper's rule). 60 keeps spikes out of the
     /// coarse levels: bunny's Hausdorff error at 2% falls from 1.20% to 0.54% of the diagonal.
     float max_rotation_degrees = 60.0f;
+    /// passes only: threads that evaluate a pass's candidates (0 = one per core). The result is
+    /// the same for any count.
+    unsigned threads = 0;
 };
 
 /// What the builder did, for reports.
