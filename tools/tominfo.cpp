@@ -46,6 +46,10 @@ int main(int argc, char** argv) {
             mj["min_vertices"] = m.min_vertex_count;
             mj["min_triangles"] = tom::active_triangle_count(m, m.min_vertex_count);
             mj["index_bytes"] = m.index_size;
+            if (m.coarse_corners)  // FORMAT.md, COAR: extraction at or below this resolution starts from them
+                mj["coarse_corners"] = {{"resolution", m.coarse_resolution}, {"triangles", m.coarse_triangle_count}};
+            else
+                mj["coarse_corners"] = nullptr;
             mj["material"] = m.material;
             std::vector<std::string> attrs = {"position"};
             if (m.normals) attrs.push_back("normal");
@@ -109,16 +113,18 @@ int main(int argc, char** argv) {
         std::printf("%s: TOM %s, %s, %u mesh%s, %.1f%% of face-vertex (positions+normals, 32-bit indices)\n", path.c_str(),
                     j["version"].get<std::string>().c_str(), tools::human_bytes(file.file_bytes()).c_str(), file.mesh_count(),
                     file.mesh_count() == 1 ? "" : "es", j["percent_of_face_vertex"].get<double>());
-        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s %8s %8s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
-                    "k_mean", "k_max", "attributes");
+        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s %8s %8s %8s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
+                    "coarse", "k_mean", "k_max", "attributes");
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const auto& mj = j["meshes"][i];
             std::string attrs;
             for (const auto& a : mj["attributes"]) attrs += (attrs.empty() ? "" : ",") + a.get<std::string>();
             const bool has_curve = !mj["error_curve"].is_null();
-            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
+            const bool has_coarse = !mj["coarse_corners"].is_null();
+            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub %8s %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
                         mj["triangles"].get<uint32_t>(), mj["min_vertices"].get<uint32_t>(), mj["min_triangles"].get<uint32_t>(),
                         8 * mj["index_bytes"].get<uint32_t>(),
+                        has_coarse ? std::to_string(mj["coarse_corners"]["resolution"].get<uint32_t>()).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_mean"].get<double>()).substr(0, 7).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_max"].get<double>()).substr(0, 7).c_str() : "-", attrs.c_str());
         }

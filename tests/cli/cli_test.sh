@@ -52,6 +52,7 @@ check "tominfo reads a file" expect_exit 0 "$tools/tominfo" "$work/o1/fandisk.to
 check "tominfo shows the counts" grep -q "6475" "$work/stdout"
 check "tominfo --json" expect_exit 0 "$tools/tominfo" "$work/o1/fandisk.tom" --json
 check "tominfo --json is JSON with the mesh" python3 -c "import json,sys; d=json.load(open('$work/stdout')); assert d['meshes'][0]['vertices']==6475, d"
+check "tominfo --json shows the coarse corners (V / 64)" python3 -c "import json,sys; d=json.load(open('$work/stdout')); c=d['meshes'][0]['coarse_corners']; assert c['resolution']==6475//64 and c['triangles']>0, c"
 head -c 500 "$work/o1/fandisk.tom" > "$work/truncated.tom"
 check "tominfo on a truncated file exits 1" expect_exit 1 "$tools/tominfo" "$work/truncated.tom"
 check "with a message naming the file and rule" grep -q "truncated.tom: byte 16, file_bytes: file is truncated.*rule 5" "$work/stderr"

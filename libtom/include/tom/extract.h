@@ -29,6 +29,8 @@ uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_coun
 uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction) noexcept;
 
 /// Writes the index buffer at resolution `vertex_count` (clamped as above) into `destination`.
+/// At or below a file's coarse resolution (MeshView::coarse_resolution, FORMAT.md section COAR)
+/// the corners are read from the coarse corners, already mapped that far; the result is the same.
 /// At most `destination_capacity` indices (rounded down to whole triangles) are written: a
 /// buffer of 3 * mesh.triangle_count indices always suffices, and so does one of
 /// 3 * active_triangle_count(mesh, vertex_count). The walk stops at the first inactive
