@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 #include <cmath>
 #include <stdexcept>
 
@@ -166,39 +167,45 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     r.memory = memory_of(built);
     const MeshView v = built.view();
     // extraction is timed on the form an engine maps: the file (16-bit indices where they fit,
-    // coarse corners), extracted into 32-bit buffers, as tombench does
-    const std::vector<uint8_t> image = serialize({built});
-    const File file = File::from_bytes(image.data(), image.size(), built.name, OpenOptions{false});
+    // coarse corners), extracted into 32-bit buffers, as tombench does; first, on a quiet machine
+    {
+        const std::vector<uint8_t> image = serialize({built});
+        const File file = File::from_bytes(image.data(), image.size(), built.name, OpenOptions{false});
+        std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
+        for (double f : params.levels) {
+            LevelReport lr;
+            lr.fraction = f;
+            lr.vertices = vertex_count_for_fraction(v, f);
+            lr.extract_seconds = median_extract_seconds(file.mesh(0), lr.vertices, buffer);
+            lr.chain = chain_stats(v, lr.vertices);
+            lr.mean_steps = lr.chain.corners ? double(lr.chain.steps) / double(lr.chain.corners) : 0.0;
+            lr.overhead = overhead_distinct(v, lr.vertices);
+            r.levels.push_back(lr);
+        }
+    }
+    // the stored curve does not depend on the levels (its own reference, samples and seed): it is
+    // measured alongside them, on the cores their serial parts leave idle
+    std::future<ErrorCurve> curve = std::async(std::launch::async, [&] { return measure_error_curve(original, built, params); });
     const SurfaceAttributes original_attributes{original.normals.empty() ? nullptr : original.normals.data(),
                                                 original.texcoords.empty() ? nullptr : original.texcoords.data()};
     const SurfaceAttributes level_attributes{built.normals.empty() ? nullptr : built.normals.data(),
                                              built.texcoords.empty() ? nullptr : built.texcoords.data()};
     const MetroReference reference(surface_of(original), params.distance, original_attributes);
-    std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
     std::vector<double> tris, means, maxes;
-    for (double f : params.levels) {
-        LevelReport lr;
-        lr.fraction = f;
-        const uint32_t n = vertex_count_for_fraction(v, f);
-        const Level l = extract_level(built, n);
-        lr.vertices = n;
+    for (LevelReport& lr : r.levels) {
+        const Level l = extract_level(built, lr.vertices);
         lr.triangles = l.e.triangle_count;
-        lr.extract_seconds = median_extract_seconds(file.mesh(0), n, buffer);
-        lr.chain = chain_stats(v, n);
-        lr.mean_steps = lr.chain.corners ? double(lr.chain.steps) / double(lr.chain.corners) : 0.0;
-        lr.overhead = overhead_distinct(v, n);
         if (l.e.triangle_count > 0) {
-            lr.error = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count}, level_attributes, lr.attributes);
+            lr.error = reference.compare({built.positions.data(), lr.vertices, l.indices.data(), l.e.triangle_count}, level_attributes, lr.attributes);
             r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
             tris.push_back(lr.triangles);
             means.push_back(std::max(lr.error.forward.mean, lr.error.backward.mean) / lr.error.diagonal);
             maxes.push_back(lr.error.hausdorff / lr.error.diagonal);
         }
-        r.levels.push_back(lr);
     }
     r.fit.mean = fit_k_over_n(tris, means);
     r.fit.max = fit_k_over_n(tris, maxes);
-    r.curve = measure_error_curve(original, built, params);
+    r.curve = curve.get();
     return r;
 }
 
