@@ -4,6 +4,8 @@
 #include <cmath>
 #include <random>
 
+#include <thread>
+
 #include <catch2/catch.hpp>
 
 #include "support.h"
@@ -121,6 +123,35 @@ TEST_CASE("figures are repeatable: same seed and any thread count give identical
     const tom::Distance c = tom::metro_distance(surface(bunny.mesh), level, other_seed);
     CHECK(c.forward.mean != a.forward.mean);                            // other samples...
     CHECK(c.forward.mean == Approx(a.forward.mean).epsilon(0.02));      // ...the same figure within sampling noise
+}
+
+TEST_CASE("one reference compared from several threads at once, and the curve on any thread count, give identical figures", "[metrics][curve]") {
+    const test::NamedMesh fandisk = test::real_meshes()[1];
+    const tom::TomMesh t = tom::build(fandisk.mesh);
+    std::vector<std::vector<uint32_t>> idx(4, std::vector<uint32_t>(t.triangle_count() * 3));
+    std::vector<tom::Surface> levels;
+    for (size_t k = 0; k < idx.size(); ++k) {
+        const uint32_t n = tom::vertex_count_for_fraction(t.view(), 0.4 / double(1 << (2 * k)));
+        const tom::Extracted e = tom::extract(t.view(), n, idx[k].data(), idx[k].size());
+        levels.push_back({t.positions.data(), n, idx[k].data(), e.triangle_count});
+    }
+    const tom::MetroReference reference(surface(fandisk.mesh));
+    std::vector<tom::Distance> alone, together(levels.size());
+    for (const tom::Surface& l : levels) alone.push_back(reference.compare(l));
+    std::vector<std::thread> pool;
+    for (size_t k = 0; k < levels.size(); ++k) pool.emplace_back([&, k] { together[k] = reference.compare(levels[k]); });
+    for (std::thread& th : pool) th.join();
+    for (size_t k = 0; k < levels.size(); ++k) {
+        INFO("level " << k);
+        CHECK(together[k].forward.mean == alone[k].forward.mean);
+        CHECK(together[k].backward.mean == alone[k].backward.mean);
+        CHECK(together[k].hausdorff == alone[k].hausdorff);
+        CHECK(alone[k].hausdorff > 0);
+    }
+    tom::ReportParams one, three;
+    one.distance.threads = 1;
+    three.distance.threads = 3;
+    CHECK(tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, one)) == tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, three)));
 }
 
 namespace {

@@ -86,8 +86,8 @@ public:
     MetroReference(MetroReference&&) noexcept;
     MetroReference& operator=(MetroReference&&) noexcept;
 
-    /// The same figures metro_distance(original, simplified, params) gives. Not safe to call
-    /// concurrently on one object (it keeps samples and buffers between calls).
+    /// The same figures metro_distance(original, simplified, params) gives. Safe to call from
+    /// several threads at once (the figures do not depend on it).
     Distance compare(const Surface& simplified) const;
     /// The same, and the attribute deviation of `simplified` (whose attributes are given).
     Distance compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const;

@@ -24,6 +24,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -461,22 +464,48 @@ AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttr
 
 } // namespace
 
+// compare() may run on several threads at once: what it makes on first use is made under the
+// lock (and never moves: a deque), and each call borrows its own buffers
 struct MetroReference::Impl {
+    struct Workspace {
+        Samples backward;  // the simplified side's, buffers reused between calls
+        MortonScratch scratch;
+    };
     Surface original;
     DistanceParams params;
     SurfaceAttributes attributes;
     Mesh3 mesh;
-    mutable std::vector<std::pair<uint64_t, Samples>> samples;  // by target count
-    mutable FaceSamples attribute_samples;                       // made on first use
-    mutable Samples backward;                                    // the simplified side's, buffers reused
-    mutable MortonScratch scratch;
+    mutable std::mutex lock;
+    mutable std::deque<std::pair<uint64_t, Samples>> samples;  // by target count
+    mutable std::unique_ptr<FaceSamples> attribute_samples;     // made on first use
+    mutable std::vector<std::unique_ptr<Workspace>> idle;
     Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s) {}
     const Samples& samples_for(uint64_t target) const {
+        std::lock_guard<std::mutex> hold(lock);
         for (const auto& [t, smp] : samples)
             if (t == target) return smp;
         samples.emplace_back(target, Samples{});
+        MortonScratch scratch;
         sample_surface(original, target, params, samples.back().second, scratch);
         return samples.back().second;
+    }
+    const FaceSamples& attribute_samples_once() const {
+        std::lock_guard<std::mutex> hold(lock);
+        if (!attribute_samples)
+            attribute_samples = std::make_unique<FaceSamples>(
+                face_samples(original, uint64_t(std::llround(params.attribute_samples_per_face * double(original.triangle_count))), params.seed, params.threads));
+        return *attribute_samples;
+    }
+    std::unique_ptr<Workspace> borrow() const {
+        std::lock_guard<std::mutex> hold(lock);
+        if (idle.empty()) return std::make_unique<Workspace>();
+        std::unique_ptr<Workspace> w = std::move(idle.back());
+        idle.pop_back();
+        return w;
+    }
+    void give_back(std::unique_ptr<Workspace> w) const {
+        std::lock_guard<std::mutex> hold(lock);
+        idle.push_back(std::move(w));
     }
 };
 
@@ -498,19 +527,17 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
     const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
     const Mesh3 other(simplified);
     if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
-        if (impl_->attribute_samples.samples.empty())
-            impl_->attribute_samples = face_samples(impl_->original, uint64_t(std::llround(impl_->params.attribute_samples_per_face * double(impl_->original.triangle_count))),
-                                                    impl_->params.seed, impl_->params.threads);
-        deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples, simplified, attributes, other, impl_->params.threads);
+        deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples_once(), simplified, attributes, other, impl_->params.threads);
     } else {
         deviation = AttributeDeviation{};
     }
     Distance d;
     const Samples& fs = impl_->samples_for(target);
     d.forward = measure(fs, other, impl_->params.threads);
-    Samples& bs = impl_->backward;
-    sample_surface(simplified, target, impl_->params, bs, impl_->scratch);
-    d.backward = measure(bs, impl_->mesh, impl_->params.threads);
+    std::unique_ptr<Impl::Workspace> work = impl_->borrow();
+    sample_surface(simplified, target, impl_->params, work->backward, work->scratch);
+    d.backward = measure(work->backward, impl_->mesh, impl_->params.threads);
+    impl_->give_back(std::move(work));
     d.hausdorff = std::max(d.forward.max, d.backward.max);
     d.diagonal = enlarged_union_diagonal(impl_->original, simplified);
     return d;

@@ -4,7 +4,9 @@
 #include "tom/report.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <thread>
 #include <future>
 #include <cmath>
 #include <stdexcept>
@@ -102,7 +104,7 @@ void check(const Mesh& original, const TomMesh& built) {
     if (original.triangle_count() == 0) throw std::invalid_argument("report: the mesh has no triangle");
 }
 
-ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportParams& params, const MetroReference& reference) {
+ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportParams& params, const MetroReference& reference, unsigned workers) {
     ErrorCurve c;
     const MeshView v = built.view();
     const uint32_t lo = std::max<uint32_t>(v.min_vertex_count, std::min<uint32_t>(4, v.vertex_count));
@@ -114,19 +116,36 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
         const uint32_t n = uint32_t(std::lround(std::exp(std::log(double(lo)) + t * (std::log(double(hi)) - std::log(double(lo))))));
         if (ns.empty() || n > ns.back()) ns.push_back(std::min(n, hi));
     }
-    std::vector<double> tris, means, maxes;
-    for (uint32_t n : ns) {
-        const Level l = extract_level(built, n);
-        ErrorCurvePoint p;
-        p.vertices = n;
-        p.triangles = l.e.triangle_count;
-        if (n == hi) {
-            // full resolution is the original itself: its error is 0 by definition
-        } else if (l.e.triangle_count > 0) {
+    // the points on `workers` threads, each measured on one (their costs differ widely: coarse
+    // levels lie far from the original, fine ones make large trees), taken in turn
+    std::vector<ErrorCurvePoint> points(ns.size());
+    std::vector<float> diagonals(ns.size(), 0.0f);
+    std::atomic<size_t> next{0};
+    auto work = [&] {
+        for (size_t i; (i = next++) < ns.size();) {
+            const uint32_t n = ns[i];
+            const Level l = extract_level(built, n);
+            ErrorCurvePoint& p = points[i];
+            p.vertices = n;
+            p.triangles = l.e.triangle_count;
+            if (n == hi || l.e.triangle_count == 0) continue;  // full resolution is the original itself: error 0
             const Distance d = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
             p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
             p.max = float(d.hausdorff / d.diagonal);
-            c.diagonal = float(d.diagonal);
+            diagonals[i] = float(d.diagonal);
+        }
+    };
+    {
+        std::vector<std::thread> pool;
+        for (unsigned k = 1; k < workers; ++k) pool.emplace_back(work);
+        work();
+        for (std::thread& t : pool) t.join();
+    }
+    std::vector<double> tris, means, maxes;
+    for (size_t i = 0; i < ns.size(); ++i) {
+        const ErrorCurvePoint& p = points[i];
+        if (ns[i] != hi && p.triangles > 0) {
+            c.diagonal = diagonals[i];
             tris.push_back(p.triangles);
             means.push_back(p.mean);
             maxes.push_back(p.max);
@@ -145,6 +164,7 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
 // so its cost does not grow with the mesh.
 static DistanceParams curve_distance_params(const ReportParams& params) {
     DistanceParams dp = params.distance;
+    dp.threads = 1;  // the points run in parallel instead (curve_workers)
     dp.vertex_samples = false;
     dp.edge_samples = false;
     dp.samples_per_face = 1e9;
@@ -155,7 +175,8 @@ static DistanceParams curve_distance_params(const ReportParams& params) {
 ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params) {
     check(original, built);
     const MetroReference reference(surface_of(original), curve_distance_params(params));
-    return curve_with(original, built, params, reference);
+    const unsigned workers = params.distance.threads ? params.distance.threads : std::max(1u, std::thread::hardware_concurrency());
+    return curve_with(original, built, params, reference, workers);
 }
 
 MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportParams& params) {
