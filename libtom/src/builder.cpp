@@ -757,7 +757,7 @@ void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats)
     std::vector<Candidate> candidates, tmp, rest;
     std::vector<uint32_t> pass_mark(b.n, 0);
     // the vertices to evaluate in a pass are independent: each reads the shared state and writes
-    // only its own list, best[], has[] and dirty[] (results do not depend on the thread count)
+    // only its own best[], has[] and dirty[] (results do not depend on the thread count)
     std::vector<uint32_t> evaluate;
     std::vector<Scratch> helpers(threads > 1 ? threads - 1 : 0);
     for (Scratch& h : helpers) h.stamp.assign(b.n, 0);
@@ -768,9 +768,11 @@ void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats)
         evaluate.clear();
         for (uint32_t v : live_vertices)
             if (dirty[v]) evaluate.push_back(v);
+        // two phases: compaction rewrites v's list, which another vertex's oracle may be walking
+        // (each corner is in one list, so compactions do not meet); evaluation only reads lists
+        parallel_for(evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch&) { adj.compact(evaluate[i]); });
         parallel_for(evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch& sc) {
             const uint32_t v = evaluate[i];
-            adj.compact(v);
             has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0, sc);
             dirty[v] = 0;
         });
