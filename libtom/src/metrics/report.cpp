@@ -7,7 +7,9 @@
 #include <atomic>
 #include <chrono>
 #include <thread>
+#include <exception>
 #include <future>
+#include <mutex>
 #include <cmath>
 #include <stdexcept>
 
@@ -121,26 +123,38 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
     std::vector<ErrorCurvePoint> points(ns.size());
     std::vector<float> diagonals(ns.size(), 0.0f);
     std::atomic<size_t> next{0};
+    std::exception_ptr failure;  // the first a point threw, rethrown once every thread stopped
+    std::mutex failure_lock;
+    auto measure_point = [&](size_t i) {
+        const uint32_t n = ns[i];
+        const Level l = extract_level(built, n);
+        ErrorCurvePoint& p = points[i];
+        p.vertices = n;
+        p.triangles = l.e.triangle_count;
+        if (n == hi || l.e.triangle_count == 0) return;  // full resolution is the original itself: error 0
+        const Distance d = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
+        p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
+        p.max = float(d.hausdorff / d.diagonal);
+        diagonals[i] = float(d.diagonal);
+    };
     auto work = [&] {
         for (size_t i; (i = next++) < ns.size();) {
-            const uint32_t n = ns[i];
-            const Level l = extract_level(built, n);
-            ErrorCurvePoint& p = points[i];
-            p.vertices = n;
-            p.triangles = l.e.triangle_count;
-            if (n == hi || l.e.triangle_count == 0) continue;  // full resolution is the original itself: error 0
-            const Distance d = reference.compare({built.positions.data(), n, l.indices.data(), l.e.triangle_count});
-            p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
-            p.max = float(d.hausdorff / d.diagonal);
-            diagonals[i] = float(d.diagonal);
+            try {
+                measure_point(i);
+            } catch (...) {
+                const std::lock_guard<std::mutex> hold(failure_lock);
+                if (!failure) failure = std::current_exception();
+                next = ns.size();
+            }
         }
     };
     {
         std::vector<std::thread> pool;
-        for (unsigned k = 1; k < workers; ++k) pool.emplace_back(work);
+        for (unsigned k = 1; k < std::min<size_t>(workers, ns.size()); ++k) pool.emplace_back(work);
         work();
         for (std::thread& t : pool) t.join();
     }
+    if (failure) std::rethrow_exception(failure);
     std::vector<double> tris, means, maxes;
     for (size_t i = 0; i < ns.size(); ++i) {
         const ErrorCurvePoint& p = points[i];
