@@ -28,7 +28,9 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <thread>
 
 namespace tom {
@@ -731,14 +733,23 @@ void parallel_for(size_t count, Scratch& own, std::vector<Scratch>& helpers, F&&
         return;
     }
     std::atomic<size_t> next{0};
+    std::exception_ptr failure;  // the first one thrown (std::bad_alloc), rethrown once all stopped
+    std::mutex failure_lock;
     auto work = [&](Scratch& sc) {
-        for (size_t begin; (begin = next.fetch_add(block)) < count;)
-            for (size_t i = begin, end = std::min(count, begin + block); i < end; ++i) f(i, sc);
+        try {
+            for (size_t begin; (begin = next.fetch_add(block)) < count;)
+                for (size_t i = begin, end = std::min(count, begin + block); i < end; ++i) f(i, sc);
+        } catch (...) {
+            const std::lock_guard<std::mutex> hold(failure_lock);
+            if (!failure) failure = std::current_exception();
+            next = count;
+        }
     };
     std::vector<std::thread> pool;
     for (size_t k = 1; k < threads; ++k) pool.emplace_back(work, std::ref(helpers[k - 1]));
     work(own);
     for (std::thread& t : pool) t.join();
+    if (failure) std::rethrow_exception(failure);
 }
 
 void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats) {
