@@ -211,45 +211,50 @@ struct Builder {
         size_t co = 0;
         bool bad = false;
         const uint32_t wv = wedge[v], wu = wedge[u];
-        // flips: v's own triangles (in index space: only they move)
-        adj.each(v, [&](uint32_t t) {
-            if (bad || contains(t, u)) return;
-            uint32_t a, c;
-            others(t, v, a, c);
-            const Vec3 pa = pos[a], pc = pos[c];
-            const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
-            const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
-            const float d = dot(n0, n1), l0 = dot(n0, n0);
-            if (l0 > 0.0f && (d <= 0.0f || d * d <= min_cos2 * l0 * dot(n1, n1))) bad = true;
-        });
-        if (bad) return true;
         // link condition on the surface welded by position (seam copies are one point): every
         // class adjacent to both v's and u's must be opposite a triangle joining them, otherwise
-        // two edges merge into a non-manifold one
+        // two edges merge into a non-manifold one. First, the classes around v and its copies.
         const uint32_t mark = sc.next_visit();
         auto is_opposite = [&](uint32_t w) {
             for (size_t i = 0; i < co; ++i)
                 if (opposite[i] == w) return true;
             return false;
         };
-        uint32_t x = v;
-        do {
+        auto link = [&](uint32_t a, uint32_t c) {
+            const uint32_t wa = wedge[a], wc = wedge[c];
+            stamp[wa] = mark;
+            stamp[wc] = mark;
+            if (wa == wu || wc == wu) {
+                const uint32_t w = wa == wu ? wc : wa;
+                if (!is_opposite(w)) {
+                    if (co < 8) opposite[co++] = w;
+                    else bad = true;
+                }
+            }
+        };
+        // v's own fan in one walk: flips (only v's triangles move; those with u die) and its link
+        adj.each(v, [&](uint32_t t) {
+            if (bad) return;
+            uint32_t a, c;
+            others(t, v, a, c);
+            if (a != u && c != u) {
+                const Vec3 pa = pos[a], pc = pos[c];
+                const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
+                const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
+                const float d = dot(n0, n1), l0 = dot(n0, n0);
+                if (l0 > 0.0f && (d <= 0.0f || d * d <= min_cos2 * l0 * dot(n1, n1))) {
+                    bad = true;
+                    return;
+                }
+            }
+            link(a, c);
+        });
+        for (uint32_t x = next_copy[v]; x != v && !bad; x = next_copy[x])
             adj.each(x, [&](uint32_t t) {
                 uint32_t a, c;
                 others(t, x, a, c);
-                const uint32_t wa = wedge[a], wc = wedge[c];
-                stamp[wa] = mark;
-                stamp[wc] = mark;
-                if (wa == wu || wc == wu) {
-                    const uint32_t w = wa == wu ? wc : wa;
-                    if (!is_opposite(w)) {
-                        if (co < 8) opposite[co++] = w;
-                        else bad = true;
-                    }
-                }
+                link(a, c);
             });
-            x = next_copy[x];
-        } while (x != v && !bad);
         if (bad) return true;
         uint32_t y = u;
         do {
