@@ -413,6 +413,11 @@ TEST_CASE("malformed OFF, PLY and OBJ files are errors naming the file and the l
         {"short.off", "OFF\n4 2 0\n" + cube_v + "3 0 1 2\n", "dir/short.off:8: the file ends after 1 of 2 faces"},
         {"counts.off", "OFF\n4000000000 1 0\n" + cube_v, "dir/counts.off:2: 4000000000 vertices and 1 faces cannot fit"},
         {"nan.off", "OFF\n4 1 0\n0 0 0\nnan 0 0\n1 1 0\n0 1 0\n3 0 1 2\n", "dir/nan.off:4: vertex 1: 'nan' is not a number"},
+        // out of float range (strtof's ERANGE: overflow, and underflow past the normal floats)
+        {"overflow.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 3.5e38\n3 0 1 2\n", "dir/overflow.off:6: vertex 3: '3.5e38' is not a number"},
+        {"underflow.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0.000000000000000000000000000000000000001 1 0\n0 0 1\n3 0 1 2\n",
+         "dir/underflow.off:5: vertex 2: '0.00000000000000000000000000000000000000...' is not a number"},  // quoted up to 40 characters
+        {"underflow_exponent.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n1e-41 0 1\n3 0 1 2\n", "dir/underflow_exponent.off:6: vertex 3: '1e-41' is not a number"},
         {"dimension.off", "nOFF\n4\n4 1 0\n", "only three-dimensional vertices"},
         {"bad_type.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty flaot x\nend_header\n", "dir/bad_type.ply:4: expected 'property TYPE NAME'"},
         {"no_end.ply", "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n", "the file ends before end_header"},
@@ -441,6 +446,25 @@ TEST_CASE("malformed OFF, PLY and OBJ files are errors naming the file and the l
         CHECK(message.find(path) != std::string::npos);
     }
     fs::remove_all(dir);
+}
+
+TEST_CASE("numbers anywhere in the float range are read, written in any form", "[import]") {
+    namespace fs = std::filesystem;
+    const fs::path path = fs::temp_directory_path() / "tom_import_numbers.off";
+    std::ofstream(path, std::ios::binary) << "OFF\n4 2 0\n1e30 0 0\n0 1E-30 +2.5\n-3.4e38 0.000000000000000000000000000001 0\n"
+                                             "00012.5e+1 -0 .5\n3 0 1 2\n3 0 2 3\n";
+    const tom::ImportResult r = tom::import_file(path.string());
+    REQUIRE(r.meshes.size() == 1);
+    const std::vector<float>& p = r.meshes[0].positions;
+    REQUIRE(p.size() == 12);
+    CHECK(p[0] == 1e30f);
+    CHECK(p[4] == 1e-30f);
+    CHECK(p[5] == 2.5f);
+    CHECK(p[6] == -3.4e38f);
+    CHECK(p[7] == 1e-30f);
+    CHECK(p[9] == 125.0f);
+    CHECK(p[11] == 0.5f);
+    fs::remove(path);
 }
 
 TEST_CASE("mutated sample files (truncated, bytes flipped, extreme numbers) give a mesh or an error, never a crash", "[import][broken]") {

@@ -32,9 +32,18 @@ namespace detail {
 
 std::vector<uint8_t> read_whole_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError("cannot open '" + path + "': " + std::strerror(errno));
     std::vector<uint8_t> bytes;
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (!in.good() && !in.eof()) throw IoError("cannot read '" + path + "'");
+    // in blocks (the size may change under us; a block at a time also reads pipes)
+    constexpr size_t kBlock = size_t(1) << 20;
+    for (;;) {
+        const size_t at = bytes.size();
+        bytes.resize(at + kBlock);
+        in.read(reinterpret_cast<char*>(bytes.data() + at), std::streamsize(kBlock));
+        bytes.resize(at + size_t(in.gcount()));
+        if (!in) break;
+    }
+    if (in.bad()) throw IoError("cannot read '" + path + "'");
     return bytes;
 }
 

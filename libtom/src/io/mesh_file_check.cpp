@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <charconv>
 #include <cstring>
 #include <strings.h>
 #include <map>
@@ -80,15 +81,12 @@ class Tokens {
     size_t line_ = 1, last_line_ = 1;
 };
 
+// As strtoll reads a whole token: optional sign, decimal digits, in range.
 bool parse_integer(std::string_view s, long long& value) {
     if (s.empty() || s.size() > 20) return false;
-    char buffer[24];
-    std::memcpy(buffer, s.data(), s.size());
-    buffer[s.size()] = 0;
-    char* end = nullptr;
-    errno = 0;
-    value = std::strtoll(buffer, &end, 10);
-    return errno == 0 && end == buffer + s.size();
+    const char* first = s.data() + (s[0] == '+' && s.size() > 1 && s[1] != '-' ? 1 : 0);
+    const auto [end, error] = std::from_chars(first, s.data() + s.size(), value);
+    return error == std::errc() && end == s.data() + s.size();
 }
 
 // A number as an input stream reads it into a float: decimal digits with an optional sign,
@@ -102,18 +100,40 @@ bool parse_number(std::string_view s) {
         return i > start;
     };
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    const size_t integer_start = i;
     bool mantissa = digits();
+    const size_t integer_end = i;
+    size_t fraction_start = i, fraction_end = i;
     if (i < s.size() && s[i] == '.') {
         ++i;
+        fraction_start = i;
         mantissa |= digits();
+        fraction_end = i;
     }
     if (!mantissa) return false;
+    long exponent = 0;
+    bool has_exponent = false;
     if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
         ++i;
+        const bool negative = i < s.size() && s[i] == '-';
         if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+        const size_t exponent_start = i;
         if (!digits()) return false;
+        for (size_t k = exponent_start; k < i && exponent < 100000; ++k) exponent = exponent * 10 + (s[k] - '0');
+        if (negative) exponent = -exponent;
+        has_exponent = true;
     }
     if (i != s.size() || s.size() > 64) return false;
+    // the decimal magnitude of the first non-zero digit: within 1e-30..1e30 the value is a
+    // finite, normal float, and strtof (what the range check below asks) cannot fail
+    long magnitude = 0;
+    bool nonzero = false;
+    for (size_t k = integer_start; k < integer_end && !nonzero; ++k)
+        if (s[k] != '0') nonzero = true, magnitude = long(integer_end - k) - 1;
+    for (size_t k = fraction_start; k < fraction_end && !nonzero; ++k)
+        if (s[k] != '0') nonzero = true, magnitude = -long(k - fraction_start) - 1;
+    if (!nonzero && !has_exponent) return true;  // zero
+    if (nonzero && magnitude + exponent >= -30 && magnitude + exponent <= 30) return true;
     char buffer[72];
     std::memcpy(buffer, s.data(), s.size());
     buffer[s.size()] = 0;
