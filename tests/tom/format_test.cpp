@@ -525,6 +525,37 @@ TEST_CASE("random corruption never crashes and never yields an out-of-range inde
     CHECK(accepted + rejected == 4000);
 }
 
+TEST_CASE("random corruption of the coarse corners and the order never yields an out-of-range index", "[format][fuzz][coarse]") {
+    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    const std::vector<uint8_t> good = tom::serialize({tom::build(sphere)});
+    const std::vector<Section> sections = sections_of(good);
+    const Section coarse = find(sections, "COAR"), subs = find(sections, "SUBS"), tris = find(sections, "TRIS");
+    std::mt19937 rng(4321);
+    int rejected = 0, accepted = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        std::vector<uint8_t> b = good;
+        // bits of COAR (header and corners) mostly, sometimes of SUBS or TRIS, behind valid checksums
+        const Section& target = trial % 4 == 0 ? subs : trial % 4 == 1 ? tris : coarse;
+        for (int k = 0, flips = 1 + int(rng() % 3); k < flips; ++k) b[target.offset + rng() % target.bytes] ^= uint8_t(1u << (rng() % 8));
+        fix_checksums(b);
+        try {
+            const tom::File f = tom::File::from_bytes(b.data(), b.size(), "fuzz.tom");
+            ++accepted;
+            const tom::MeshView& m = f.mesh(0);
+            std::vector<uint32_t> out(size_t(m.triangle_count) * 3);
+            for (uint32_t n : {m.min_vertex_count, m.coarse_resolution / 2, m.coarse_resolution, m.coarse_resolution + 1}) {
+                const tom::Extracted r = tom::extract(m, n, out.data(), out.size());
+                for (size_t c = 0; c < size_t(r.triangle_count) * 3; ++c) REQUIRE(out[c] < r.vertex_count);
+            }
+        } catch (const tom::FormatError&) {
+            ++rejected;
+        }
+    }
+    CHECK(rejected > 300);  // a flipped corner or count is caught by rule 19 (or 13, 14)
+    CHECK(accepted + rejected == 600);
+}
+
 TEST_CASE("a missing file is an I/O error naming it", "[format]") {
     try {
         tom::File::open("/nonexistent/dir/x.tom");
