@@ -2,6 +2,8 @@
 
 #include "candidates.h"
 
+#include "../simd.h"
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -31,7 +33,7 @@ __attribute__((target("avx"))) size_t below_avx(double* column, size_t padded, V
     return count;
 }
 bool cpu_has_avx() {
-    static const bool has = __builtin_cpu_supports("avx");
+    static const bool has = __builtin_cpu_supports("avx") && simd_enabled();
     return has;
 }
 #endif
