@@ -21,17 +21,14 @@
 
 #include "attribute_error.h"
 #include "format_layout.h"
+#include "parallel.h"
 #include "vec3.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <limits>
-#include <mutex>
-#include <thread>
 
 namespace tom {
 
@@ -41,7 +38,9 @@ using Vec3 = detail::Vec3T<float>;
 using detail::cross;
 using detail::dot;
 using detail::length;
+using detail::parallel_blocks;
 using detail::sub;
+using detail::thread_count;
 
 // Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22). The error is divided by
 // the accumulated weight (area), as meshoptimizer does: a mean squared distance, which measured
@@ -727,34 +726,14 @@ void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candi
 }
 
 // Runs f(i, scratch) for i in [0, count) on up to 1 + helpers.size() threads (the caller's with
-// `own`, each helper thread with its own scratch), in blocks taken in turn. f must only write
-// state that belongs to i.
+// `own`, each helper thread with its own scratch), in blocks of 512. f must only write state that
+// belongs to i.
 template <class F>
 void parallel_for(size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
-    constexpr size_t block = 512;
-    const size_t threads = std::min<size_t>(1 + helpers.size(), (count + block - 1) / block);
-    if (threads <= 1) {
-        for (size_t i = 0; i < count; ++i) f(i, own);
-        return;
-    }
-    std::atomic<size_t> next{0};
-    std::exception_ptr failure;  // the first one thrown (std::bad_alloc), rethrown once all stopped
-    std::mutex failure_lock;
-    auto work = [&](Scratch& sc) {
-        try {
-            for (size_t begin; (begin = next.fetch_add(block)) < count;)
-                for (size_t i = begin, end = std::min(count, begin + block); i < end; ++i) f(i, sc);
-        } catch (...) {
-            const std::lock_guard<std::mutex> hold(failure_lock);
-            if (!failure) failure = std::current_exception();
-            next = count;
-        }
-    };
-    std::vector<std::thread> pool;
-    for (size_t k = 1; k < threads; ++k) pool.emplace_back(work, std::ref(helpers[k - 1]));
-    work(own);
-    for (std::thread& t : pool) t.join();
-    if (failure) std::rethrow_exception(failure);
+    parallel_blocks(count, 512, unsigned(1 + helpers.size()), [&](unsigned worker, size_t begin, size_t end) {
+        Scratch& sc = worker == 0 ? own : helpers[worker - 1];
+        for (size_t i = begin; i < end; ++i) f(i, sc);
+    });
 }
 
 void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats) {
@@ -1007,8 +986,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     if (params.strategy == Strategy::heap)
         run_heap(b);
     else
-        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)),
-                   params.threads ? params.threads : std::max(1u, std::thread::hardware_concurrency()), stats);
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), thread_count(params.threads), stats);
 
     // total order: survivors first (in input order), then removed vertices, last removed first
     const uint32_t n = b.n, m = b.m;

@@ -4,16 +4,13 @@
 #include "tom/report.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <thread>
-#include <exception>
-#include <future>
-#include <mutex>
 #include <cmath>
+#include <future>
 #include <stdexcept>
 
 #include "tom/format.h"
+#include "../parallel.h"
 
 namespace tom {
 
@@ -106,6 +103,7 @@ void check(const Mesh& original, const TomMesh& built) {
     if (original.triangle_count() == 0) throw std::invalid_argument("report: the mesh has no triangle");
 }
 
+// `workers`: threads for the points, 0 for one per core
 ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportParams& params, const MetroReference& reference, unsigned workers) {
     ErrorCurve c;
     const MeshView v = built.view();
@@ -122,10 +120,7 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
     // levels lie far from the original, fine ones make large trees), taken in turn
     std::vector<ErrorCurvePoint> points(ns.size());
     std::vector<float> diagonals(ns.size(), 0.0f);
-    std::atomic<size_t> next{0};
-    std::exception_ptr failure;  // the first a point threw, rethrown once every thread stopped
-    std::mutex failure_lock;
-    auto measure_point = [&](size_t i) {
+    detail::parallel_blocks(ns.size(), 1, workers, [&](unsigned, size_t i, size_t) {
         const uint32_t n = ns[i];
         const Level l = extract_level(built, n);
         ErrorCurvePoint& p = points[i];
@@ -136,25 +131,7 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
         p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
         p.max = float(d.hausdorff / d.diagonal);
         diagonals[i] = float(d.diagonal);
-    };
-    auto work = [&] {
-        for (size_t i; (i = next++) < ns.size();) {
-            try {
-                measure_point(i);
-            } catch (...) {
-                const std::lock_guard<std::mutex> hold(failure_lock);
-                if (!failure) failure = std::current_exception();
-                next = ns.size();
-            }
-        }
-    };
-    {
-        std::vector<std::thread> pool;
-        for (unsigned k = 1; k < std::min<size_t>(workers, ns.size()); ++k) pool.emplace_back(work);
-        work();
-        for (std::thread& t : pool) t.join();
-    }
-    if (failure) std::rethrow_exception(failure);
+    });
     std::vector<double> tris, means, maxes;
     for (size_t i = 0; i < ns.size(); ++i) {
         const ErrorCurvePoint& p = points[i];
@@ -178,7 +155,7 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
 // so its cost does not grow with the mesh.
 static DistanceParams curve_distance_params(const ReportParams& params) {
     DistanceParams dp = params.distance;
-    dp.threads = 1;  // the points run in parallel instead (curve_workers)
+    dp.threads = 1;  // the points run in parallel instead (curve_with's workers)
     dp.vertex_samples = false;
     dp.edge_samples = false;
     dp.samples_per_face = 1e9;
@@ -189,8 +166,7 @@ static DistanceParams curve_distance_params(const ReportParams& params) {
 ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params) {
     check(original, built);
     const MetroReference reference(surface_of(original), curve_distance_params(params));
-    const unsigned workers = params.distance.threads ? params.distance.threads : std::max(1u, std::thread::hardware_concurrency());
-    return curve_with(original, built, params, reference, workers);
+    return curve_with(original, built, params, reference, params.distance.threads);
 }
 
 MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportParams& params) {

@@ -4,13 +4,12 @@
 // face samples of the attribute deviation. Internal to tom::metrics.
 
 #include <algorithm>
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
-#include <thread>
 #include <utility>
 #include <vector>
 
+#include "../parallel.h"
 #include "geometry.h"
 #include "tom/metrics.h"
 
@@ -22,18 +21,8 @@ constexpr size_t kChunk = 4096;
 // core); results kept per chunk and combined in chunk order give the same figures for any count.
 template <class Work>
 size_t parallel_chunks(size_t n, unsigned threads, Work&& work) {
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::atomic<size_t> next{0};
-    auto run = [&] {
-        for (size_t c; (c = next++) < chunks;) work(c, c * kChunk, std::min(n, c * kChunk + kChunk));
-    };
-    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-    threads = unsigned(std::min<size_t>(threads, std::max<size_t>(1, chunks)));
-    std::vector<std::thread> pool;
-    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(run);
-    run();
-    for (std::thread& t : pool) t.join();
-    return chunks;
+    parallel_blocks(n, kChunk, threads, [&](unsigned, size_t begin, size_t end) { work(begin / kChunk, begin, end); });
+    return (n + kChunk - 1) / kChunk;
 }
 
 inline V3 vertex(const Surface& s, uint32_t v) {
