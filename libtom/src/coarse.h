@@ -12,6 +12,9 @@ namespace tom::detail {
 /// most 65536 so they fit 16 bits), or 0 when the mesh is too small to gain from it.
 uint32_t coarse_resolution(const MeshView& mesh) noexcept;
 
+/// Bytes per stored coarse corner: 2 when the resolution allows (values < resolution), else 4.
+inline uint32_t coarse_index_size(uint32_t resolution) noexcept { return resolution <= 65536 ? 2 : 4; }
+
 /// Stored corner c of TRIS mapped to resolution n (n >= min_vertex_count).
 uint32_t map_corner(const MeshView& mesh, uint32_t c, uint32_t n) noexcept;
 

@@ -204,16 +204,20 @@ void map_corners(const I* sub, const C* in, O* dst, size_t corners, uint32_t n) 
     map_corners_scalar(sub, in, dst, corners, n);
 }
 
+template <class I>
+uint32_t active_count(const MeshView& m, uint32_t n) noexcept {
+    const Corners src = corners_for(m, n);
+    const I* sub = static_cast<const I*>(m.substitute);
+    return src.index_size == 2 ? count_active<I, uint16_t>(sub, src, n) : count_active<I, uint32_t>(sub, src, n);
+}
+
 template <class I, class O>
 Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t capacity) noexcept {
     Extracted r;
     r.vertex_count = clamp_resolution(m, vertex_count);
     const uint32_t n = r.vertex_count;
-    const I* sub = static_cast<const I*>(m.substitute);
-    const Corners src = corners_for(m, n);
     // the count costs O(log T) short walks: far less than checking every triangle for the end
-    const uint32_t active = src.index_size == 2 ? count_active<I, uint16_t>(sub, src, n) : count_active<I, uint32_t>(sub, src, n);
-    r.triangle_count = uint32_t(std::min<size_t>(active, capacity / 3));
+    r.triangle_count = uint32_t(std::min<size_t>(active_count<I>(m, n), capacity / 3));
     const size_t corners = size_t(r.triangle_count) * 3;
     if (n == m.vertex_count) {  // full resolution: every chain is empty
         const I* in = static_cast<const I*>(m.triangles);
@@ -223,6 +227,8 @@ Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t 
             for (size_t i = 0; i < corners; ++i) dst[i] = O(in[i]);
         return r;
     }
+    const I* sub = static_cast<const I*>(m.substitute);
+    const Corners src = corners_for(m, n);
     if (src.index_size == 2)
         map_corners(sub, static_cast<const uint16_t*>(src.data), dst, corners, n);
     else
@@ -230,19 +236,10 @@ Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t 
     return r;
 }
 
-template <class I>
-uint32_t active_count(const MeshView& m, uint32_t n) noexcept {
-    const Corners src = corners_for(m, n);
-    const I* sub = static_cast<const I*>(m.substitute);
-    return src.index_size == 2 ? count_active<I, uint16_t>(sub, src, n) : count_active<I, uint32_t>(sub, src, n);
-}
-
-} // namespace
-
-namespace {
 uint32_t active_count_at(const MeshView& m, uint32_t n) noexcept {
     return m.index_size == 2 ? active_count<uint16_t>(m, n) : active_count<uint32_t>(m, n);
 }
+
 } // namespace
 
 uint32_t active_triangle_count(const MeshView& m, uint32_t vertex_count) noexcept {

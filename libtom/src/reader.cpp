@@ -289,8 +289,9 @@ void File::Impl::validate(const OpenOptions& options) {
             fail(sec->offset + c_resolution, field + " resolution", 19,
                  std::to_string(resolution) + " is not in [min_vertex_count, vertex_count] = [" + std::to_string(v.min_vertex_count) + ", " +
                      std::to_string(v.vertex_count) + "]");
-        if (index_size != (resolution <= 65536 ? 2u : 4u))
-            fail(sec->offset + c_index_size, field + " index_size", 19, "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + (resolution <= 65536 ? "2" : "4"));
+        if (index_size != detail::coarse_index_size(resolution))
+            fail(sec->offset + c_index_size, field + " index_size", 19,
+                 "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + std::to_string(detail::coarse_index_size(resolution)));
         if (triangles > v.triangle_count)
             fail(sec->offset + c_triangle_count, field + " triangle_count", 19, std::to_string(triangles) + " is more than the mesh's " + std::to_string(v.triangle_count));
         if (sec->bytes != coarse_header_bytes + uint64_t(triangles) * 3 * index_size)

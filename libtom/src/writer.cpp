@@ -72,7 +72,7 @@ std::vector<uint8_t> coarse_bytes(const TomMesh& mesh) {
     if (resolution == 0) return {};
     const uint32_t triangles = detail::active_prefix(view, resolution);
     if (triangles == 0) return {};
-    const uint32_t index_size = resolution <= 65536 ? 2 : 4;
+    const uint32_t index_size = detail::coarse_index_size(resolution);
     std::vector<uint32_t> corners(size_t(triangles) * 3);
     for (uint32_t c = 0; c < corners.size(); ++c) corners[c] = detail::map_corner(view, c, resolution);
     std::vector<uint8_t> out(coarse_header_bytes, 0);
