@@ -110,6 +110,13 @@ tom::TomMesh small_mesh() {
     return t;
 }
 
+// a mesh large enough (>= 4096 vertices) for the writer to store coarse corners (COAR)
+tom::TomMesh coarse_sphere() {
+    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    return tom::build(sphere);
+}
+
 // two materials (one with textures), three instances of meshes 0 and 1 (or only mesh 0)
 tom::Scene small_scene(uint32_t meshes = 2) {
     tom::Scene scene;
@@ -364,9 +371,7 @@ TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[forma
 
 TEST_CASE("rule 19: coarse corners are the active triangles' corners mapped to their resolution", "[format][corrupt][coarse]") {
     // FORMAT.md, section COAR: u32 resolution, u32 triangle_count, u32 index_size, u32 reserved, corners
-    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
-    tom::clean_mesh(sphere);
-    const tom::TomMesh t = tom::build(sphere);
+    const tom::TomMesh t = coarse_sphere();
     REQUIRE(t.vertex_count() >= 4096);
     const std::vector<uint8_t> good = tom::serialize({t});
     const Section coarse = find(sections_of(good), "COAR");
@@ -526,9 +531,7 @@ TEST_CASE("random corruption never crashes and never yields an out-of-range inde
 }
 
 TEST_CASE("random corruption of the coarse corners and the order never yields an out-of-range index", "[format][fuzz][coarse]") {
-    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
-    tom::clean_mesh(sphere);
-    const std::vector<uint8_t> good = tom::serialize({tom::build(sphere)});
+    const std::vector<uint8_t> good = tom::serialize({coarse_sphere()});
     const std::vector<Section> sections = sections_of(good);
     const Section coarse = find(sections, "COAR"), subs = find(sections, "SUBS"), tris = find(sections, "TRIS");
     std::mt19937 rng(4321);
