@@ -270,14 +270,17 @@ struct RunSearch {
         list.clear();
         CollectWithin collect{lo, hi, centre, reach2, target, list};
         descend(collect, *target.tree.root_node(), target.triangles.size());
-        const size_t m = list.size();
-        // never empty (c is within the reach); with many candidates, every point is far from a
-        // fine surface and its own descent is cheaper than the scan
-        if (m == 0 || m > 1024) return each(b, e, emit);
-        bounds.fill(target.flat, list);
-        size_t of_c = 0;
-        for (size_t k = 0; k < m; ++k)
+        // c is within the reach, but where the reach is a few ulps (points on c) rounding may
+        // leave it out: the starts below are distances to c, so it must be a candidate
+        size_t of_c = list.size();
+        for (size_t k = 0; k < list.size(); ++k)
             if (list[k] == c) of_c = k;
+        if (of_c == list.size()) list.push_back(c);
+        const size_t m = list.size();
+        // with many candidates, every point is far from a fine surface and its own descent is
+        // cheaper than the scan
+        if (m > 1024) return each(b, e, emit);
+        bounds.fill(target.flat, list);
         size_t last = of_c;
         for (size_t i = b; i < e; ++i) {
             const V3 p = points[i];
