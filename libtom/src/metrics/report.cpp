@@ -104,7 +104,7 @@ void check(const Mesh& original, const TomMesh& built) {
 }
 
 // `workers`: threads for the points, 0 for one per core
-ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportParams& params, const MetroReference& reference, unsigned workers) {
+ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const MetroReference& reference, unsigned workers) {
     ErrorCurve c;
     const MeshView v = built.view();
     const uint32_t lo = std::max<uint32_t>(v.min_vertex_count, std::min<uint32_t>(4, v.vertex_count));
@@ -145,7 +145,6 @@ ErrorCurve curve_with(const Mesh& original, const TomMesh& built, const ReportPa
     }
     c.k_mean = float(fit_k_over_n(tris, means).k);
     c.k_max = float(fit_k_over_n(tris, maxes).k);
-    (void)original;
     return c;
 }
 
@@ -166,7 +165,7 @@ static DistanceParams curve_distance_params(const ReportParams& params) {
 ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params) {
     check(original, built);
     const MetroReference reference(surface_of(original), curve_distance_params(params));
-    return curve_with(original, built, params, reference, params.distance.threads);
+    return curve_with(built, params, reference, params.distance.threads);
 }
 
 MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportParams& params) {
