@@ -212,9 +212,10 @@ int main(int argc, char** argv) {
             return tools::exit_failed;
         }
         const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && jobs.size() > 1;
-        const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
-        const tom::ReportParams rparams = report_params(opt, std::max(1u, hardware / std::max(1u, opt.jobs)));
-        if (params.threads == 0) params.threads = std::max(1u, hardware / std::max(1u, opt.jobs));
+        // the cores shared among the -j jobs: each job's build and report threads
+        const unsigned per_job = std::max(1u, std::max(1u, std::thread::hardware_concurrency()) / std::max(1u, opt.jobs));
+        const tom::ReportParams rparams = report_params(opt, per_job);
+        if (params.threads == 0) params.threads = per_job;
         std::vector<std::string> summary_rows(jobs.size());
         auto report_path_of = [&](const tools::Job& job) -> std::string {
             if (opt.report_json_dir.empty()) return "";
