@@ -68,6 +68,18 @@ double surface_area(const Surface& s) {
     return area;
 }
 
+namespace {
+
+// each face's area into `areas`; returns their sum (summed in face order, as surface_area())
+double face_areas(const Surface& s, std::vector<double>& areas) {
+    areas.resize(s.triangle_count);
+    double total = 0;
+    for (size_t t = 0; t < s.triangle_count; ++t) total += areas[t] = face_area(s, t);
+    return total;
+}
+
+} // namespace
+
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation) {
     const size_t n = points.size();
@@ -105,9 +117,8 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch) {
     out.points.clear();
     out.vertex = out.edge = out.face = 0;
-    std::vector<double> areas(s.triangle_count);
-    out.area = 0;
-    for (size_t t = 0; t < s.triangle_count; ++t) out.area += areas[t] = face_area(s, t);
+    std::vector<double> areas;
+    out.area = face_areas(s, areas);
     out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
     const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
     if (p.vertex_samples) {
@@ -191,13 +202,14 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
 
 FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsigned threads) {
     FaceSamples out;
-    const double area = surface_area(s);
+    std::vector<double> areas;
+    const double area = face_areas(s, areas);
     if (!(area > 0)) return out;
     std::vector<FaceSample> made;
     Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
     for (size_t t = 0; t < s.triangle_count; ++t) {
         const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
-        const double expected = double(target) * face_area(s, t) / area;
+        const double expected = double(target) * areas[t] / area;
         for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
             double u, v;
             rng.in_triangle(u, v);
