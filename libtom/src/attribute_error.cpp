@@ -113,21 +113,6 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate) {
     }
 }
 
-double AttributeError::accumulated(uint32_t v, const float* pu, uint32_t u) const noexcept {
-    if (quadric_.empty()) return 0.0;
-    const double* q = &quadric_[size_t(v) * stride_];
-    if (!(q[0] > 0)) return 0.0;
-    const double x = pu[0], y = pu[1], z = pu[2];
-    double e = q[1] * x * x + q[4] * y * y + q[6] * z * z + 2 * (q[2] * x * y + q[3] * x * z + q[5] * y * z) + 2 * (q[7] * x + q[8] * y + q[9] * z) + q[10];
-    const float* a = &values_[size_t(u) * size_t(channels_)];
-    for (int j = 0; j < channels_; ++j) {
-        const double* ch = &q[11 + 4 * size_t(j)];
-        const double s = a[j];
-        e += q[0] * s * s - 2 * s * (ch[0] * x + ch[1] * y + ch[2] * z + ch[3]);
-    }
-    return e > 0 ? e / q[0] : 0.0;
-}
-
 void AttributeError::merge(uint32_t u, uint32_t v) noexcept {
     if (quadric_.empty()) return;
     double* dst = &quadric_[size_t(u) * stride_];

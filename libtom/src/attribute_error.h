@@ -30,7 +30,16 @@ public:
 
     /// Accumulated error of v's quadric at u's position and attributes, per unit area (like the
     /// geometric quadric), in length^2.
-    double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept;
+    double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept {
+        if (quadric_.empty()) return 0.0;
+        const double* q = &quadric_[size_t(v) * stride_];
+        const float* a = &values_[size_t(u) * size_t(channels_)];
+        switch (channels_) {  // the common layouts unrolled (the same sums in the same order)
+        case 3: return evaluate<3>(q, position_u, a);        // normals
+        case 5: return evaluate<5>(q, position_u, a);        // normals, TEXCOORD_0
+        default: return evaluate<0>(q, position_u, a);
+        }
+    }
     /// v's quadric merges into u's (v -> u).
     void merge(uint32_t u, uint32_t v) noexcept;
 
@@ -39,6 +48,21 @@ public:
     double triangle_error(const float* positions, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t u) const noexcept;
 
 private:
+    // v's quadric q at position p with attributes a, per unit area; C channels (0: channels_)
+    template <int C>
+    double evaluate(const double* q, const float* p, const float* a) const noexcept {
+        if (!(q[0] > 0)) return 0.0;
+        const double x = p[0], y = p[1], z = p[2];
+        double e = q[1] * x * x + q[4] * y * y + q[6] * z * z + 2 * (q[2] * x * y + q[3] * x * z + q[5] * y * z) + 2 * (q[7] * x + q[8] * y + q[9] * z) + q[10];
+        const int channels = C ? C : channels_;
+        for (int j = 0; j < channels; ++j) {
+            const double* ch = &q[11 + 4 * j];
+            const double s = a[j];
+            e += q[0] * s * s - 2 * s * (ch[0] * x + ch[1] * y + ch[2] * z + ch[3]);
+        }
+        return e > 0 ? e / q[0] : 0.0;
+    }
+
     int channels_ = 0;
     std::vector<float> values_;    // channels_ per vertex, scaled
     std::vector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D

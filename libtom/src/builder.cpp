@@ -38,7 +38,6 @@ using Vec3 = detail::Vec3T<float>;
 using detail::cross;
 using detail::dot;
 using detail::length;
-using detail::parallel_blocks;
 using detail::sub;
 using detail::thread_count;
 
@@ -725,18 +724,17 @@ void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candi
     items.insert(items.end(), rest.begin(), rest.end());
 }
 
-// Runs f(i, scratch) for i in [0, count) on up to 1 + helpers.size() threads (the caller's with
-// `own`, each helper thread with its own scratch), in blocks of 512. f must only write state that
-// belongs to i.
+// Runs f(i, scratch) for i in [0, count) on the team's threads (the caller's with `own`, each
+// helper with its own scratch), in blocks of 512. f must only write state that belongs to i.
 template <class F>
-void parallel_for(size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
-    parallel_blocks(count, 512, unsigned(1 + helpers.size()), [&](unsigned worker, size_t begin, size_t end) {
+void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
+    team.blocks(count, 512, [&](unsigned worker, size_t begin, size_t end) {
         Scratch& sc = worker == 0 ? own : helpers[worker - 1];
         for (size_t i = begin; i < end; ++i) f(i, sc);
     });
 }
 
-void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats) {
+void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stats) {
     // adjacency as corner lists that substitutions splice: nothing is rebuilt between passes
     ListAdjacency adj;
     adj.build(b);
@@ -754,7 +752,7 @@ void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats)
     // the vertices to evaluate in a pass are independent: each reads the shared state and writes
     // only its own best[], has[] and dirty[] (results do not depend on the thread count)
     std::vector<uint32_t> evaluate;
-    std::vector<Scratch> helpers(threads > 1 ? threads - 1 : 0);
+    std::vector<Scratch> helpers(team.size() - 1);
     for (Scratch& h : helpers) h.stamp.assign(b.n, 0);
     uint32_t alive_count = b.n;
     bool full_rescan_done = false;
@@ -765,8 +763,8 @@ void run_passes(Builder& b, float fraction, unsigned threads, BuildStats& stats)
             if (dirty[v]) evaluate.push_back(v);
         // two phases: compaction rewrites v's list, which another vertex's oracle may be walking
         // (each corner is in one list, so compactions do not meet); evaluation only reads lists
-        parallel_for(evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch&) { adj.compact(evaluate[i]); });
-        parallel_for(evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch& sc) {
+        parallel_for(team, evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch&) { adj.compact(evaluate[i]); });
+        parallel_for(team, evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch& sc) {
             const uint32_t v = evaluate[i];
             has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0, sc);
             dirty[v] = 0;
@@ -983,10 +981,12 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric);
     find_pairs(b, params.pair_threshold, stats);
 
-    if (params.strategy == Strategy::heap)
+    if (params.strategy == Strategy::heap) {
         run_heap(b);
-    else
-        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), thread_count(params.threads), stats);
+    } else {
+        detail::Team team(thread_count(params.threads));
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), team, stats);
+    }
 
     // total order: survivors first (in input order), then removed vertices, last removed first
     const uint32_t n = b.n, m = b.m;
