@@ -919,6 +919,96 @@ void run_heap(Builder& b) {
     }
 }
 
+// dst = src's vertex rows in the given order (row i = src row order[i]) for every stream of
+// `from` into the same stream of `to`; positions included. Streams not one row per vertex are
+// copied as they are (clean_mesh leaves none).
+template <class From, class To>
+void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>& order) {
+    auto gather = [&](const std::vector<float>& src, std::vector<float>& dst, size_t width) {
+        if (src.size() != order.size() * width) {
+            dst = src;
+            return;
+        }
+        dst.resize(src.size());
+        for (size_t i = 0; i < order.size(); ++i) std::memcpy(&dst[i * width], &src[size_t(order[i]) * width], width * sizeof(float));
+    };
+    gather(from.positions, to.positions, 3);
+    std::vector<const std::vector<float>*> sources;
+    for_each_attribute_stream(from, [&](const std::vector<float>& values, size_t, const char*) { sources.push_back(&values); });
+    size_t stream = 0;
+    for_each_attribute_stream(to, [&](std::vector<float>& dst, size_t width, const char*) { gather(*sources[stream++], dst, width); });
+}
+
+// Spreads the 10 low bits of x to every third bit (a Morton code's one axis).
+inline uint32_t spread3(uint32_t x) {
+    x &= 0x3ffu;
+    x = (x | (x << 16)) & 0x030000ffu;
+    x = (x | (x << 8)) & 0x0300f00fu;
+    x = (x | (x << 4)) & 0x030c30c3u;
+    x = (x | (x << 2)) & 0x09249249u;
+    return x;
+}
+
+// The mesh the build runs on: the input with its vertices in Morton order of their positions
+// and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
+// Input vertex orders can be arbitrary (bunny00's triangles span 40% of its vertex range at the
+// median), and the passes then miss the cache on almost every neighbour's quadric and corner
+// list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t.
+Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old) {
+    const uint32_t n = in.vertex_count(), m = in.triangle_count();
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (uint32_t v = 0; v < n; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const float x = in.positions[3 * size_t(v) + size_t(k)];
+            lo[k] = v ? std::min(lo[k], x) : x;
+            hi[k] = v ? std::max(hi[k], x) : x;
+        }
+    std::vector<uint32_t> code(n);
+    for (uint32_t v = 0; v < n; ++v) {
+        uint32_t c = 0;
+        for (int k = 0; k < 3; ++k) {
+            const float extent = hi[k] - lo[k];
+            const float t = extent > 0 ? (in.positions[3 * size_t(v) + size_t(k)] - lo[k]) / extent : 0.0f;
+            c |= spread3(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f)))) << k;
+        }
+        code[v] = c;
+    }
+    // LSD radix sort of the 30-bit codes, stable: equal codes keep input order
+    vertex_old.resize(n);
+    for (uint32_t v = 0; v < n; ++v) vertex_old[v] = v;
+    {
+        std::vector<uint32_t> tmp(n);
+        for (int shift = 0; shift < 30; shift += 10) {
+            uint32_t count[1025] = {};
+            for (uint32_t v : vertex_old) ++count[((code[v] >> shift) & 1023u) + 1];
+            for (int i = 0; i < 1024; ++i) count[i + 1] += count[i];
+            for (uint32_t v : vertex_old) tmp[count[(code[v] >> shift) & 1023u]++] = v;
+            vertex_old.swap(tmp);
+        }
+    }
+    std::vector<uint32_t> vertex_new(n);
+    for (uint32_t i = 0; i < n; ++i) vertex_new[vertex_old[i]] = i;
+
+    Mesh out;
+    out.name = in.name;
+    out.material = in.material;
+    gather_vertex_streams(in, out, vertex_old);
+    // triangles by their lowest new vertex (counting sort, stable)
+    std::vector<uint32_t> start(size_t(n) + 1, 0);
+    auto first_vertex = [&](uint32_t t) {
+        const uint32_t* c = &in.indices[3 * size_t(t)];
+        return std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
+    };
+    for (uint32_t t = 0; t < m; ++t) ++start[first_vertex(t) + 1];
+    for (uint32_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    triangle_old.resize(m);
+    for (uint32_t t = 0; t < m; ++t) triangle_old[start[first_vertex(t)]++] = t;
+    out.indices.resize(in.indices.size());
+    for (uint32_t t = 0; t < m; ++t)
+        for (int k = 0; k < 3; ++k) out.indices[3 * size_t(t) + size_t(k)] = vertex_new[in.indices[3 * size_t(triangle_old[t]) + size_t(k)]];
+    return out;
+}
+
 } // namespace
 
 MeshView TomMesh::view() const noexcept {
@@ -944,8 +1034,10 @@ MeshView TomMesh::view() const noexcept {
 const char* to_string(Predicate p) noexcept { return p == Predicate::quadric ? "quadric" : "memoryless"; }
 const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "passes" : "heap"; }
 
-TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out) {
+TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
     BuildStats stats;
+    std::vector<uint32_t> vertex_old, triangle_old;
+    const Mesh mesh = reorder_for_locality(input, vertex_old, triangle_old);
     Builder b;
     b.n = mesh.vertex_count();
     b.m = mesh.triangle_count();
@@ -988,14 +1080,26 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
         run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), team, stats);
     }
 
-    // total order: survivors first (in input order), then removed vertices, last removed first
+    // back to the input's numbering
     const uint32_t n = b.n, m = b.m;
+    {
+        std::vector<uint8_t> removed(n);
+        for (uint32_t i = 0; i < n; ++i) removed[vertex_old[i]] = b.removed[i];
+        b.removed.swap(removed);
+        for (uint32_t& v : b.removed_order) v = vertex_old[v];
+        for (uint32_t& v : b.removed_target) v = vertex_old[v];
+        std::vector<uint32_t> death(m);
+        for (uint32_t t = 0; t < m; ++t) death[triangle_old[t]] = b.death_step[t];
+        b.death_step.swap(death);
+    }
+
+    // total order: survivors first (in input order), then removed vertices, last removed first
     const uint32_t removed_count = uint32_t(b.removed_order.size());
     const uint32_t s = n - removed_count;
     std::vector<uint32_t> new_index(n, kNone);
     TomMesh out;
-    out.name = mesh.name;
-    out.material = mesh.material;
+    out.name = input.name;
+    out.material = input.material;
     out.min_vertex_count = s;
     out.original_index.resize(n);
     uint32_t next = 0;
@@ -1008,17 +1112,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     for (uint32_t i = 0; i < s; ++i) out.substitute[i] = i;
     for (uint32_t j = 0; j < removed_count; ++j) out.substitute[n - 1 - j] = new_index[b.removed_target[j]];
 
-    auto permute = [&](const std::vector<float>& in, std::vector<float>& dst, size_t width) {
-        if (in.empty()) return;
-        dst.resize(size_t(n) * width);
-        for (uint32_t i = 0; i < n; ++i)
-            std::memcpy(&dst[size_t(i) * width], &in[size_t(out.original_index[i]) * width], width * sizeof(float));
-    };
-    permute(mesh.positions, out.positions, 3);
-    std::vector<const std::vector<float>*> inputs;  // the input's streams, in the order out's are visited
-    for_each_attribute_stream(mesh, [&](const std::vector<float>& values, size_t, const char*) { inputs.push_back(&values); });
-    size_t stream = 0;
-    for_each_attribute_stream(out, [&](std::vector<float>& dst, size_t width, const char*) { permute(*inputs[stream++], dst, width); });
+    gather_vertex_streams(input, out, out.original_index);
 
     // triangle t is alive at resolution r >= key(t): key = n - step for a triangle killed by
     // substitution `step` (its removed vertex gets index n-1-step), s for the survivors.
@@ -1030,7 +1124,7 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     out.triangles.resize(size_t(m) * 3);
     for (uint32_t t = 0; t < m; ++t) {
         const uint32_t slot = bucket[key_of(t)]++;
-        for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[mesh.indices[3 * size_t(t) + k]];
+        for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[input.indices[3 * size_t(t) + k]];
     }
 
     for (int k = 0; k < 3; ++k) {
@@ -1039,8 +1133,8 @@ TomMesh build(const Mesh& mesh, const BuildParams& params, BuildStats* stats_out
     }
     for (uint32_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) {
-            out.bounds_min[k] = std::min(out.bounds_min[k], mesh.positions[3 * size_t(i) + k]);
-            out.bounds_max[k] = std::max(out.bounds_max[k], mesh.positions[3 * size_t(i) + k]);
+            out.bounds_min[k] = std::min(out.bounds_min[k], input.positions[3 * size_t(i) + k]);
+            out.bounds_max[k] = std::max(out.bounds_max[k], input.positions[3 * size_t(i) + k]);
         }
     // a seam collapse removed two vertices at steps j, j + 1: they sit at n-2-j and n-1-j, and
     // no resolution may take one without the other
