@@ -77,47 +77,6 @@ enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2, kSeam = 3 };
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr float kBoundaryWeight = 4.0f;  // border edge planes vs. area-weighted face planes
 
-// Open-addressing hash of directed edges (a, b) -> count.
-class EdgeCounter {
-public:
-    explicit EdgeCounter(size_t edges) {
-        size_t cap = 16;
-        while (cap < edges * 2) cap *= 2;
-        keys_.assign(cap, UINT64_MAX);
-        counts_.assign(cap, 0);
-        mask_ = cap - 1;
-    }
-    void add(uint32_t a, uint32_t b) { ++counts_[slot(key(a, b))]; }
-    uint32_t count(uint32_t a, uint32_t b) const {
-        const uint64_t k = key(a, b);
-        for (size_t i = hash(k) & mask_;; i = (i + 1) & mask_) {
-            if (keys_[i] == k) return counts_[i];
-            if (keys_[i] == UINT64_MAX) return 0;
-        }
-    }
-
-private:
-    static uint64_t key(uint32_t a, uint32_t b) { return (uint64_t(a) << 32) | b; }
-    static size_t hash(uint64_t k) {
-        k ^= k >> 33;
-        k *= 0xff51afd7ed558ccdULL;
-        k ^= k >> 33;
-        return size_t(k);
-    }
-    size_t slot(uint64_t k) {
-        for (size_t i = hash(k) & mask_;; i = (i + 1) & mask_) {
-            if (keys_[i] == k) return i;
-            if (keys_[i] == UINT64_MAX) {
-                keys_[i] = k;
-                return i;
-            }
-        }
-    }
-    std::vector<uint64_t> keys_;
-    std::vector<uint32_t> counts_;
-    size_t mask_ = 0;
-};
-
 struct Candidate {
     float cost;
     uint32_t v, u;
@@ -520,29 +479,66 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams) {
     b.kind.assign(n, kInterior);
     b.border_next.assign(n, kNone);
     b.border_prev.assign(n, kNone);
-    EdgeCounter edges(size_t(m) * 3);
-    for (uint32_t c = 0; c < m * 3; ++c) edges.add(b.idx[c], b.idx[c - c % 3 + (c + 1) % 3]);
-    std::vector<uint8_t> open_out(n, 0), open_in(n, 0);
-    for (uint32_t c = 0; c < m * 3; ++c) {
-        const uint32_t a = b.idx[c], e = b.idx[c - c % 3 + (c + 1) % 3];
-        const uint32_t fwd = edges.count(a, e), rev = edges.count(e, a);
-        if (fwd > 1 || rev > 1) {  // non-manifold or inconsistently oriented
-            b.kind[a] = kLocked;
-            b.kind[e] = kLocked;
-        } else if (rev == 0) {
-            b.border_next[a] = e;
-            b.border_prev[e] = a;
-            open_out[a] = uint8_t(std::min(open_out[a] + 1, 255));
-            open_in[e] = uint8_t(std::min(open_in[e] + 1, 255));
-        }
+    // Per vertex v, from its corners in order: outs = the vertices following v (its outgoing
+    // edges v -> e), ins = those preceding it (incoming w -> v). The multiplicity of the directed
+    // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
+    // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
+    // inconsistently oriented) locks both ends; an edge without its reverse is open.
+    std::vector<uint32_t> start(size_t(n) + 1, 0), corner(size_t(m) * 3);
+    for (uint32_t c = 0; c < m * 3; ++c) ++start[b.idx[c] + 1];
+    for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
+    {
+        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        for (uint32_t c = 0; c < m * 3; ++c) corner[fill[b.idx[c]]++] = c;
     }
+    std::vector<uint32_t> outs, ins, sorted_outs, sorted_ins;
     for (uint32_t v = 0; v < n; ++v) {
-        if (b.kind[v] == kLocked) continue;
-        if (open_out[v] == 0 && open_in[v] == 0) continue;
-        if (open_out[v] == 1 && open_in[v] == 1)
-            b.kind[v] = kBorder;
-        else
+        outs.clear();
+        ins.clear();
+        for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
+            const uint32_t c = corner[i];
+            outs.push_back(b.idx[c - c % 3 + (c + 1) % 3]);
+            ins.push_back(b.idx[c - c % 3 + (c + 2) % 3]);
+        }
+        const bool wide = outs.size() > 32;  // a high-valence vertex: count by binary search
+        if (wide) {
+            sorted_outs = outs;
+            sorted_ins = ins;
+            std::sort(sorted_outs.begin(), sorted_outs.end());
+            std::sort(sorted_ins.begin(), sorted_ins.end());
+        }
+        auto count = [&](const std::vector<uint32_t>& list, const std::vector<uint32_t>& sorted, uint32_t x) {
+            if (wide) {
+                const auto range = std::equal_range(sorted.begin(), sorted.end(), x);
+                return uint32_t(range.second - range.first);
+            }
+            uint32_t k = 0;
+            for (const uint32_t y : list) k += y == x;
+            return k;
+        };
+        uint32_t open_out = 0, open_in = 0;
+        bool locked = false;
+        for (size_t i = 0; i < outs.size(); ++i) {
+            const uint32_t e = outs[i], w = ins[i];
+            const uint32_t out_fwd = count(outs, sorted_outs, e), out_rev = count(ins, sorted_ins, e);
+            if (out_fwd > 1 || out_rev > 1) {
+                locked = true;
+            } else if (out_rev == 0) {
+                b.border_next[v] = e;
+                ++open_out;
+            }
+            const uint32_t in_fwd = count(ins, sorted_ins, w), in_rev = count(outs, sorted_outs, w);
+            if (in_fwd > 1 || in_rev > 1) {
+                locked = true;
+            } else if (in_rev == 0) {
+                b.border_prev[v] = w;
+                ++open_in;
+            }
+        }
+        if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
             b.kind[v] = kLocked;
+        else if (open_out == 1)
+            b.kind[v] = kBorder;
     }
     // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
     // An open-addressing table of exact position bits groups them: a group of two border vertices
