@@ -518,22 +518,21 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams) {
         };
         uint32_t open_out = 0, open_in = 0;
         bool locked = false;
+        // the edge between v and x, x taken from `mine` (outs or ins): its multiplicity in that
+        // direction is x's count in mine, the reverse's x's count in `theirs`
+        auto edge = [&](uint32_t x, const std::vector<uint32_t>& mine, const std::vector<uint32_t>& mine_sorted, const std::vector<uint32_t>& theirs,
+                        const std::vector<uint32_t>& theirs_sorted, uint32_t& link, uint32_t& open) {
+            const uint32_t fwd = count(mine, mine_sorted, x), rev = count(theirs, theirs_sorted, x);
+            if (fwd > 1 || rev > 1) {
+                locked = true;
+            } else if (rev == 0) {
+                link = x;
+                ++open;
+            }
+        };
         for (size_t i = 0; i < outs.size(); ++i) {
-            const uint32_t e = outs[i], w = ins[i];
-            const uint32_t out_fwd = count(outs, sorted_outs, e), out_rev = count(ins, sorted_ins, e);
-            if (out_fwd > 1 || out_rev > 1) {
-                locked = true;
-            } else if (out_rev == 0) {
-                b.border_next[v] = e;
-                ++open_out;
-            }
-            const uint32_t in_fwd = count(ins, sorted_ins, w), in_rev = count(outs, sorted_outs, w);
-            if (in_fwd > 1 || in_rev > 1) {
-                locked = true;
-            } else if (in_rev == 0) {
-                b.border_prev[v] = w;
-                ++open_in;
-            }
+            edge(outs[i], outs, sorted_outs, ins, sorted_ins, b.border_next[v], open_out);
+            edge(ins[i], ins, sorted_ins, outs, sorted_outs, b.border_prev[v], open_in);
         }
         if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
             b.kind[v] = kLocked;
