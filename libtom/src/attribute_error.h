@@ -40,6 +40,12 @@ public:
         default: return evaluate<0>(q, position_u, a);
         }
     }
+    /// Starts loading v's quadric (a hint; no effect on results).
+    void prefetch(uint32_t v) const noexcept {
+        if (quadric_.empty()) return;
+        const char* q = reinterpret_cast<const char*>(&quadric_[size_t(v) * stride_]);
+        for (size_t byte = 0; byte < stride_ * sizeof(double); byte += 64) __builtin_prefetch(q + byte);
+    }
     /// v's quadric merges into u's (v -> u).
     void merge(uint32_t u, uint32_t v) noexcept;
 

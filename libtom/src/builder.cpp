@@ -241,6 +241,14 @@ struct Builder {
         adj.each(x, [&](uint32_t t) { mark[idx[3 * t]] = mark[idx[3 * t + 1]] = mark[idx[3 * t + 2]] = 1; });
     }
 
+    // starts loading what evaluating v's substitutions reads first
+    template <class Adj>
+    void prefetch(const Adj& adj, uint32_t v) const {
+        if (!quadric.empty()) __builtin_prefetch(&quadric[v]);
+        attributes.prefetch(v);
+        adj.prefetch(v);
+    }
+
     // the quadric predicate: geometric and attribute error accumulated in v, at u
     float quadric_cost(uint32_t v, uint32_t u) const {
         return float(evaluate(quadric[v], pos[u]) + attributes.accumulated(v, &pos[u].x, u));
@@ -424,6 +432,14 @@ struct ListAdjacency {
     void each(uint32_t v, F&& f) const {
         for (uint32_t c = first[v]; c != kNone; c = next[c])
             if (!b->dead[c / 3]) f(c / 3);
+    }
+    void prefetch(uint32_t v) const { __builtin_prefetch(&first[v]); }
+    // the second step, once first[v] is in: v's first corner's triangle and link
+    void prefetch_fan(uint32_t v) const {
+        const uint32_t c = first[v];
+        if (c == kNone) return;
+        __builtin_prefetch(&b->idx[c - c % 3]);
+        __builtin_prefetch(&next[c]);
     }
     // drops the corners of dead triangles from v's list
     void compact(uint32_t v) {
@@ -761,6 +777,8 @@ void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stat
         parallel_for(team, evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch&) { adj.compact(evaluate[i]); });
         parallel_for(team, evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch& sc) {
             const uint32_t v = evaluate[i];
+            if (i + 8 < evaluate.size()) b.prefetch(adj, evaluate[i + 8]);
+            if (i + 4 < evaluate.size()) adj.prefetch_fan(evaluate[i + 4]);
             has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0, sc);
             dirty[v] = 0;
         });
@@ -775,8 +793,11 @@ void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stat
                 sort_candidates(candidates, tmp);
                 quota = candidates.size();
             }
-            for (const Candidate& c : candidates) {
+            for (size_t ci = 0; ci < candidates.size(); ++ci) {
+                const Candidate& c = candidates[ci];
                 if (executed >= quota) break;
+                if (ci + 4 < candidates.size()) b.prefetch(adj, candidates[ci + 4].v);
+                if (ci + 2 < candidates.size()) adj.prefetch_fan(candidates[ci + 2].v);
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
                 if (b.kind[c.v] == kSeam) {
                     // both copies move, each to the copy of the target on its side
