@@ -37,7 +37,7 @@ Frame frame(D3 p0, D3 p1, D3 p2) {
 
 } // namespace
 
-void AttributeError::init(const Mesh& mesh, float weight, bool accumulate) {
+void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team& team) {
     channels_ = 0;
     values_.clear();
     quadric_.clear();
@@ -85,12 +85,11 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate) {
     if (!accumulate) return;
     stride_ = 11 + 4 * size_t(channels_);
     quadric_.assign(size_t(n) * stride_, 0.0);
-    std::vector<double> q(stride_);
-    for (uint32_t t = 0; t < m; ++t) {
+    detail::scatter_by_vertex_range(team, n, mesh.indices.data(), m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
         const uint32_t* c = &mesh.indices[3 * size_t(t)];
         const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
-        if (!f.valid) continue;
-        std::fill(q.begin(), q.end(), 0.0);
+        if (!f.valid) return;
+        double q[kMaxStride] = {};
         const double w = f.area;
         q[0] = w;
         for (int j = 0; j < channels_; ++j) {
@@ -107,10 +106,11 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate) {
             ch[0] = w * g.x, ch[1] = w * g.y, ch[2] = w * g.z, ch[3] = w * d;
         }
         for (int k = 0; k < 3; ++k) {
+            if (c[k] < lo || c[k] >= hi) continue;
             double* dst = &quadric_[size_t(c[k]) * stride_];
             for (size_t i = 0; i < stride_; ++i) dst[i] += q[i];
         }
-    }
+    });
 }
 
 void AttributeError::merge(uint32_t u, uint32_t v) noexcept {

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "parallel.h"
 #include "tom/mesh.h"
 
 namespace tom::detail {
@@ -24,7 +25,8 @@ public:
     /// surface length), normals and colours by the mean edge length, each by a measured relative
     /// weight (see the .cpp); all by `weight`.
     /// Inactive (every cost 0) when weight <= 0 or the mesh has none of the streams.
-    void init(const Mesh& mesh, float weight, bool accumulate);
+    /// `team` shares the accumulation (bit-identical sums whatever its size).
+    void init(const Mesh& mesh, float weight, bool accumulate, Team& team);
     bool active() const noexcept { return channels_ > 0; }
     int channels() const noexcept { return channels_; }
 
@@ -73,6 +75,7 @@ private:
     std::vector<float> values_;    // channels_ per vertex, scaled
     std::vector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
     size_t stride_ = 0;
+    static constexpr size_t kMaxStride = 11 + 4 * 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
 };
 
 } // namespace tom::detail

@@ -628,27 +628,27 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams) {
     }
 }
 
-void init_quadrics(Builder& b) {
+void init_quadrics(Builder& b, detail::Team& team) {
     b.quadric.assign(b.n, Quadric{});
-    for (uint32_t t = 0; t < b.m; ++t) {
+    detail::scatter_by_vertex_range(team, b.n, b.idx.data(), b.m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
+        auto mine = [&](uint32_t v) { return v >= lo && v < hi; };
         const uint32_t i0 = b.idx[3 * t], i1 = b.idx[3 * t + 1], i2 = b.idx[3 * t + 2];
         const Vec3 p0 = b.pos[i0], p1 = b.pos[i1], p2 = b.pos[i2];
         Vec3 nrm = cross(sub(p1, p0), sub(p2, p0));
         const float len = length(nrm);
-        if (len == 0.0f) continue;
+        if (len == 0.0f) return;
         const float area = 0.5f * len;
         nrm = {nrm.x / len, nrm.y / len, nrm.z / len};
         const double d = -double(dot(nrm, p0));
         Quadric q{};
         add_plane(q, nrm.x, nrm.y, nrm.z, d, area);
-        add(b.quadric[i0], q);
-        add(b.quadric[i1], q);
-        add(b.quadric[i2], q);
+        for (const uint32_t v : {i0, i1, i2})
+            if (mine(v)) add(b.quadric[v], q);
         // open edges: a plane through the edge, perpendicular to the triangle, keeps borders in place
         const uint32_t c[3] = {i0, i1, i2};
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = c[k], e = c[(k + 1) % 3];
-            if (b.border_next[a] != e || b.border_prev[e] != a) continue;
+            if ((!mine(a) && !mine(e)) || b.border_next[a] != e || b.border_prev[e] != a) continue;
             const Vec3 pa = b.pos[a], pe = b.pos[e];
             const Vec3 edge = sub(pe, pa);
             Vec3 en = cross(edge, nrm);
@@ -657,10 +657,10 @@ void init_quadrics(Builder& b) {
             en = {en.x / el, en.y / el, en.z / el};
             Quadric qe{};
             add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(dot(edge, edge)));
-            add(b.quadric[a], qe);
-            add(b.quadric[e], qe);
+            if (mine(a)) add(b.quadric[a], qe);
+            if (mine(e)) add(b.quadric[e], qe);
         }
-    }
+    });
 }
 
 // Non-edge pairs closer than t, found on a uniform grid of cell size t (at most 8 per vertex).
@@ -1084,15 +1084,15 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     b.removed_target.reserve(b.n);
     // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
     // keep coincident copies locked
+    detail::Team team(thread_count(params.threads));
     classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
-    if (b.predicate == Predicate::quadric) init_quadrics(b);
-    b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric);
+    if (b.predicate == Predicate::quadric) init_quadrics(b, team);
+    b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
     find_pairs(b, params.pair_threshold, stats);
 
     if (params.strategy == Strategy::heap) {
         run_heap(b);
     } else {
-        detail::Team team(thread_count(params.threads));
         run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), team, stats);
     }
 

@@ -160,4 +160,22 @@ private:
     std::atomic<bool> quit_{false};
 };
 
+/// Per-vertex sums over triangles without races or reordering: the vertices are cut into one
+/// range per team thread, and each thread visits, in ascending order, the triangles with a corner
+/// in its range, calling visit(t, lo, hi); visit adds t's terms to its corners in [lo, hi) only.
+/// Every vertex then receives its terms in ascending triangle order, as a sequential scatter
+/// would add them: the sums are bit-identical whatever the thread count. A triangle spanning two
+/// ranges is visited by both threads.
+template <class Visit>
+void scatter_by_vertex_range(Team& team, uint32_t vertex_count, const uint32_t* indices, uint32_t triangle_count, Visit&& visit) {
+    const unsigned parts = team.size();
+    team.blocks(parts, 1, [&](unsigned, size_t part, size_t) {
+        const uint32_t lo = uint32_t(uint64_t(vertex_count) * part / parts), hi = uint32_t(uint64_t(vertex_count) * (part + 1) / parts);
+        for (uint32_t t = 0; t < triangle_count; ++t) {
+            const uint32_t* c = indices + 3 * size_t(t);
+            if ((c[0] >= lo && c[0] < hi) || (c[1] >= lo && c[1] < hi) || (c[2] >= lo && c[2] < hi)) visit(t, lo, hi);
+        }
+    });
+}
+
 } // namespace tom::detail
