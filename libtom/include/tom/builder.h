@@ -39,8 +39,10 @@ struct BuildParams {
     /// (degrees, 1..90; 90 forbids flips only, the TOM paper's rule). 60 keeps spikes out of the
     /// coarse levels: bunny's Hausdorff error at 2% falls from 1.20% to 0.54% of the diagonal.
     float max_rotation_degrees = 60.0f;
-    /// passes only: threads that evaluate a pass's candidates (0 = one per core). The result is
-    /// the same for any count.
+    /// Threads that share the build (0 = one per core): the quadrics' set-up and, with passes,
+    /// each pass's candidate evaluation. Between a pass's parallel loops the helpers spin for up
+    /// to 2 ms before they sleep, so a build keeps its cores busy while it runs; they end with
+    /// build(). The result is the same for any count.
     unsigned threads = 0;
 };
 
