@@ -1,6 +1,7 @@
 #pragma once
-// The one way libtom runs a loop on several threads (builder passes, error-curve points, metric
-// samples): blocks of a range taken in turn by up to `threads` threads, the caller's among them.
+// How libtom runs a loop on several threads: blocks of a range taken in turn by up to `threads`
+// threads, the caller's among them. parallel_blocks starts its threads for one loop (error-curve
+// points, metric samples); a Team keeps them for a run of short loops (the builder's passes).
 
 #include <algorithm>
 #include <atomic>
