@@ -253,6 +253,16 @@ struct Builder {
     float quadric_cost(uint32_t v, uint32_t u) const {
         return float(evaluate(quadric[v], pos[u]) + attributes.accumulated(v, &pos[u].x, u));
     }
+    // quadric_cost(v, u) into `cost` when it may beat (bound, bound_u) in the order (cost, u);
+    // false when it cannot: both terms are >= 0 and rounding is monotone, so the geometric term
+    // alone bounds the sum from below, and the attribute term is skipped (same results)
+    bool quadric_cost_within(uint32_t v, uint32_t u, float bound, uint32_t bound_u, float& cost) const {
+        const double geometric = evaluate(quadric[v], pos[u]);
+        const float lower = float(geometric);
+        if (lower > bound || (lower == bound && u > bound_u)) return false;
+        cost = float(geometric + attributes.accumulated(v, &pos[u].x, u));
+        return true;
+    }
 
     template <class Adj>
     float cost(const Adj& adj, uint32_t v, uint32_t u) const {
@@ -299,9 +309,13 @@ struct Builder {
             adj.each(v, [&](uint32_t t) {
                 uint32_t u, unused;
                 others(t, v, u, unused);
-                const float c = quadric_cost(v, u);
-                if (!any || c < best.cost || (c == best.cost && u < best.u)) best = {c, v, u};
-                any = true;
+                if (!any) {
+                    best = {quadric_cost(v, u), v, u};
+                    any = true;
+                    return;
+                }
+                float c;
+                if (quadric_cost_within(v, u, best.cost, best.u, c) && (c < best.cost || (c == best.cost && u < best.u))) best = {c, v, u};
             });
             return any;
         }
@@ -842,8 +856,9 @@ void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stat
                                 dirty[w] = 1;
                                 continue;
                             }
-                            const float cw = b.quadric_cost(w, c.u);
-                            if (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)) best[w] = {cw, w, c.u};
+                            float cw;
+                            if (b.quadric_cost_within(w, c.u, best[w].cost, best[w].u, cw) && (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)))
+                                best[w] = {cw, w, c.u};
                         }
                     });
                     dirty[c.u] = 1;
