@@ -2,6 +2,7 @@
 
 #include "attribute_error.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "vec3.h"
@@ -89,7 +90,8 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
         const uint32_t* c = &mesh.indices[3 * size_t(t)];
         const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
         if (!f.valid) return;
-        double q[kMaxStride] = {};
+        double q[kMaxStride];
+        std::fill(q, q + stride_, 0.0);
         const double w = f.area;
         q[0] = w;
         for (int j = 0; j < channels_; ++j) {

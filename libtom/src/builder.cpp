@@ -521,38 +521,40 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams) {
         std::vector<uint32_t> fill(start.begin(), start.end() - 1);
         for (uint32_t c = 0; c < m * 3; ++c) corner[fill[b.idx[c]]++] = c;
     }
-    std::vector<uint32_t> outs, ins, sorted_outs, sorted_ins;
+    std::vector<uint32_t> outs, ins;  // of v, in corner order; sorted copies for a high valence
     for (uint32_t v = 0; v < n; ++v) {
-        outs.clear();
-        ins.clear();
-        for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
-            const uint32_t c = corner[i];
-            outs.push_back(b.idx[c - c % 3 + (c + 1) % 3]);
-            ins.push_back(b.idx[c - c % 3 + (c + 2) % 3]);
+        const uint32_t valence = start[v + 1] - start[v];
+        outs.resize(2 * size_t(valence));
+        ins.resize(2 * size_t(valence));
+        for (uint32_t i = 0; i < valence; ++i) {
+            const uint32_t c = corner[start[v] + i];
+            outs[i] = b.idx[c - c % 3 + (c + 1) % 3];
+            ins[i] = b.idx[c - c % 3 + (c + 2) % 3];
         }
-        const bool wide = outs.size() > 32;  // a high-valence vertex: count by binary search
+        const uint32_t* out = outs.data();
+        const uint32_t* in = ins.data();
+        const bool wide = valence > 32;  // count by binary search in sorted copies
         if (wide) {
-            sorted_outs = outs;
-            sorted_ins = ins;
-            std::sort(sorted_outs.begin(), sorted_outs.end());
-            std::sort(sorted_ins.begin(), sorted_ins.end());
+            std::copy(outs.begin(), outs.begin() + valence, outs.begin() + valence);
+            std::copy(ins.begin(), ins.begin() + valence, ins.begin() + valence);
+            std::sort(outs.begin() + valence, outs.end());
+            std::sort(ins.begin() + valence, ins.end());
         }
-        auto count = [&](const std::vector<uint32_t>& list, const std::vector<uint32_t>& sorted, uint32_t x) {
+        auto count = [&](const uint32_t* list, uint32_t x) {
             if (wide) {
-                const auto range = std::equal_range(sorted.begin(), sorted.end(), x);
+                const auto range = std::equal_range(list + valence, list + 2 * valence, x);
                 return uint32_t(range.second - range.first);
             }
             uint32_t k = 0;
-            for (const uint32_t y : list) k += y == x;
+            for (uint32_t i = 0; i < valence; ++i) k += list[i] == x;
             return k;
         };
         uint32_t open_out = 0, open_in = 0;
         bool locked = false;
-        // the edge between v and x, x taken from `mine` (outs or ins): its multiplicity in that
+        // the edge between v and x, x taken from `mine` (out or in): its multiplicity in that
         // direction is x's count in mine, the reverse's x's count in `theirs`
-        auto edge = [&](uint32_t x, const std::vector<uint32_t>& mine, const std::vector<uint32_t>& mine_sorted, const std::vector<uint32_t>& theirs,
-                        const std::vector<uint32_t>& theirs_sorted, uint32_t& link, uint32_t& open) {
-            const uint32_t fwd = count(mine, mine_sorted, x), rev = count(theirs, theirs_sorted, x);
+        auto edge = [&](uint32_t x, const uint32_t* mine, const uint32_t* theirs, uint32_t& link, uint32_t& open) {
+            const uint32_t fwd = count(mine, x), rev = count(theirs, x);
             if (fwd > 1 || rev > 1) {
                 locked = true;
             } else if (rev == 0) {
@@ -560,9 +562,9 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams) {
                 ++open;
             }
         };
-        for (size_t i = 0; i < outs.size(); ++i) {
-            edge(outs[i], outs, sorted_outs, ins, sorted_ins, b.border_next[v], open_out);
-            edge(ins[i], ins, sorted_ins, outs, sorted_outs, b.border_prev[v], open_in);
+        for (uint32_t i = 0; i < valence; ++i) {
+            edge(out[i], out, in, b.border_next[v], open_out);
+            edge(in[i], in, out, b.border_prev[v], open_in);
         }
         if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
             b.kind[v] = kLocked;
