@@ -1,7 +1,8 @@
 #pragma once
 // How libtom runs a loop on several threads: blocks of a range taken in turn by up to `threads`
-// threads, the caller's among them. parallel_blocks starts its threads for one loop (error-curve
-// points, metric samples); a Team keeps them for a run of short loops (the builder's passes).
+// threads, the caller's among them. A Team keeps its threads for a run of short loops (the
+// builder's passes); parallel_blocks makes one for a single loop (error-curve points, metric
+// samples).
 
 #include <algorithm>
 #include <atomic>
@@ -13,6 +14,7 @@
 #include <mutex>
 #include <system_error>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace tom::detail {
@@ -20,39 +22,12 @@ namespace tom::detail {
 /// `threads`, or one per core for 0.
 inline unsigned thread_count(unsigned threads) noexcept { return threads ? threads : std::max(1u, std::thread::hardware_concurrency()); }
 
-/// Runs work(worker, begin, end) over [0, count) in blocks of `block`, on up to thread_count(threads)
-/// threads (never more than there are blocks); `worker` is 0 for the caller's thread and 1, 2, ...
-/// for the others, so each can keep state of its own. The first exception a block throws
-/// (std::bad_alloc) stops the others after their current block and is rethrown to the caller
-/// once every thread has stopped.
-template <class Work>
-void parallel_blocks(size_t count, size_t block, unsigned threads, Work&& work) {
-    const size_t blocks = (count + block - 1) / block;
-    const unsigned used = unsigned(std::min<size_t>(thread_count(threads), std::max<size_t>(1, blocks)));
-    std::atomic<size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_lock;
-    auto run = [&](unsigned worker) {
-        try {
-            for (size_t b; (b = next++) < blocks;) work(worker, b * block, std::min(count, b * block + block));
-        } catch (...) {
-            const std::lock_guard<std::mutex> hold(failure_lock);
-            if (!failure) failure = std::current_exception();
-            next = blocks;
-        }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned k = 1; k < used; ++k) pool.emplace_back(run, k);
-    run(0);
-    for (std::thread& t : pool) t.join();
-    if (failure) std::rethrow_exception(failure);
-}
-
 /// Helper threads kept for a run of many short parallel loops (the builder's passes: two loops
 /// per pass, a hundred passes), so a loop costs a hand-over instead of creating and joining
 /// threads (about 50 us each here, as much as a sleeping thread's wake-up). Between loops a
 /// helper spins for up to kSpin before it sleeps, so loops separated by short sequential work
-/// start at once. Same contract as parallel_blocks; one loop at a time, from the team's owner.
+/// start at once. Runs work(worker, begin, end) as parallel_blocks describes; one loop at a time,
+/// from the team's owner.
 class Team {
 public:
     explicit Team(unsigned threads) {
@@ -83,8 +58,9 @@ public:
             for (size_t b = 0; b < blocks; ++b) work(0u, b * block, std::min(count, b * block + block));
             return;
         }
-        auto call = [](void* w, unsigned worker, size_t begin, size_t end) { (*static_cast<Work*>(w))(worker, begin, end); };
-        job_ = {call, &work, count, block, blocks};
+        using W = std::remove_reference_t<Work>;
+        auto call = [](void* w, unsigned worker, size_t begin, size_t end) { (*static_cast<W*>(w))(worker, begin, end); };
+        job_ = {call, const_cast<void*>(static_cast<const void*>(&work)), count, block, blocks};
         next_.store(0, std::memory_order_relaxed);
         failure_ = nullptr;
         busy_.store(size_ - 1, std::memory_order_relaxed);
@@ -160,6 +136,18 @@ private:
     std::atomic<uint64_t> generation_{0};
     std::atomic<bool> quit_{false};
 };
+
+/// Runs work(worker, begin, end) over [0, count) in blocks of `block`, on up to thread_count(threads)
+/// threads (never more than there are blocks); `worker` is 0 for the caller's thread and 1, 2, ...
+/// for the others, so each can keep state of its own. The first exception a block throws
+/// (std::bad_alloc) stops the others after their current block and is rethrown to the caller
+/// once every thread has stopped. A Team made for this one loop.
+template <class Work>
+void parallel_blocks(size_t count, size_t block, unsigned threads, Work&& work) {
+    const size_t blocks = (count + block - 1) / block;
+    Team team(unsigned(std::min<size_t>(thread_count(threads), std::max<size_t>(1, blocks))));
+    team.blocks(count, block, work);
+}
 
 /// Per-vertex sums over triangles without races or reordering: the vertices are cut into one
 /// range per team thread, and each thread visits, in ascending order, the triangles with a corner
