@@ -28,7 +28,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
-#include <limits>
 
 namespace tom {
 
@@ -986,10 +985,12 @@ inline uint32_t spread3(uint32_t x) {
 // and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
 // Input vertex orders can be arbitrary (bunny00's triangles span 40% of its vertex range at the
 // median), and the passes then miss the cache on almost every neighbour's quadric and corner
-// list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t.
-Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old) {
+// list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
+// the positions' bounding box (zero for no vertex), which the codes are taken in.
+Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3]) {
     const uint32_t n = in.vertex_count(), m = in.triangle_count();
-    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    std::fill(lo, lo + 3, 0.0f);
+    std::fill(hi, hi + 3, 0.0f);
     for (uint32_t v = 0; v < n; ++v)
         for (int k = 0; k < 3; ++k) {
             const float x = in.positions[3 * size_t(v) + size_t(k)];
@@ -1070,7 +1071,8 @@ const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "pas
 TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
     BuildStats stats;
     std::vector<uint32_t> vertex_old, triangle_old;
-    const Mesh mesh = reorder_for_locality(input, vertex_old, triangle_old);
+    float bounds_min[3], bounds_max[3];
+    const Mesh mesh = reorder_for_locality(input, vertex_old, triangle_old, bounds_min, bounds_max);
     Builder b;
     b.n = mesh.vertex_count();
     b.m = mesh.triangle_count();
@@ -1160,15 +1162,8 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
         for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[input.indices[3 * size_t(t) + k]];
     }
 
-    for (int k = 0; k < 3; ++k) {
-        out.bounds_min[k] = n ? std::numeric_limits<float>::max() : 0.0f;
-        out.bounds_max[k] = n ? std::numeric_limits<float>::lowest() : 0.0f;
-    }
-    for (uint32_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-            out.bounds_min[k] = std::min(out.bounds_min[k], input.positions[3 * size_t(i) + k]);
-            out.bounds_max[k] = std::max(out.bounds_max[k], input.positions[3 * size_t(i) + k]);
-        }
+    std::copy(bounds_min, bounds_min + 3, out.bounds_min);
+    std::copy(bounds_max, bounds_max + 3, out.bounds_max);
     // a seam collapse removed two vertices at steps j, j + 1: they sit at n-2-j and n-1-j, and
     // no resolution may take one without the other
     if (!b.pair_steps.empty()) {
