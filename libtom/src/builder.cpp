@@ -503,33 +503,29 @@ void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp)
     }
 }
 
-void classify(Builder& b, BuildStats& stats, bool allow_seams) {
-    const uint32_t n = b.n, m = b.m;
+void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allow_seams) {
+    const uint32_t n = b.n;
     b.kind.assign(n, kInterior);
     b.border_next.assign(n, kNone);
     b.border_prev.assign(n, kNone);
-    // Per vertex v, from its corners in order: outs = the vertices following v (its outgoing
+    // Per vertex v, from its triangles in order: outs = the vertices following v (its outgoing
     // edges v -> e), ins = those preceding it (incoming w -> v). The multiplicity of the directed
     // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
     // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
     // inconsistently oriented) locks both ends; an edge without its reverse is open.
-    std::vector<uint32_t> start(size_t(n) + 1, 0), corner(size_t(m) * 3);
-    for (uint32_t c = 0; c < m * 3; ++c) ++start[b.idx[c] + 1];
-    for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
-    {
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (uint32_t c = 0; c < m * 3; ++c) corner[fill[b.idx[c]]++] = c;
-    }
     std::vector<uint32_t> outs, ins;  // of v, in corner order; sorted copies for a high valence
     for (uint32_t v = 0; v < n; ++v) {
-        const uint32_t valence = start[v + 1] - start[v];
+        outs.clear();
+        ins.clear();
+        adj.each(v, [&](uint32_t t) {
+            uint32_t e, w;
+            b.others(t, v, e, w);
+            outs.push_back(e);
+            ins.push_back(w);
+        });
+        const uint32_t valence = uint32_t(outs.size());
         outs.resize(2 * size_t(valence));
         ins.resize(2 * size_t(valence));
-        for (uint32_t i = 0; i < valence; ++i) {
-            const uint32_t c = corner[start[v] + i];
-            outs[i] = b.idx[c - c % 3 + (c + 1) % 3];
-            ins[i] = b.idx[c - c % 3 + (c + 2) % 3];
-        }
         const uint32_t* out = outs.data();
         const uint32_t* in = ins.data();
         const bool wide = valence > 32;  // count by binary search in sorted copies
@@ -760,10 +756,9 @@ void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Sc
     });
 }
 
-void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stats) {
-    // adjacency as corner lists that substitutions splice: nothing is rebuilt between passes
-    ListAdjacency adj;
-    adj.build(b);
+// `adj`: the triangles around each vertex, which substitutions splice (nothing is rebuilt
+// between passes)
+void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& team, BuildStats& stats) {
     std::vector<uint32_t> live_vertices;
     for (uint32_t v = 0; v < b.n; ++v)
         if (b.kind[v] != kLocked) live_vertices.push_back(v);
@@ -890,9 +885,7 @@ void run_passes(Builder& b, float fraction, detail::Team& team, BuildStats& stat
     }
 }
 
-void run_heap(Builder& b) {
-    ListAdjacency adj;
-    adj.build(b);
+void run_heap(Builder& b, ListAdjacency& adj) {
     struct Entry {
         float cost;
         uint32_t v, u, stamp;
@@ -1104,15 +1097,17 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
     // keep coincident copies locked
     detail::Team team(thread_count(params.threads));
-    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
+    ListAdjacency adj;  // the triangles around each vertex, from classification to the last substitution
+    adj.build(b);
+    classify(b, adj, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
     b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
     find_pairs(b, params.pair_threshold, stats);
 
     if (params.strategy == Strategy::heap) {
-        run_heap(b);
+        run_heap(b, adj);
     } else {
-        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), team, stats);
+        run_passes(b, adj, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), team, stats);
     }
 
     // back to the input's numbering
