@@ -272,9 +272,7 @@ struct RunSearch {
         descend(collect, *target.tree.root_node(), target.triangles.size());
         // c is within the reach, but where the reach is a few ulps (points on c) rounding may
         // leave it out: the starts below are distances to c, so it must be a candidate
-        size_t of_c = list.size();
-        for (size_t k = 0; k < list.size(); ++k)
-            if (list[k] == c) of_c = k;
+        const size_t of_c = size_t(std::find(list.begin(), list.end(), c) - list.begin());  // each triangle is listed once
         if (of_c == list.size()) list.push_back(c);
         const size_t m = list.size();
         // with many candidates, every point is far from a fine surface and its own descent is
