@@ -353,6 +353,20 @@ TEST_CASE("a report on a real mesh: levels, error growth, memory like Table 4, f
     CHECK(r.fit.mean.k > 0);
     CHECK(r.fit.max.k > r.fit.mean.k);
     CHECK(r.bbox_diagonal > 0);
+    // the levels run side by side on the cores: the figures are those of one thread
+    tom::ReportParams serial;
+    serial.distance.threads = 1;
+    const tom::MeshReport s = tom::make_report(fandisk.mesh, t, serial);
+    REQUIRE(s.levels.size() == r.levels.size());
+    for (size_t i = 0; i < r.levels.size(); ++i) {
+        INFO("level " << r.levels[i].fraction);
+        CHECK(s.levels[i].error.forward.mean == r.levels[i].error.forward.mean);
+        CHECK(s.levels[i].error.forward.rms == r.levels[i].error.forward.rms);
+        CHECK(s.levels[i].error.backward.mean == r.levels[i].error.backward.mean);
+        CHECK(s.levels[i].error.hausdorff == r.levels[i].error.hausdorff);
+        CHECK(s.levels[i].attributes.normal_mean_degrees == r.levels[i].attributes.normal_mean_degrees);
+    }
+    CHECK(s.fit.mean.k == r.fit.mean.k);
 }
 
 TEST_CASE("attribute deviation: 0 against itself, the known angle and shift against altered copies", "[metrics][attributes]") {
