@@ -153,6 +153,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
             continue;
         }
         r.coverage_px = p.coverage_px;
+        r.inside_share = p.inside_share;
         r.size_px = p.size_px;
         r.focus = p.focus;
         r.distance = p.distance;
@@ -184,7 +185,8 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         const uint32_t id = visible_ids_[k];
         const Object& o = objects_[id];
         const ObjectResult& r = results_[id];
-        const double a = model_.t_tri_ms + model_.t_vert_ms * o.vertices_per_triangle;
+        // per triangle, of the share inside the frustum (CostModel::object_ms)
+        const double a = (model_.t_tri_ms + model_.t_vert_ms * o.vertices_per_triangle) * r.inside_share;
         const double fill_ms = model_.t_pix_ms * r.coverage_px;
         double hi = o.triangles;
         if (params.max_error_px > 0) hi = std::max(o.min_triangles, std::min(hi, triangles_for_error(id, params.max_error_px)));
@@ -237,7 +239,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         if (!r.drawn) continue;
         r.vertices = resolution_for(o, plan_.triangles[k]);
         r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px);
+        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
         r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
         predicted += r.predicted_ms;
     }
@@ -252,7 +254,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
             const Object& o = objects_[visible_ids_[k]];
             r.vertices = resolution_for(o, std::max(problem_.lo[k], r.triangles * factor));
             r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-            r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px);
+            r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
             r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
             predicted += r.predicted_ms;
         }

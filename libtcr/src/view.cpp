@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace tcr {
 
@@ -58,6 +59,51 @@ void look_at(const float eye[3], const float target[3], const float up[3], float
     out[14] = f[0] * eye[0] + f[1] * eye[1] + f[2] * eye[2];
 }
 
+namespace {
+
+// The share of `box`'s 4 x 4 x 4 sub-boxes that are not entirely outside one clip plane; 1 when
+// all of `clip` (the box's corners in clip space) lie inside the frustum, and at least one
+// sub-box's share for a box that is visible (not entirely outside one plane) as a whole.
+float inside_share(const float mvp[16], const Box& box, const float clip[8][4]) noexcept {
+    bool inside = true;
+    for (int c = 0; c < 8 && inside; ++c)
+        for (int axis = 0; axis < 3; ++axis) inside &= clip[c][axis] >= -clip[c][3] && clip[c][axis] <= clip[c][3];
+    if (inside) return 1.0f;
+    constexpr int K = 4, L = K + 1;
+    // the lattice of sub-box corners in clip space, each transformed once
+    float lattice[L * L * L][4];
+    for (int i = 0; i < L; ++i)
+        for (int j = 0; j < L; ++j)
+            for (int k = 0; k < L; ++k) {
+                const float x = box.min[0] + (box.max[0] - box.min[0]) * float(i) / K;
+                const float y = box.min[1] + (box.max[1] - box.min[1]) * float(j) / K;
+                const float z = box.min[2] + (box.max[2] - box.min[2]) * float(k) / K;
+                float* out = lattice[(i * L + j) * L + k];
+                for (int r = 0; r < 4; ++r) out[r] = mvp[r] * x + mvp[4 + r] * y + mvp[8 + r] * z + mvp[12 + r];
+            }
+    // per lattice point, the clip planes it lies outside of (bit 2 axis: below, 2 axis + 1: above)
+    uint8_t outside[L * L * L];
+    for (int q = 0; q < L * L * L; ++q) {
+        uint8_t bits = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            if (lattice[q][axis] < -lattice[q][3]) bits |= uint8_t(1u << (2 * axis));
+            if (lattice[q][axis] > lattice[q][3]) bits |= uint8_t(1u << (2 * axis + 1));
+        }
+        outside[q] = bits;
+    }
+    int visible = 0;
+    for (int i = 0; i < K; ++i)
+        for (int j = 0; j < K; ++j)
+            for (int k = 0; k < K; ++k) {
+                uint8_t all = 0x3F;  // the planes every corner of the sub-box lies outside of
+                for (int c = 0; c < 8; ++c) all &= outside[((i + (c & 1)) * L + (j + ((c >> 1) & 1))) * L + (k + ((c >> 2) & 1))];
+                visible += all == 0;
+            }
+    return float(std::max(visible, 1)) / float(K * K * K);
+}
+
+} // namespace
+
 Projection project_box(const Camera& camera, const float model[16], const Box& box, float focus_weight) noexcept {
     Projection p;
     float view_model[16], mvp[16];
@@ -79,6 +125,7 @@ Projection project_box(const Camera& camera, const float model[16], const Box& b
         if (all_below || all_above) return p;
     }
     p.visible = true;
+    p.inside_share = inside_share(mvp, box, clip);
     const float w = float(camera.viewport_width), h = float(camera.viewport_height);
     // eye-space distance to the box centre
     const float cx = 0.5f * (box.min[0] + box.max[0]), cy = 0.5f * (box.min[1] + box.max[1]), cz = 0.5f * (box.min[2] + box.max[2]);

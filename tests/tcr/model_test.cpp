@@ -73,4 +73,7 @@ TEST_CASE("object cost is geometry or fill bound, and r_min is where they meet",
     CHECK(m.object_ms(10, 0, 100000) == Approx(0.1 + 1.0));    // fill bound
     CHECK(m.min_useful_triangles(100000, 0) == Approx(10000));  // below it, fewer triangles save nothing
     CHECK(m.object_ms(m.min_useful_triangles(100000, 0), 0, 100000) == Approx(m.object_ms(1, 0, 100000)));
+    // half the object outside the frustum: half its geometry time; fill (the clipped rectangle) as is
+    CHECK(m.object_ms(1000, 0, 100, 0.5) == Approx(0.1 + 0.05));
+    CHECK(m.object_ms(10, 0, 100000, 0.5) == Approx(0.1 + 1.0));
 }

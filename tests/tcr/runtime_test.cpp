@@ -86,6 +86,29 @@ TEST_CASE("culling and coverage: hand-computed cases", "[tcr][view]") {
     CHECK(tcr::motion_factor(32) == Approx(0.5));
 }
 
+TEST_CASE("inside share: whole boxes 1, a box reaching past both sides or around the eye less", "[tcr][view]") {
+    const tcr::Camera cam = camera_at(10, 1000, 1000, 90);
+    float model[16];
+    tcr::identity(model);
+    // in view: every corner inside the frustum
+    CHECK(tcr::project_box(cam, model, tcr::Box{{-1, -1, -1}, {1, 1, 1}}).inside_share == 1.0f);
+    // 80 wide at 9-11 from the eye, where the view is 18-22 wide: of its four slices along x the
+    // outer two lie entirely beyond the side planes (|x| >= 20 > 11), the inner two reach x = 0
+    const tcr::Projection wide = tcr::project_box(cam, model, tcr::Box{{-40, -1, -1}, {40, 1, 1}});
+    REQUIRE(wide.visible);
+    CHECK(wide.inside_share == Approx(0.5));
+    // the eye inside a large box, 10 from its centre: the quarter behind the eye (z from 25 to 50)
+    // drops out, and the corners beside the frustum in the quarter that holds the eye
+    const tcr::Projection around = tcr::project_box(cam, model, tcr::Box{{-50, -50, -50}, {50, 50, 50}});
+    REQUIRE(around.visible);
+    CHECK(around.coverage_px == Approx(1000.0 * 1000.0));
+    CHECK(around.inside_share > 0.25f);
+    CHECK(around.inside_share < 0.75f);
+    // culled boxes have none
+    tcr::translation_scale(0, 0, 20, 1, model);
+    CHECK(tcr::project_box(cam, model, tcr::Box{{-1, -1, -1}, {1, 1, 1}}).inside_share == 0.0f);
+}
+
 namespace {
 
 struct SceneFixture {
@@ -128,6 +151,7 @@ void fill_scene(tcr::Runtime& rt, const tom::File& file, int count) {
 
 TEST_CASE("every selector holds the budget on a real scene, and levels extract as chosen", "[tcr][runtime]") {
     SceneFixture fx;
+    size_t partly_outside = 0;  // drawn objects reaching out of the frustum (the test must meet some)
     for (tcr::SelectorKind k : {tcr::SelectorKind::static_size, tcr::SelectorKind::stress, tcr::SelectorKind::greedy, tcr::SelectorKind::barrier,
                                 tcr::SelectorKind::exact}) {
         tcr::Runtime rt(model(), k);
@@ -150,6 +174,11 @@ TEST_CASE("every selector holds the budget on a real scene, and levels extract a
             for (uint32_t id = 0; id < rt.object_count(); ++id) {
                 const tcr::ObjectResult& o = rt.object(id);
                 if (!o.drawn) continue;
+                // each object's prediction counts the share of it inside the frustum
+                CHECK(o.inside_share > 0.0f);
+                CHECK(o.inside_share <= 1.0f);
+                CHECK(o.predicted_ms == Approx(r.correction * model().object_ms(o.triangles, o.vertices, o.coverage_px, o.inside_share)));
+                partly_outside += o.inside_share < 1.0f;
                 const tom::Extracted e = rt.indices(id, buffer.data(), buffer.size());
                 REQUIRE(e.triangle_count == o.triangles);
                 REQUIRE(e.vertex_count == o.vertices);
@@ -159,6 +188,7 @@ TEST_CASE("every selector holds the budget on a real scene, and levels extract a
             CHECK(drawn_tris == r.triangles);
         }
     }
+    CHECK(partly_outside > 0);
 }
 
 TEST_CASE("the model correction converges to the renderer's true factor", "[tcr][runtime]") {

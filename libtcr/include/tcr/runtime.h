@@ -53,6 +53,7 @@ struct ObjectResult {
     uint32_t triangles = 0;     ///< its active triangles
     float coverage_px = 0, size_px = 0, focus = 1;
     float distance = 0;         ///< eye-space distance to the box centre
+    float inside_share = 1;     ///< share of the box inside the view frustum (its geometry cost scales with it)
     double importance = 0;
     double error_px = 0;        ///< projected error at the chosen resolution
     double predicted_ms = 0;

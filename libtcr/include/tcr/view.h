@@ -29,6 +29,11 @@ struct Projection {
     float center_x = 0, center_y = 0;  ///< rectangle centre, pixels from the top-left corner
     float focus = 1;          ///< 1 at the screen centre, 1 - focus_weight at a corner
     float distance = 0;       ///< eye-space distance to the box centre (object units x scale)
+    /// Share of the box inside the view frustum: of its 4 x 4 x 4 equal sub-boxes, those not
+    /// entirely outside one frustum plane (1 when the whole box is inside, at least 1/64 when it
+    /// is visible, 0 when culled). What lies outside is clipped before set-up and rasterisation,
+    /// so it costs little (tcr::CostModel::object_ms).
+    float inside_share = 0;
 };
 
 /// Projects `box` transformed by `model` (object -> world). A box crossing the eye plane counts
