@@ -212,7 +212,7 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
     }
     // then 8 frames at the path's first position, planned, drawn and fed back as every
     // frame is but not recorded: the runtime's model correction starts from this scene's
-    // measured frames instead of the calibration's isolated objects (frame 0 came out 25-40%
+    // measured frames instead of the calibration's isolated objects (frame 0 came out 25-35%
     // over the budget, and the next few frames over too, while the correction caught up)
     const int64_t settle = none ? 0 : 8;  // full detail has no budget to settle on
     for (int64_t step = -settle; step < int64_t(o.frames); ++step) {
