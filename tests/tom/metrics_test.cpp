@@ -353,7 +353,7 @@ TEST_CASE("a report on a real mesh: levels, error growth, memory like Table 4, f
     CHECK(r.fit.mean.k > 0);
     CHECK(r.fit.max.k > r.fit.mean.k);
     CHECK(r.bbox_diagonal > 0);
-    // the levels run side by side on the cores: the figures are those of one thread
+    // the figures do not depend on the number of threads
     tom::ReportParams serial;
     serial.distance.threads = 1;
     const tom::MeshReport s = tom::make_report(fandisk.mesh, t, serial);

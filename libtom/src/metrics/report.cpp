@@ -200,25 +200,18 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
                                                 original.texcoords.empty() ? nullptr : original.texcoords.data()};
     const SurfaceAttributes level_attributes{built.normals.empty() ? nullptr : built.normals.data(),
                                              built.texcoords.empty() ? nullptr : built.texcoords.data()};
-    // the levels side by side, each measured on one thread (the figures do not depend on it): a
-    // level's sequential parts (its tree, the sort of its samples) then overlap another's search
-    DistanceParams per_level = params.distance;
-    per_level.threads = 1;
-    const MetroReference reference(surface_of(original), per_level, original_attributes);
-    detail::parallel_blocks(r.levels.size(), 1, params.distance.threads, [&](unsigned, size_t i, size_t) {
-        LevelReport& lr = r.levels[i];
+    const MetroReference reference(surface_of(original), params.distance, original_attributes);
+    std::vector<double> tris, means, maxes;
+    for (LevelReport& lr : r.levels) {
         const Level l = extract_level(built, lr.vertices);
         lr.triangles = l.e.triangle_count;
-        if (l.e.triangle_count > 0)
+        if (l.e.triangle_count > 0) {
             lr.error = reference.compare({built.positions.data(), lr.vertices, l.indices.data(), l.e.triangle_count}, level_attributes, lr.attributes);
-    });
-    std::vector<double> tris, means, maxes;
-    for (const LevelReport& lr : r.levels) {
-        if (lr.triangles == 0) continue;
-        r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
-        tris.push_back(lr.triangles);
-        means.push_back(std::max(lr.error.forward.mean, lr.error.backward.mean) / lr.error.diagonal);
-        maxes.push_back(lr.error.hausdorff / lr.error.diagonal);
+            r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
+            tris.push_back(lr.triangles);
+            means.push_back(std::max(lr.error.forward.mean, lr.error.backward.mean) / lr.error.diagonal);
+            maxes.push_back(lr.error.hausdorff / lr.error.diagonal);
+        }
     }
     r.fit.mean = fit_k_over_n(tris, means);
     r.fit.max = fit_k_over_n(tris, maxes);
