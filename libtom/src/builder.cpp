@@ -21,6 +21,7 @@
 
 #include "attribute_error.h"
 #include "format_layout.h"
+#include "morton.h"
 #include "parallel.h"
 #include "vec3.h"
 
@@ -964,16 +965,6 @@ void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>
     for_each_attribute_stream(to, [&](std::vector<float>& dst, size_t width, const char*) { gather(*sources[stream++], dst, width); });
 }
 
-// Spreads the 10 low bits of x to every third bit (a Morton code's one axis).
-inline uint32_t spread3(uint32_t x) {
-    x &= 0x3ffu;
-    x = (x | (x << 16)) & 0x030000ffu;
-    x = (x | (x << 8)) & 0x0300f00fu;
-    x = (x | (x << 4)) & 0x030c30c3u;
-    x = (x | (x << 2)) & 0x09249249u;
-    return x;
-}
-
 // The mesh the build runs on: the input with its vertices in Morton order of their positions
 // and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
 // Input vertex orders can be arbitrary (bunny00's triangles span 40% of its vertex range at the
@@ -996,7 +987,7 @@ Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std
         for (int k = 0; k < 3; ++k) {
             const float extent = hi[k] - lo[k];
             const float t = extent > 0 ? (in.positions[3 * size_t(v) + size_t(k)] - lo[k]) / extent : 0.0f;
-            c |= spread3(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f)))) << k;
+            c |= uint32_t(detail::spread_bits(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f))))) << k;  // 10 bits: 30 in all
         }
         code[v] = c;
     }

@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "../morton.h"
+
 namespace tom::detail {
 
 namespace {
@@ -24,16 +26,6 @@ struct Random {
         if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
     }
 };
-
-// The 16 low bits of x spread to every third bit.
-inline uint64_t spread_bits(uint64_t x) {
-    x &= 0xFFFF;
-    x = (x | x << 16) & 0x0000FF0000FFULL;
-    x = (x | x << 8) & 0x00F00F00F00FULL;
-    x = (x | x << 4) & 0x0C30C30C30C3ULL;
-    x = (x | x << 2) & 0x249249249249ULL;
-    return x;
-}
 
 // Sorts (key, index) pairs by key (keys below 2^48), equal keys in index order (as std::sort of
 // the pairs would order them): least-significant-digit radix sort, 12 bits a pass, passes where
