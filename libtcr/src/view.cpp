@@ -61,36 +61,33 @@ void look_at(const float eye[3], const float target[3], const float up[3], float
 
 namespace {
 
-// The share of `box`'s 4 x 4 x 4 sub-boxes that are not entirely outside one clip plane; 1 when
-// all of `clip` (the box's corners in clip space) lie inside the frustum, and at least one
-// sub-box's share for a box that is visible (not entirely outside one plane) as a whole.
-float inside_share(const float mvp[16], const Box& box, const float clip[8][4]) noexcept {
-    bool inside = true;
-    for (int c = 0; c < 8 && inside; ++c)
-        for (int axis = 0; axis < 3; ++axis) inside &= clip[c][axis] >= -clip[c][3] && clip[c][axis] <= clip[c][3];
-    if (inside) return 1.0f;
+// The clip planes a point in clip space lies outside of: bit 2 axis below (x < -w), bit
+// 2 axis + 1 above (x > w), for the axes x, y, z.
+uint8_t outcode(const float v[4]) noexcept {
+    uint8_t bits = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (v[axis] < -v[3]) bits |= uint8_t(1u << (2 * axis));
+        if (v[axis] > v[3]) bits |= uint8_t(1u << (2 * axis + 1));
+    }
+    return bits;
+}
+
+// The share of `box`'s 4 x 4 x 4 sub-boxes that are not entirely outside one clip plane, at
+// least one sub-box's share (the caller has found the box as a whole visible).
+float inside_share(const float mvp[16], const Box& box) noexcept {
     constexpr int K = 4, L = K + 1;
-    // the lattice of sub-box corners in clip space, each transformed once
-    float lattice[L * L * L][4];
+    // the outcodes of the lattice of sub-box corners, each corner transformed once
+    uint8_t outside[L * L * L];
     for (int i = 0; i < L; ++i)
         for (int j = 0; j < L; ++j)
             for (int k = 0; k < L; ++k) {
                 const float x = box.min[0] + (box.max[0] - box.min[0]) * float(i) / K;
                 const float y = box.min[1] + (box.max[1] - box.min[1]) * float(j) / K;
                 const float z = box.min[2] + (box.max[2] - box.min[2]) * float(k) / K;
-                float* out = lattice[(i * L + j) * L + k];
-                for (int r = 0; r < 4; ++r) out[r] = mvp[r] * x + mvp[4 + r] * y + mvp[8 + r] * z + mvp[12 + r];
+                float v[4];
+                for (int r = 0; r < 4; ++r) v[r] = mvp[r] * x + mvp[4 + r] * y + mvp[8 + r] * z + mvp[12 + r];
+                outside[(i * L + j) * L + k] = outcode(v);
             }
-    // per lattice point, the clip planes it lies outside of (bit 2 axis: below, 2 axis + 1: above)
-    uint8_t outside[L * L * L];
-    for (int q = 0; q < L * L * L; ++q) {
-        uint8_t bits = 0;
-        for (int axis = 0; axis < 3; ++axis) {
-            if (lattice[q][axis] < -lattice[q][3]) bits |= uint8_t(1u << (2 * axis));
-            if (lattice[q][axis] > lattice[q][3]) bits |= uint8_t(1u << (2 * axis + 1));
-        }
-        outside[q] = bits;
-    }
     int visible = 0;
     for (int i = 0; i < K; ++i)
         for (int j = 0; j < K; ++j)
@@ -109,23 +106,20 @@ Projection project_box(const Camera& camera, const float model[16], const Box& b
     float view_model[16], mvp[16];
     multiply(camera.view, model, view_model);
     multiply(camera.projection, view_model, mvp);
-    // the eight corners in clip space
+    // the eight corners in clip space, and the clip planes (-w <= x, y, z <= w) all of them lie
+    // outside of (culled when there is one) and any of them does (none: wholly inside)
     float clip[8][4];
+    uint8_t outside_all = 0x3F, outside_any = 0;
     for (int c = 0; c < 8; ++c) {
         const float x = (c & 1) ? box.max[0] : box.min[0], y = (c & 2) ? box.max[1] : box.min[1], z = (c & 4) ? box.max[2] : box.min[2];
         for (int r = 0; r < 4; ++r) clip[c][r] = mvp[r] * x + mvp[4 + r] * y + mvp[8 + r] * z + mvp[12 + r];
+        const uint8_t code = outcode(clip[c]);
+        outside_all &= code;
+        outside_any |= code;
     }
-    // culled when every corner lies outside the same clip plane (-w <= x, y, z <= w)
-    for (int axis = 0; axis < 3; ++axis) {
-        bool all_below = true, all_above = true;
-        for (int c = 0; c < 8; ++c) {
-            all_below &= clip[c][axis] < -clip[c][3];
-            all_above &= clip[c][axis] > clip[c][3];
-        }
-        if (all_below || all_above) return p;
-    }
+    if (outside_all) return p;
     p.visible = true;
-    p.inside_share = inside_share(mvp, box, clip);
+    p.inside_share = outside_any ? inside_share(mvp, box) : 1.0f;
     const float w = float(camera.viewport_width), h = float(camera.viewport_height);
     // eye-space distance to the box centre
     const float cx = 0.5f * (box.min[0] + box.max[0]), cy = 0.5f * (box.min[1] + box.max[1]), cz = 0.5f * (box.min[2] + box.max[2]);
