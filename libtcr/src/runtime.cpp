@@ -84,45 +84,49 @@ double Runtime::error_px(uint32_t id, double triangles, double m) const noexcept
     return c_for(o, m, last_fixed_c_) * std::pow(std::max(1.0, triangles), -m) * results_[id].size_px;
 }
 
-double Runtime::triangles_for_error(uint32_t id, double max_error_px) const noexcept {
-    const Object& o = objects_[id];
-    const ObjectResult& r = results_[id];
-    if (!(max_error_px > 0)) return o.triangles;
-    if (o.has_curve) {
-        // the stored curve, interpolated (log-log), scaled to the projected size: bisection in log n
-        auto err = [&](double n) {
-            // piecewise log-log interpolation over the stored points, k/N beyond them
-            const std::vector<double>& t = o.curve_tris;
-            const std::vector<double>& e = o.curve_error;
-            size_t hi = 0;
-            while (hi < t.size() && t[hi] < n) ++hi;
-            double rel;
-            if (hi == 0)
-                rel = e.empty() ? 0.0 : e[0] * t[0] / n;
-            else if (hi == t.size())
-                rel = e.back() * t.back() / n;
-            else if (e[hi - 1] > 0 && e[hi] > 0 && t[hi] > t[hi - 1])
-                rel = std::exp(std::log(e[hi - 1]) + (std::log(n) - std::log(t[hi - 1])) / (std::log(t[hi]) - std::log(t[hi - 1])) * (std::log(e[hi]) - std::log(e[hi - 1])));
-            else
-                rel = e[hi];
-            return rel * r.size_px;
-        };
-        double lo = o.min_triangles, hi = o.triangles;
-        if (err(lo) <= max_error_px) return lo;
-        for (int it = 0; it < 40; ++it) {
-            const double mid = std::sqrt(lo * hi);
-            (err(mid) <= max_error_px ? hi : lo) = mid;
-        }
-        return std::min(o.triangles, std::ceil(hi));
-    }
-    // Pasman & Jansen: angular error 2 k arctan(r / d) / N against the pixel's angle
+// Pasman & Jansen's angular error 2 k arctan(r / d) / N, in pixels, is k_px / N with this k_px.
+double Runtime::pasman_k_px(const Object& o, const ObjectResult& r) const noexcept {
     const float* P = last_camera_.projection;
     const double fov = P[5] != 0 ? 2.0 * std::atan(1.0 / P[5]) : 1.0;
     const double radians_per_px = fov / std::max<uint32_t>(1, last_camera_.viewport_height);
     const double radius = 0.5 * o.diagonal * scale_of(o.transform);
     const double d = std::max(r.distance, 1e-6f);
-    const double n = 2.0 * last_fixed_c_ * std::atan(radius / d) / (max_error_px * radians_per_px);
-    return std::min(o.triangles, std::max(o.min_triangles, std::ceil(n)));
+    return 2.0 * last_fixed_c_ * std::atan(radius / d) / radians_per_px;
+}
+
+double Runtime::projected_error_px(const Object& o, const ObjectResult& r, double n) const noexcept {
+    n = std::max(n, 1.0);
+    if (!o.has_curve) return pasman_k_px(o, r) / n;
+    // the stored curve, interpolated log-log, k / N beyond its points, scaled to the projected size
+    const std::vector<double>& t = o.curve_tris;
+    const std::vector<double>& e = o.curve_error;
+    size_t hi = 0;
+    while (hi < t.size() && t[hi] < n) ++hi;
+    double rel;
+    if (hi == 0)
+        rel = e.empty() ? 0.0 : e[0] * t[0] / n;
+    else if (hi == t.size())
+        rel = e.back() * t.back() / n;
+    else if (e[hi - 1] > 0 && e[hi] > 0 && t[hi] > t[hi - 1])
+        rel = std::exp(std::log(e[hi - 1]) + (std::log(n) - std::log(t[hi - 1])) / (std::log(t[hi]) - std::log(t[hi - 1])) * (std::log(e[hi]) - std::log(e[hi - 1])));
+    else
+        rel = e[hi];
+    return rel * r.size_px;
+}
+
+double Runtime::triangles_for_error(uint32_t id, double max_error_px) const noexcept {
+    const Object& o = objects_[id];
+    const ObjectResult& r = results_[id];
+    if (!(max_error_px > 0)) return o.triangles;
+    if (!o.has_curve) return std::min(o.triangles, std::max(o.min_triangles, std::ceil(pasman_k_px(o, r) / max_error_px)));
+    // bisection in log n over the interpolated curve
+    double lo = o.min_triangles, hi = o.triangles;
+    if (projected_error_px(o, r, lo) <= max_error_px) return lo;
+    for (int it = 0; it < 40; ++it) {
+        const double mid = std::sqrt(lo * hi);
+        (projected_error_px(o, r, mid) <= max_error_px ? hi : lo) = mid;
+    }
+    return std::min(o.triangles, std::ceil(hi));
 }
 
 uint32_t Runtime::resolution_for(const Object& o, double triangles) const noexcept {
@@ -240,7 +244,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         r.vertices = resolution_for(o, plan_.triangles[k]);
         r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
         r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
-        r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
+        r.error_px = projected_error_px(o, r, r.triangles);
         predicted += r.predicted_ms;
     }
     // vertex counts are exact here and were estimated in the problem: step down if that tipped
@@ -255,7 +259,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
             r.vertices = resolution_for(o, std::max(problem_.lo[k], r.triangles * factor));
             r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
             r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
-            r.error_px = c_for(o, params.m, params.fixed_c) * std::pow(std::max(1u, r.triangles), -params.m) * r.size_px;
+            r.error_px = projected_error_px(o, r, r.triangles);
             predicted += r.predicted_ms;
         }
     }

@@ -250,7 +250,10 @@ TEST_CASE("error-bounded mode: every object at the smallest resolution within th
     f.budget_ms = 1e6;
     f.max_error_px = 4.0;
     const tcr::FrameReport capped = rt.plan_frame(f);  // a copy: the next frame overwrites the report
-    CHECK(capped.max_error_px <= 4.0 * 1.3);
+    // the reported error is the one the cap bounds (the stored curve in pixels); an object may sit
+    // one step of the TOM (a few triangles) below the count the bound asks for
+    CHECK(capped.max_error_px <= 4.0 * 1.05);
+    CHECK(capped.max_error_px >= 4.0 * 0.5);  // the cap binds: the objects are not all far finer
     f.max_error_px = 0;
     CHECK(rt.plan_frame(f).triangles > capped.triangles);
 }

@@ -21,6 +21,14 @@ namespace {
 
 tom::Surface surface(const tom::Mesh& m) { return {m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count()}; }
 
+// The surface of built mesh t at a fraction of its vertices; `idx` holds its indices.
+tom::Surface level_surface(const tom::TomMesh& t, double fraction, std::vector<uint32_t>& idx) {
+    idx.assign(size_t(t.triangle_count()) * 3, 0);
+    const uint32_t n = tom::vertex_count_for_fraction(t.view(), fraction);
+    const tom::Extracted e = tom::extract(t.view(), n, idx.data(), idx.size());
+    return {t.positions.data(), n, idx.data(), e.triangle_count};
+}
+
 // An icosahedron with vertices on the sphere of radius r, and the same with each face cut into
 // f x f triangles whose vertices are pushed out onto the sphere (a geodesic sphere).
 tom::Mesh icosphere(int f, double r) {
@@ -108,10 +116,8 @@ TEST_CASE("a sphere against its inscribed icosahedron: the known maximum distanc
 TEST_CASE("figures are repeatable: same seed and any thread count give identical results", "[metrics]") {
     const test::NamedMesh bunny = test::real_meshes()[0];
     const tom::TomMesh t = tom::build(bunny.mesh);
-    std::vector<uint32_t> idx(t.triangle_count() * 3);
-    const uint32_t n = tom::vertex_count_for_fraction(t.view(), 0.05);
-    const tom::Extracted e = tom::extract(t.view(), n, idx.data(), idx.size());
-    const tom::Surface level{t.positions.data(), n, idx.data(), e.triangle_count};
+    std::vector<uint32_t> idx;
+    const tom::Surface level = level_surface(t, 0.05, idx);
     tom::DistanceParams one, two, other_seed;
     one.threads = 1;
     two.threads = 2;
@@ -123,6 +129,30 @@ TEST_CASE("figures are repeatable: same seed and any thread count give identical
     const tom::Distance c = tom::metro_distance(surface(bunny.mesh), level, other_seed);
     CHECK(c.forward.mean != a.forward.mean);                            // other samples...
     CHECK(c.forward.mean == Approx(a.forward.mean).epsilon(0.02));      // ...the same figure within sampling noise
+}
+
+TEST_CASE("a per-face cap on one direction's samples: a coarse level gets fewer, the figures stay within sampling noise", "[metrics][curve]") {
+    // the error curve's setting: face samples only, a fixed total, at most 4 per face of the level
+    const test::NamedMesh bunny = test::real_meshes()[0];
+    const tom::TomMesh t = tom::build(bunny.mesh);
+    std::vector<uint32_t> idx;
+    const tom::Surface level = level_surface(t, 0.005, idx);
+    tom::DistanceParams all;
+    all.vertex_samples = all.edge_samples = false;
+    all.samples_per_face = 1e9;
+    all.max_samples = 16384;
+    tom::DistanceParams capped = all;
+    capped.max_samples_per_sampled_face = 4;
+    const tom::Distance a = tom::metro_distance(surface(bunny.mesh), level, all), b = tom::metro_distance(surface(bunny.mesh), level, capped);
+    INFO("level triangles " << level.triangle_count << ", backward samples " << a.backward.samples << " -> " << b.backward.samples);
+    CHECK(a.forward.samples == b.forward.samples);  // the original has far more faces than the total
+    CHECK(a.backward.samples >= 16000);
+    CHECK(b.backward.samples >= uint64_t(3.5 * double(level.triangle_count)));  // each face's share rounded at random
+    CHECK(b.backward.samples <= uint64_t(4.5 * double(level.triangle_count)));
+    CHECK(a.forward.mean == b.forward.mean);
+    CHECK(b.backward.mean == Approx(a.backward.mean).epsilon(0.05));
+    CHECK(b.backward.max <= a.backward.max * 1.0001);  // a tenth of the samples: a lower max (with this seed)...
+    CHECK(b.backward.max >= a.backward.max * 0.7);     // ...and not far below
 }
 
 TEST_CASE("one reference compared from several threads at once, and the curve on any thread count, give identical figures", "[metrics][curve]") {

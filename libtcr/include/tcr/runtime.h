@@ -55,7 +55,7 @@ struct ObjectResult {
     float distance = 0;         ///< eye-space distance to the box centre
     float inside_share = 1;     ///< share of the box inside the view frustum (its geometry cost scales with it)
     double importance = 0;
-    double error_px = 0;        ///< projected error at the chosen resolution
+    double error_px = 0;        ///< projected error at the chosen resolution, as max_error_px bounds it: the stored curve (or Pasman's 2 k arctan(r/d) / N) in pixels
     double predicted_ms = 0;
 };
 
@@ -119,6 +119,8 @@ private:
         float last_x = -1, last_y = -1;                // previous frame's screen position (motion)
     };
     double c_for(const Object& o, double m, double fixed_c) const noexcept;
+    double pasman_k_px(const Object& o, const ObjectResult& r) const noexcept;
+    double projected_error_px(const Object& o, const ObjectResult& r, double triangles) const noexcept;
     uint32_t resolution_for(const Object& o, double triangles) const noexcept;
 
     CostModel model_;

@@ -42,6 +42,10 @@ struct AttributeDeviation {
 struct DistanceParams {
     double samples_per_face = 10.0;  ///< total samples per direction = this x faces of the larger mesh
     uint64_t max_samples = 0;        ///< cap on that total per direction (0: none)
+    /// Cap per direction of this x the faces of the surface sampled in it (0: none; not Metro's
+    /// convention, which gives both directions the same total). The error curve's: a level of a
+    /// few large faces far from the original needs few samples, and each costs a long search.
+    double max_samples_per_sampled_face = 0;
     uint64_t seed = 1;               ///< fixed seed: repeated runs give identical figures
     bool vertex_samples = true;
     bool edge_samples = true;

@@ -19,7 +19,13 @@ struct ReportParams {
     std::vector<double> levels = {0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005};  ///< fractions of the triangles
     DistanceParams distance;                 ///< Metro's defaults: 10 samples per face, seed 1
     uint32_t curve_points = 16;              ///< error-curve points, log-spaced in vertex count (2..64)
-    uint64_t curve_samples = 8192;           ///< area-uniform face samples per direction for each curve point
+    /// Error-curve sampling, per direction and curve point: area-uniform face samples,
+    /// curve_samples_per_triangle x the mesh's triangles within [curve_min_samples,
+    /// curve_samples], and at most curve_samples_per_level_face x the faces of the level sampled
+    double curve_samples_per_triangle = 0.5;
+    uint64_t curve_min_samples = 1024;
+    uint64_t curve_samples = 4096;
+    double curve_samples_per_level_face = 64;
 };
 
 struct LevelReport {

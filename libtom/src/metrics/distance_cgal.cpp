@@ -367,9 +367,13 @@ double enlarged_union_diagonal(const Surface& a, const Surface& b) {
                      (hi[2] - lo[2] + grow) * (hi[2] - lo[2] + grow));
 }
 
-uint64_t sample_target(const Surface& a, const Surface& b, const DistanceParams& p) {
-    const uint64_t n = uint64_t(std::llround(p.samples_per_face * double(std::max(a.triangle_count, b.triangle_count))));
-    return p.max_samples ? std::min(n, p.max_samples) : n;
+// The samples of one direction, on `sampled`, between `sampled` and `other`.
+uint64_t sample_target(const Surface& sampled, const Surface& other, const DistanceParams& p) {
+    uint64_t n = uint64_t(std::llround(p.samples_per_face * double(std::max(sampled.triangle_count, other.triangle_count))));
+    if (p.max_samples) n = std::min(n, p.max_samples);
+    if (p.max_samples_per_sampled_face > 0)
+        n = std::min(n, std::max<uint64_t>(1, uint64_t(std::llround(p.max_samples_per_sampled_face * double(sampled.triangle_count)))));
+    return n;
 }
 
 
@@ -529,6 +533,7 @@ Distance MetroReference::compare(const Surface& simplified) const {
 Distance MetroReference::compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const {
     validate(simplified, "simplified");
     const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
+    const uint64_t backward_target = sample_target(simplified, impl_->original, impl_->params);
     const Mesh3 other(simplified);
     if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
         deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples_once(), simplified, attributes, other, impl_->params.threads);
@@ -539,7 +544,7 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
     const Samples& fs = impl_->samples_for(target);
     d.forward = measure(fs, other, impl_->params.threads);
     std::unique_ptr<Impl::Workspace> work = impl_->borrow();
-    sample_surface(simplified, target, impl_->params, work->backward, work->scratch);
+    sample_surface(simplified, backward_target, impl_->params, work->backward, work->scratch);
     d.backward = measure(work->backward, impl_->mesh, impl_->params.threads);
     impl_->give_back(std::move(work));
     d.hausdorff = std::max(d.forward.max, d.backward.max);

@@ -150,21 +150,28 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
 
 } // namespace
 
-// The curve is a runtime estimate: a fixed budget of area-uniform face samples per direction,
-// so its cost does not grow with the mesh.
-static DistanceParams curve_distance_params(const ReportParams& params) {
+// The curve is a runtime estimate (the runtime reads its means): area-uniform face samples, a
+// budget that grows with the mesh up to a cap, and fewer on a level of a few faces. Measured
+// against 32768 samples per direction on bunny00, fandisk, elephant, 2CylinderEngine and
+// ClearCoatTest (818 points): the means differ by 2.8% on average (0.6% with 8192 samples
+// throughout), and the curves take half the time (1.9 s against 3.6 s; most of it the 61 small
+// meshes of the two glTF files, which 8192 samples each made cost 40x their build)
+static DistanceParams curve_distance_params(const ReportParams& params, size_t triangles) {
     DistanceParams dp = params.distance;
     dp.threads = 1;  // the points run in parallel instead (curve_with's workers)
     dp.vertex_samples = false;
     dp.edge_samples = false;
     dp.samples_per_face = 1e9;
-    dp.max_samples = params.curve_samples;
+    const double wanted = params.curve_samples_per_triangle * double(triangles);
+    const uint64_t floor = std::min(params.curve_min_samples, params.curve_samples);
+    dp.max_samples = std::max<uint64_t>(1, std::min<uint64_t>(params.curve_samples, std::max<uint64_t>(floor, uint64_t(std::llround(wanted)))));
+    dp.max_samples_per_sampled_face = params.curve_samples_per_level_face;
     return dp;
 }
 
 ErrorCurve measure_error_curve(const Mesh& original, const TomMesh& built, const ReportParams& params) {
     check(original, built);
-    const MetroReference reference(surface_of(original), curve_distance_params(params));
+    const MetroReference reference(surface_of(original), curve_distance_params(params, original.triangle_count()));
     return curve_with(built, params, reference, params.distance.threads);
 }
 
