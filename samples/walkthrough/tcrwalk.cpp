@@ -320,6 +320,72 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
     return summarize(selector, o.budget_ms, rows);
 }
 
+// The renderer's own variation, which no selector can remove: viewpoint A's frame, as the exact
+// selector plans it at the budget once its model correction has settled on 10 frames there,
+// drawn `count` times in a row. The spread of identical frames and how it comes in runs.
+nlohmann::ordered_json noise_test(const World& w, const Options& o, const tcr::CostModel& model, walk::Renderer& renderer,
+                                  const std::vector<uint32_t>& handles, uint32_t count) {
+    uint32_t shots[3];
+    walk::viewpoints(o.frames, shots);
+    tcr::Runtime rt(model, tcr::SelectorKind::exact);
+    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+    const tcr::Camera cam = camera_for(shots[0], o.frames, o.width, o.height);
+    tcr::FrameParams fp;
+    fp.camera = cam;
+    fp.budget_ms = o.budget_ms;
+    std::vector<uint32_t> indices;
+    std::vector<walk::Renderer::Draw> draws;
+    size_t at = 0;
+    for (int settle = 0; settle < 10; ++settle) {
+        const tcr::FrameReport& r = rt.plan_frame(fp);
+        ensure(indices, size_t(r.triangles) * 3);
+        draws.clear();
+        at = 0;
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            if (!rt.object(id).drawn) continue;
+            const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
+            draws.push_back({handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {0.85f, 0.78f, 0.62f}});
+            at += size_t(e.triangle_count) * 3;
+        }
+        const auto t0 = Clock::now();
+        renderer.render(cam.view, cam.projection, draws, indices, at);
+        fp.previous_frame_ms = ms_since(t0);
+    }
+    const tcr::FrameReport& r = rt.last_frame();
+    std::vector<double> times;
+    for (uint32_t k = 0; k < count; ++k) {
+        const auto t0 = Clock::now();
+        renderer.render(cam.view, cam.projection, draws, indices, at);
+        times.push_back(ms_since(t0));
+    }
+    std::vector<double> sorted = times;
+    std::sort(sorted.begin(), sorted.end());
+    auto quantile = [&](double q) { return sorted[size_t(q * double(sorted.size() - 1) + 0.5)]; };
+    const double median = quantile(0.5);
+    double mean = 0, var = 0, lag1 = 0;
+    for (double t : times) mean += t / double(count);
+    for (double t : times) var += (t - mean) * (t - mean) / double(count);
+    for (size_t k = 1; k < times.size(); ++k) lag1 += (times[k] - mean) * (times[k - 1] - mean) / double(count - 1);
+    // means of 10 frames in a row: a slow variation moves them, a fast one averages out
+    double block_lo = INFINITY, block_hi = 0;
+    for (size_t k = 0; k + 10 <= times.size(); k += 10) {
+        const double b = std::accumulate(times.begin() + ptrdiff_t(k), times.begin() + ptrdiff_t(k + 10), 0.0) / 10.0;
+        block_lo = std::min(block_lo, b), block_hi = std::max(block_hi, b);
+    }
+    nlohmann::ordered_json j;
+    j["frame"] = shots[0];
+    j["renders"] = count;
+    j["triangles"] = r.triangles;
+    j["objects"] = r.drawn;
+    j["median_ms"] = median;
+    j["std_percent"] = 100.0 * std::sqrt(var) / median;
+    j["p5_percent"] = 100.0 * quantile(0.05) / median;
+    j["p95_percent"] = 100.0 * quantile(0.95) / median;
+    j["lag1_autocorrelation"] = var > 0 ? lag1 / var : 0.0;
+    j["block10_percent"] = {100.0 * block_lo / median, 100.0 * block_hi / median};
+    return j;
+}
+
 // Renders sample objects at several resolutions and sizes, fits the cost model by least squares.
 tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::vector<uint32_t>& handles, std::FILE* log) {
     auto median = [](std::vector<double> v) {
@@ -449,7 +515,7 @@ int main(int argc, char** argv) {
     Options o;
     std::string make_scene, calibrate_out;
     std::vector<std::string> mesh_files;
-    uint32_t instances = 300;
+    uint32_t instances = 300, noise_renders = 0;
     CLI::App app{"tcrwalk: render a scene of TOM objects headless along a path, under libtcr's selectors, and measure the frame budget"};
     app.set_version_flag("--version", "tcrwalk 0.1.0");
     app.add_option("--scene", o.scene, "Scene file (see samples/walkthrough/scene.h)");
@@ -469,6 +535,8 @@ int main(int argc, char** argv) {
     app.add_option("--hysteresis", o.hysteresis, "Relative dead band against the previous frame (default 0.05)");
     app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in standard deviations of the calibrated frame noise (default 0.35)");
     app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
+    app.add_option("--noise-test", noise_renders, "Draw viewpoint A's frame (the exact selector's plan at --budget-ms) this many times in a row and print how much identical frames vary")
+        ->check(CLI::Range(20u, 100000u));
     app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"
                "The whole walkthrough: bash scripts/walkthrough.sh");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
@@ -516,6 +584,25 @@ int main(int argc, char** argv) {
             return 2;
         }
         const tcr::CostModel model = tcr::read_cost_model(o.calibration);
+        if (noise_renders) {
+            if (!renderer) {
+                std::fprintf(stderr, "error: --noise-test draws real frames: drop --simulate\n");
+                return 2;
+            }
+            const nlohmann::ordered_json j = noise_test(w, o, model, *renderer, handles, noise_renders);
+            if (o.json) {
+                std::printf("%s\n", j.dump().c_str());
+            } else {
+                std::printf("viewpoint A (frame %u of %u), %llu triangles in %u objects, drawn %u times in a row on %s:\n"
+                            "  median %.2f ms; standard deviation %.1f%% of it; 5th / 95th percentile %.0f%% / %.0f%%\n"
+                            "  lag-1 autocorrelation %.2f; means of 10 frames in a row from %.0f%% to %.0f%%\n",
+                            j["frame"].get<uint32_t>(), o.frames, static_cast<unsigned long long>(j["triangles"].get<uint64_t>()), j["objects"].get<uint32_t>(),
+                            noise_renders, renderer->description().c_str(), j["median_ms"].get<double>(), j["std_percent"].get<double>(),
+                            j["p5_percent"].get<double>(), j["p95_percent"].get<double>(), j["lag1_autocorrelation"].get<double>(),
+                            j["block10_percent"][0].get<double>(), j["block10_percent"][1].get<double>());
+            }
+            return 0;
+        }
         if (o.selectors.empty() || (o.selectors.size() == 1 && o.selectors[0] == "all")) o.selectors = {"none", "static", "stress", "greedy", "barrier", "exact"};
         for (const std::string& s : o.selectors) {
             tcr::SelectorKind k;

@@ -84,6 +84,19 @@ assert blue > 100, blue
 assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() > 500
 "
 check "tomview on a file that is not a .tom exits 1" bash -c "'$view' '$data/meshes/fandisk.off' -o '$work/x.png'; test \$? -eq 1"
+check "the noise test draws one frame again and again and reports its spread" /usr/bin/python3 -c "
+import json, subprocess
+out = subprocess.run(['$walk', '--scene', '$work/scene.txt', '--calibration', '$work/calibration.txt', '--noise-test', '40',
+                      '--budget-ms', '6', '--width', '320', '--height', '240', '--json'], capture_output=True, text=True, check=True).stdout
+j = json.loads(out)
+assert j['renders'] == 40 and j['triangles'] > 0 and j['objects'] > 0, j
+assert j['median_ms'] > 0 and j['std_percent'] > 0, j                          # real frames vary
+assert j['p5_percent'] <= 100 <= j['p95_percent'], j
+lo, hi = j['block10_percent']
+assert 0 < lo <= hi, j                                                        # means of 10 in a row
+assert -1 <= j['lag1_autocorrelation'] <= 1, j
+"
+check "the noise test needs the renderer" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --noise-test 40 --simulate 2>/dev/null; test \$? -eq 2"
 check "a missing scene is an error" bash -c "! '$walk' --scene '$work/none.txt' --calibration '$work/calibration.txt' 2>/dev/null"
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]
