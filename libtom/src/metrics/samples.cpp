@@ -2,7 +2,9 @@
 
 #include "samples.h"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "../morton.h"
 
@@ -27,22 +29,42 @@ struct Random {
     }
 };
 
-// Sorts (key, index) pairs by key (keys below 2^48), equal keys in index order (as std::sort of
-// the pairs would order them): least-significant-digit radix sort, 12 bits a pass, passes where
-// every key has the same digit skipped.
-void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<std::pair<uint64_t, uint32_t>>& other) {
-    constexpr int kDigits = 4, kBuckets = 1 << 12;
+// Sorts (key, index) pairs by key (keys below 2^key_bits), equal keys in their input order:
+// least-significant-digit radix sort, 12 bits a pass, passes where every key has the same digit
+// skipped. On up to `threads` threads, each counting and then placing one contiguous part of the
+// items, the parts' places in each bucket in part order: the same result as on one thread.
+void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<std::pair<uint64_t, uint32_t>>& other, int key_bits,
+                unsigned threads) {
+    constexpr int kBits = 12;
+    constexpr size_t kBuckets = size_t(1) << kBits;
     const size_t n = items.size();
     other.resize(n);
-    std::vector<size_t> counts(size_t(kDigits) * kBuckets, 0);
-    for (const auto& item : items)
-        for (int d = 0; d < kDigits; ++d) ++counts[size_t(d) * kBuckets + ((item.first >> (12 * d)) & (kBuckets - 1))];
-    for (int d = 0; d < kDigits; ++d) {
-        size_t* count = &counts[size_t(d) * kBuckets];
-        if (std::find(count, count + kBuckets, n) != count + kBuckets) continue;  // one digit for all
+    const size_t parts = n < (size_t(1) << 16) ? 1 : std::min<size_t>(thread_count(threads), 8);
+    std::vector<size_t> counts(parts * kBuckets);  // part-major
+    Team team{unsigned(parts)};
+    for (int shift = 0; shift < key_bits; shift += kBits) {
+        auto range = [&](size_t part) { return std::make_pair(n * part / parts, n * (part + 1) / parts); };
+        team.blocks(parts, 1, [&](unsigned, size_t part, size_t) {
+            size_t* count = &counts[part * kBuckets];
+            std::fill(count, count + kBuckets, size_t(0));
+            const auto [begin, end] = range(part);
+            for (size_t i = begin; i < end; ++i) ++count[(items[i].first >> shift) & (kBuckets - 1)];
+        });
+        // each part's first place in each bucket: the buckets in order, within one the parts in order
         size_t sum = 0;
-        for (int b = 0; b < kBuckets; ++b) sum += std::exchange(count[b], sum);
-        for (const auto& item : items) other[count[(item.first >> (12 * d)) & (kBuckets - 1)]++] = item;
+        bool one_digit = false;
+        for (size_t b = 0; b < kBuckets; ++b) {
+            size_t in_bucket = 0;
+            for (size_t part = 0; part < parts; ++part) in_bucket += counts[part * kBuckets + b];
+            if (in_bucket == n) one_digit = true;
+            for (size_t part = 0; part < parts; ++part) sum += std::exchange(counts[part * kBuckets + b], sum);
+        }
+        if (one_digit) continue;
+        team.blocks(parts, 1, [&](unsigned, size_t part, size_t) {
+            size_t* place = &counts[part * kBuckets];
+            const auto [begin, end] = range(part);
+            for (size_t i = begin; i < end; ++i) other[place[(items[i].first >> shift) & (kBuckets - 1)]++] = items[i];
+        });
         items.swap(other);
     }
 }
@@ -90,7 +112,7 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
             keyed[i] = {spread_bits(uint64_t(q.x)) << 2 | spread_bits(uint64_t(q.y)) << 1 | spread_bits(uint64_t(q.z)), uint32_t(i)};
         }
     });
-    radix_sort(keyed, scratch.other);
+    radix_sort(keyed, scratch.other, 3 * kMortonBits, threads);
     std::vector<V3>& sorted = scratch.sorted;
     sorted.resize(n);
     keys.resize(n);
@@ -121,17 +143,24 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         out.vertex = out.points.size();
     }
     if (p.edge_samples && per_area > 0) {
-        std::vector<std::pair<uint32_t, uint32_t>> edges;
+        // every edge once, in the order of (lower vertex, higher vertex): a radix sort of the two
+        // packed into one key
+        int bits = 1;
+        while (bits < 32 && (uint64_t(1) << bits) < s.vertex_count) ++bits;
+        std::vector<std::pair<uint64_t, uint32_t>>& edges = scratch.keyed;
+        edges.clear();
         edges.reserve(s.triangle_count * 3);
         for (size_t t = 0; t < s.triangle_count; ++t)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
-                edges.push_back({std::min(a, b), std::max(a, b)});
+                edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), 0u});
             }
-        std::sort(edges.begin(), edges.end());
+        radix_sort(edges, scratch.other, 2 * bits, p.threads);
         edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
         const double per_length = std::sqrt(per_area);
-        for (const auto& [a, b] : edges) {
+        const uint64_t low = (uint64_t(1) << bits) - 1;
+        for (const auto& edge : edges) {
+            const uint32_t a = uint32_t(edge.first >> bits), b = uint32_t(edge.first & low);
             const V3 pa = vertex(s, a), pb = vertex(s, b);
             const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
             for (int i = 1; i <= n; ++i) {
