@@ -215,6 +215,17 @@ __attribute__((target("avx2"))) void map_corners_avx2(const I* sub, size_t verti
     map_corners_scalar(sub, in + i, out + i, count - i, n);
 }
 
+// Full resolution from 16-bit corners into a 32-bit buffer: 16 corners widened per step (the
+// plain loop widens 8 with SSE2)
+__attribute__((target("avx2"))) void widen_avx2(const uint16_t* in, uint32_t* out, size_t count) noexcept {
+    size_t i = 0;
+    for (; i + 16 <= count; i += 16) {
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), load8(in + i));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i + 8), load8(in + i + 8));
+    }
+    for (; i < count; ++i) out[i] = in[i];
+}
+
 bool cpu_has_avx2() noexcept {
     static const bool has = __builtin_cpu_supports("avx2") && detail::simd_enabled();
     return has;
@@ -254,10 +265,17 @@ Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t 
     const size_t corners = size_t(r.triangle_count) * 3;
     if (n == m.vertex_count) {  // full resolution: every chain is empty
         const I* in = static_cast<const I*>(m.triangles);
-        if (sizeof(I) == sizeof(O))
+        if (sizeof(I) == sizeof(O)) {
             std::memcpy(dst, in, corners * sizeof(O));
-        else
-            for (size_t i = 0; i < corners; ++i) dst[i] = O(in[i]);
+            return r;
+        }
+#ifdef TOM_HAVE_AVX2_PATH
+        if (sizeof(I) == 2 && sizeof(O) == 4 && cpu_has_avx2()) {
+            widen_avx2(reinterpret_cast<const uint16_t*>(in), reinterpret_cast<uint32_t*>(dst), corners);
+            return r;
+        }
+#endif
+        for (size_t i = 0; i < corners; ++i) dst[i] = O(in[i]);
         return r;
     }
     const I* sub = static_cast<const I*>(m.substitute);

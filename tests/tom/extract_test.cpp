@@ -40,7 +40,10 @@ TEST_CASE("16-bit and 32-bit storage and outputs agree with brute force at every
     const tom::MeshView m32 = b.tom.view();
     std::vector<uint32_t> a(size_t(m32.triangle_count) * 3), c(a.size());
     std::vector<uint16_t> d(a.size());
-    for (uint32_t n = m32.min_vertex_count; n <= m32.vertex_count; n += 997) {
+    std::vector<uint32_t> resolutions;
+    for (uint32_t n = m32.min_vertex_count; n < m32.vertex_count; n += 997) resolutions.push_back(n);
+    resolutions.push_back(m32.vertex_count);  // full resolution: a copy (16-bit corners widened)
+    for (const uint32_t n : resolutions) {
         INFO("resolution " << n);
         const std::vector<uint32_t> expect = test::brute_force_active(m32, n);
         const tom::Extracted r1 = tom::extract(m32, n, a.data(), a.size());
@@ -110,16 +113,19 @@ TEST_CASE("coarse corners (COAR): extraction through them equals brute force at 
 
 TEST_CASE("extraction never writes past the capacity it is given", "[extract]") {
     const Built b = bunny();
-    const tom::MeshView m = b.tom.view();
-    const uint32_t n = m.vertex_count / 3;
-    const uint32_t active = tom::active_triangle_count(m, n);
-    std::vector<uint32_t> buf(size_t(active) * 3 + 64, 0xFFFFFFFFu);
-    for (size_t cap : {size_t(0), size_t(2), size_t(3), size_t(100), size_t(active) * 3 - 1, size_t(active) * 3}) {
-        std::fill(buf.begin(), buf.end(), 0xFFFFFFFFu);
-        const tom::Extracted r = tom::extract(m, n, buf.data(), cap);
-        CHECK(r.triangle_count == std::min<size_t>(active, cap / 3));
-        for (size_t i = size_t(r.triangle_count) * 3; i < buf.size(); ++i) REQUIRE(buf[i] == 0xFFFFFFFFu);
-    }
+    const tom::File file = tom::File::from_bytes(b.bytes.data(), b.bytes.size(), "bunny.tom");
+    for (const tom::MeshView& m : {b.tom.view(), file.mesh(0)})  // 32- and 16-bit corners
+        for (const uint32_t n : {m.vertex_count / 3, m.vertex_count}) {
+            INFO("index size " << m.index_size << ", resolution " << n);
+            const uint32_t active = tom::active_triangle_count(m, n);
+            std::vector<uint32_t> buf(size_t(active) * 3 + 64, 0xFFFFFFFFu);
+            for (size_t cap : {size_t(0), size_t(2), size_t(3), size_t(100), size_t(active) * 3 - 1, size_t(active) * 3}) {
+                std::fill(buf.begin(), buf.end(), 0xFFFFFFFFu);
+                const tom::Extracted r = tom::extract(m, n, buf.data(), cap);
+                CHECK(r.triangle_count == std::min<size_t>(active, cap / 3));
+                for (size_t i = size_t(r.triangle_count) * 3; i < buf.size(); ++i) REQUIRE(buf[i] == 0xFFFFFFFFu);
+            }
+        }
 }
 
 TEST_CASE("resolution queries: clamping, smallest n for a triangle count, fractions", "[extract]") {
