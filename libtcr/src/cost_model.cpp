@@ -73,17 +73,25 @@ CalibrationResult fit_cost_model(const std::vector<CostSample>& samples) {
     // start: every sample geometry bound
     std::vector<char> fill(samples.size(), 0);
     CostModel model;
+    // relative errors: each sample's row divided by its time, so objects of a few hundred
+    // triangles count as much as those of tens of thousands (absolute residuals let the largest
+    // samples decide and left the small ones off by 50-180% on llvmpipe); times below a
+    // thousandth of the largest are weighted as that
+    double longest = 0;
+    for (const CostSample& s : samples) longest = std::max(longest, s.time_ms);
+    const double floor_ms = std::max(1e-9, 1e-3 * longest);
     for (int round = 0; round < 50; ++round) {
         // unknowns: setup, tri, vert, pix
         std::vector<std::vector<double>> rows;
         std::vector<double> b;
         for (size_t i = 0; i < samples.size(); ++i) {
             const CostSample& s = samples[i];
+            const double w = 1.0 / std::max(s.time_ms, floor_ms);
             if (fill[i])
-                rows.push_back({1.0, 0.0, 0.0, s.pixels});
+                rows.push_back({w, 0.0, 0.0, w * s.pixels});
             else
-                rows.push_back({1.0, s.triangles, s.vertices, 0.0});
-            b.push_back(s.time_ms);
+                rows.push_back({w, w * s.triangles, w * s.vertices, 0.0});
+            b.push_back(w * s.time_ms);
         }
         // scale columns so the solve is well conditioned
         double scale[4] = {1, 1, 1, 1};

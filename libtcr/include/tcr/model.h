@@ -53,7 +53,8 @@ struct CalibrationResult {
     size_t fill_bound = 0;
 };
 
-/// Fits t_setup, t_tri, t_vert and t_pix to samples by least squares on the model
+/// Fits t_setup, t_tri, t_vert and t_pix to samples by least squares on relative errors (each
+/// sample weighted by 1 / its time) on the model
 /// t = t_setup + max(t_tri*T + t_vert*V, t_pix*P): alternates between classifying each sample
 /// as geometry or fill bound and solving the linear least-squares problem of that split
 /// (all coefficients clamped to >= 0), until the split stops changing.
