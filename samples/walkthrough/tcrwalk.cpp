@@ -466,8 +466,8 @@ tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::ve
                     tcr::Box box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
                     pixels += tcr::project_box(cam, t.data(), box).coverage_px;
                 }
-                // the copies drawn `repeats` times in the frame, so that even a small level's frame
-                // holds 200,000 triangles and stands well above the empty frame and its jitter
+                // the copies drawn `repeats` times in the frame (up to 64), toward kCalibrationTriangles
+                // a frame, so that even a small level's time stands well above the empty frame's jitter
                 const int repeats = std::max(1, std::min(64, int(std::ceil(kCalibrationTriangles / (double(tris) * copies)))));
                 for (int rep = 1; rep < repeats; ++rep)
                     for (int k = 0; k < copies; ++k) draws.push_back(draws[size_t(k)]);
