@@ -23,6 +23,7 @@
 #include "format_layout.h"
 #include "morton.h"
 #include "parallel.h"
+#include "radix_sort.h"
 #include "vec3.h"
 
 #include <algorithm>
@@ -479,29 +480,13 @@ struct ListAdjacency {
     }
 };
 
-// LSD radix sort of candidates by cost (non-negative floats sort like their bits); stable.
+// Candidates by cost (non-negative floats sort like their bits), stable.
 void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp) {
-    tmp.resize(items.size());
-    for (int shift = 0; shift < 32; shift += 11) {
-        uint32_t hist[2048] = {};
-        for (const Candidate& c : items) {
-            uint32_t bits;
-            std::memcpy(&bits, &c.cost, 4);
-            ++hist[(bits >> shift) & 2047];
-        }
-        uint32_t sum = 0;
-        for (uint32_t& h : hist) {
-            const uint32_t x = h;
-            h = sum;
-            sum += x;
-        }
-        for (const Candidate& c : items) {
-            uint32_t bits;
-            std::memcpy(&bits, &c.cost, 4);
-            tmp[hist[(bits >> shift) & 2047]++] = c;
-        }
-        items.swap(tmp);
-    }
+    detail::radix_sort(items, tmp, 32, [](const Candidate& c) {
+        uint32_t bits;
+        std::memcpy(&bits, &c.cost, 4);
+        return bits;
+    });
 }
 
 void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allow_seams) {
@@ -991,18 +976,12 @@ Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std
         }
         code[v] = c;
     }
-    // LSD radix sort of the 30-bit codes, stable: equal codes keep input order
+    // by the 30-bit codes, stable: equal codes keep input order
     vertex_old.resize(n);
     for (uint32_t v = 0; v < n; ++v) vertex_old[v] = v;
     {
-        std::vector<uint32_t> tmp(n);
-        for (int shift = 0; shift < 30; shift += 10) {
-            uint32_t count[1025] = {};
-            for (uint32_t v : vertex_old) ++count[((code[v] >> shift) & 1023u) + 1];
-            for (int i = 0; i < 1024; ++i) count[i + 1] += count[i];
-            for (uint32_t v : vertex_old) tmp[count[(code[v] >> shift) & 1023u]++] = v;
-            vertex_old.swap(tmp);
-        }
+        std::vector<uint32_t> tmp;
+        detail::radix_sort(vertex_old, tmp, 30, [&](uint32_t v) { return code[v]; });
     }
     std::vector<uint32_t> vertex_new(n);
     for (uint32_t i = 0; i < n; ++i) vertex_new[vertex_old[i]] = i;

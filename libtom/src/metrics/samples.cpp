@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "../morton.h"
+#include "../radix_sort.h"
 
 namespace tom::detail {
 
@@ -29,45 +30,8 @@ struct Random {
     }
 };
 
-// Sorts (key, index) pairs by key (keys below 2^key_bits), equal keys in their input order:
-// least-significant-digit radix sort, 12 bits a pass, passes where every key has the same digit
-// skipped. On up to `threads` threads, each counting and then placing one contiguous part of the
-// items, the parts' places in each bucket in part order: the same result as on one thread.
-void radix_sort(std::vector<std::pair<uint64_t, uint32_t>>& items, std::vector<std::pair<uint64_t, uint32_t>>& other, int key_bits,
-                unsigned threads) {
-    constexpr int kBits = 12;
-    constexpr size_t kBuckets = size_t(1) << kBits;
-    const size_t n = items.size();
-    other.resize(n);
-    const size_t parts = n < (size_t(1) << 16) ? 1 : std::min<size_t>(thread_count(threads), 8);
-    std::vector<size_t> counts(parts * kBuckets);  // part-major
-    Team team{unsigned(parts)};
-    for (int shift = 0; shift < key_bits; shift += kBits) {
-        auto range = [&](size_t part) { return std::make_pair(n * part / parts, n * (part + 1) / parts); };
-        team.blocks(parts, 1, [&](unsigned, size_t part, size_t) {
-            size_t* count = &counts[part * kBuckets];
-            std::fill(count, count + kBuckets, size_t(0));
-            const auto [begin, end] = range(part);
-            for (size_t i = begin; i < end; ++i) ++count[(items[i].first >> shift) & (kBuckets - 1)];
-        });
-        // each part's first place in each bucket: the buckets in order, within one the parts in order
-        size_t sum = 0;
-        bool one_digit = false;
-        for (size_t b = 0; b < kBuckets; ++b) {
-            size_t in_bucket = 0;
-            for (size_t part = 0; part < parts; ++part) in_bucket += counts[part * kBuckets + b];
-            if (in_bucket == n) one_digit = true;
-            for (size_t part = 0; part < parts; ++part) sum += std::exchange(counts[part * kBuckets + b], sum);
-        }
-        if (one_digit) continue;
-        team.blocks(parts, 1, [&](unsigned, size_t part, size_t) {
-            size_t* place = &counts[part * kBuckets];
-            const auto [begin, end] = range(part);
-            for (size_t i = begin; i < end; ++i) other[place[(items[i].first >> shift) & (kBuckets - 1)]++] = items[i];
-        });
-        items.swap(other);
-    }
-}
+// The key of a (key, index) pair, for radix_sort.
+uint64_t key_of(const std::pair<uint64_t, uint32_t>& item) { return item.first; }
 
 } // namespace
 
@@ -112,7 +76,7 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
             keyed[i] = {spread_bits(uint64_t(q.x)) << 2 | spread_bits(uint64_t(q.y)) << 1 | spread_bits(uint64_t(q.z)), uint32_t(i)};
         }
     });
-    radix_sort(keyed, scratch.other, 3 * kMortonBits, threads);
+    radix_sort(keyed, scratch.other, 3 * kMortonBits, key_of, threads);
     std::vector<V3>& sorted = scratch.sorted;
     sorted.resize(n);
     keys.resize(n);
@@ -155,7 +119,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
                 const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
                 edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), 0u});
             }
-        radix_sort(edges, scratch.other, 2 * bits, p.threads);
+        radix_sort(edges, scratch.other, 2 * bits, key_of, p.threads);
         edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
         const double per_length = std::sqrt(per_area);
         const uint64_t low = (uint64_t(1) << bits) - 1;
