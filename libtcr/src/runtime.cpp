@@ -233,19 +233,21 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         select(selector_, problem_, sp, plan_);
     }
     // round down to the TOM resolutions and predict with the real vertex counts
-    double predicted = model_.frame_fixed_ms();
-    for (size_t k = 0; k < n; ++k) {
-        const uint32_t id = visible_ids_[k];
-        const Object& o = objects_[id];
-        ObjectResult& r = results_[id];
-        r.drawn = plan_.drawn[k] != 0;
-        r.triangles = 0;
-        if (!r.drawn) continue;
-        r.vertices = resolution_for(o, plan_.triangles[k]);
+    // (the finest resolution with at most `triangles`; returns its predicted time)
+    auto choose = [&](const Object& o, ObjectResult& r, double triangles) {
+        r.vertices = resolution_for(o, triangles);
         r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
         r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
         r.error_px = projected_error_px(o, r, r.triangles);
-        predicted += r.predicted_ms;
+        return r.predicted_ms;
+    };
+    double predicted = model_.frame_fixed_ms();
+    for (size_t k = 0; k < n; ++k) {
+        const uint32_t id = visible_ids_[k];
+        ObjectResult& r = results_[id];
+        r.drawn = plan_.drawn[k] != 0;
+        r.triangles = 0;
+        if (r.drawn) predicted += choose(objects_[id], r, plan_.triangles[k]);
     }
     // vertex counts are exact here and were estimated in the problem: step down if that tipped
     // a feasible plan over the budget
@@ -254,13 +256,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         predicted = model_.frame_fixed_ms();
         for (size_t k = 0; k < n; ++k) {
             ObjectResult& r = results_[visible_ids_[k]];
-            if (!r.drawn) continue;
-            const Object& o = objects_[visible_ids_[k]];
-            r.vertices = resolution_for(o, std::max(problem_.lo[k], r.triangles * factor));
-            r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-            r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
-            r.error_px = projected_error_px(o, r, r.triangles);
-            predicted += r.predicted_ms;
+            if (r.drawn) predicted += choose(objects_[visible_ids_[k]], r, std::max(problem_.lo[k], r.triangles * factor));
         }
     }
     for (size_t k = 0; k < n; ++k) {
