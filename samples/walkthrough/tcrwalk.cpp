@@ -131,6 +131,9 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
     return s;
 }
 
+// Object colours of the shaded view, and of the warm-up frames (never shown).
+constexpr float kSand[3] = {0.85f, 0.78f, 0.62f}, kGrey[3] = {0.8f, 0.8f, 0.8f};
+
 // Hue from red (coarse) through green to blue (full resolution), for the LOD view.
 void lod_color(double fraction, float out[3]) {
     const double t = std::min(1.0, std::max(0.0, std::log10(std::max(fraction, 1e-3)) / 3.0 + 1.0));  // 0.1% .. 100%
@@ -160,6 +163,22 @@ void ensure(std::vector<uint32_t>& v, size_t n) {
     v.resize(std::max(n, v.size() * 2), 0u);
 }
 
+// The frame the runtime planned, extracted: each drawn object's level into `indices` (grown as
+// needed), one draw per object in `color`. Returns the frame's index count.
+size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<uint32_t>& mesh_handles, const float color[3],
+                     std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws) {
+    ensure(indices, size_t(rt.last_frame().triangles) * 3);
+    draws.clear();
+    size_t at = 0;
+    for (uint32_t id = 0; id < rt.object_count(); ++id) {
+        if (!rt.object(id).drawn) continue;
+        const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
+        draws.push_back({mesh_handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {color[0], color[1], color[2]}});
+        at += size_t(e.triangle_count) * 3;
+    }
+    return at;
+}
+
 Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
             const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows) {
     const bool none = selector == "none";
@@ -172,7 +191,6 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
     for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
-    std::vector<float> colors;
     uint32_t shots[3];
     walk::viewpoints(o.frames, shots);
     std::mt19937_64 noise_rng(o.seed);
@@ -190,16 +208,9 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
             fp.budget_ms = none ? 1e12 : 4 * o.budget_ms;  // a generous plan: many triangles to time
             const tcr::FrameReport& r = rt.plan_frame(fp);
             recent_cpu[k] = r.cull_ms + r.optimize_ms;
-            ensure(indices, size_t(r.triangles) * 3);
-            draws.clear();
-            size_t at = 0;
+            ensure(indices, size_t(r.triangles) * 3);  // outside the timing
             const auto extract_start = Clock::now();
-            for (uint32_t id = 0; id < rt.object_count(); ++id) {
-                if (!rt.object(id).drawn) continue;
-                const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
-                draws.push_back({mesh_handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {0.8f, 0.8f, 0.8f}});
-                at += size_t(e.triangle_count) * 3;
-            }
+            const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws);
             if (k > 0 && r.triangles > 0) extract_per_triangle = std::max(extract_per_triangle, ms_since(extract_start) / double(r.triangles));
             if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at);
         }
@@ -242,28 +253,12 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
         row.drawn_objects = r.drawn;
         row.visible_triangles = r.visible_triangles;
         row.drawn_triangles = r.triangles;
-        row.predicted_ms = none ? r.predicted_ms : r.predicted_ms;
+        row.predicted_ms = r.predicted_ms;
         row.benefit = r.benefit;
         row.gap = r.gap;
         // extract: each drawn object's level into the frame's index array
         const auto extract_start = Clock::now();
-        draws.clear();
-        colors.clear();
-        ensure(indices, size_t(r.triangles) * 3);
-        size_t at = 0;
-        for (uint32_t id = 0; id < rt.object_count(); ++id) {
-            const tcr::ObjectResult& obj = rt.object(id);
-            if (!obj.drawn) continue;
-            const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
-            walk::Renderer::Draw d{};
-            d.mesh = mesh_handles[w.scene.instances[id].mesh];
-            d.model = w.transforms[id].data();
-            d.first = at;
-            d.index_count = e.triangle_count * 3;
-            d.color[0] = 0.85f, d.color[1] = 0.78f, d.color[2] = 0.62f;
-            draws.push_back(d);
-            at += d.index_count;
-        }
+        const size_t at = extract_frame(w, rt, mesh_handles, kSand, indices, draws);
         row.extract_ms = ms_since(extract_start);
         // render, or simulate its time from the calibrated model
         double render_ms;
@@ -337,16 +332,8 @@ nlohmann::ordered_json noise_test(const World& w, const Options& o, const tcr::C
     std::vector<walk::Renderer::Draw> draws;
     size_t at = 0;
     for (int settle = 0; settle < 10; ++settle) {
-        const tcr::FrameReport& r = rt.plan_frame(fp);
-        ensure(indices, size_t(r.triangles) * 3);
-        draws.clear();
-        at = 0;
-        for (uint32_t id = 0; id < rt.object_count(); ++id) {
-            if (!rt.object(id).drawn) continue;
-            const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
-            draws.push_back({handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {0.85f, 0.78f, 0.62f}});
-            at += size_t(e.triangle_count) * 3;
-        }
+        rt.plan_frame(fp);
+        at = extract_frame(w, rt, handles, kSand, indices, draws);
         const auto t0 = Clock::now();
         renderer.render(cam.view, cam.projection, draws, indices, at);
         fp.previous_frame_ms = ms_since(t0);
@@ -461,7 +448,7 @@ tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::ve
                     std::array<float, 16>& t = models[k];
                     const float x = (float(k % columns) - 0.5f * (columns - 1)) * spacing, y = (float(k / columns) - 0.5f * (copies / columns - 1)) * spacing;
                     t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -distance - s * c[2], 1};
-                    walk::Renderer::Draw d{handles[mi], t.data(), 0, tris * 3, {0.8f, 0.8f, 0.8f}};
+                    walk::Renderer::Draw d{handles[mi], t.data(), 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}};
                     draws.push_back(d);
                     tcr::Box box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
                     pixels += tcr::project_box(cam, t.data(), box).coverage_px;
