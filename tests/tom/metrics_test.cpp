@@ -158,13 +158,9 @@ TEST_CASE("a per-face cap on one direction's samples: a coarse level gets fewer,
 TEST_CASE("one reference compared from several threads at once, and the curve on any thread count, give identical figures", "[metrics][curve]") {
     const test::NamedMesh fandisk = test::real_meshes()[1];
     const tom::TomMesh t = tom::build(fandisk.mesh);
-    std::vector<std::vector<uint32_t>> idx(4, std::vector<uint32_t>(t.triangle_count() * 3));
+    std::vector<std::vector<uint32_t>> idx(4);
     std::vector<tom::Surface> levels;
-    for (size_t k = 0; k < idx.size(); ++k) {
-        const uint32_t n = tom::vertex_count_for_fraction(t.view(), 0.4 / double(1 << (2 * k)));
-        const tom::Extracted e = tom::extract(t.view(), n, idx[k].data(), idx[k].size());
-        levels.push_back({t.positions.data(), n, idx[k].data(), e.triangle_count});
-    }
+    for (size_t k = 0; k < idx.size(); ++k) levels.push_back(level_surface(t, 0.4 / double(1 << (2 * k)), idx[k]));
     const tom::MetroReference reference(surface(fandisk.mesh));
     std::vector<tom::Distance> alone, together(levels.size());
     for (const tom::Surface& l : levels) alone.push_back(reference.compare(l));
@@ -441,14 +437,11 @@ struct LevelError {
 };
 
 LevelError level_error(const tom::Mesh& original, const tom::TomMesh& t, double fraction) {
-    const tom::MeshView v = t.view();
-    const uint32_t n = tom::vertex_count_for_fraction(v, fraction);
-    std::vector<uint32_t> idx(size_t(v.triangle_count) * 3);
-    const tom::Extracted e = tom::extract(v, n, idx.data(), idx.size());
+    std::vector<uint32_t> idx;
+    const tom::Surface level = level_surface(t, fraction, idx);
     const tom::MetroReference reference(surface(original), {}, {original.normals.data(), original.texcoords.empty() ? nullptr : original.texcoords.data()});
     tom::AttributeDeviation a;
-    const tom::Distance d = reference.compare({t.positions.data(), n, idx.data(), e.triangle_count},
-                                              {t.normals.data(), t.texcoords.empty() ? nullptr : t.texcoords.data()}, a);
+    const tom::Distance d = reference.compare(level, {t.normals.data(), t.texcoords.empty() ? nullptr : t.texcoords.data()}, a);
     return {std::max(d.forward.mean, d.backward.mean) / d.diagonal, a.normal_mean_degrees, a.uv_mean};
 }
 
