@@ -202,7 +202,7 @@ struct CollectWithin {
         const Flat& f = target.flat[t];
         if (boxes_d2(lo, hi, f.lo, f.hi) <= reach2) out.push_back(t);
     }
-    double key(const Node& node) const { return box_d2(node.bbox(), centre); }
+    double key(const Node&) const { return 0; }  // every candidate is wanted: left to right
     bool enter(const Node& node, double) const { return boxes_d2(lo, hi, low(node.bbox()), high(node.bbox())) <= reach2; }
 };
 
