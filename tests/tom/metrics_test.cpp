@@ -212,6 +212,56 @@ double reference_d2(const double p[3], const double a[3], const double b[3], con
     return at(vb / denom, vc / denom);
 }
 
+// nearest_squared_distances() against a brute-force search over every triangle of m, for points
+// on, near and far from its surface and anywhere around it
+void check_nearest_against_brute_force(const tom::Mesh& m) {
+    const tom::Surface s = surface(m);
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (size_t i = 0; i < m.positions.size(); ++i) lo[i % 3] = std::min(lo[i % 3], double(m.positions[i])), hi[i % 3] = std::max(hi[i % 3], double(m.positions[i]));
+    const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<double> points;
+    auto corner = [&](uint32_t t, int k, int axis) { return double(m.positions[3 * size_t(m.indices[3 * t + k]) + axis]); };
+    // points on random faces, then pushed off along the face normal by growing offsets: on the
+    // surface, near it (runs share candidate lists) and far (lists would be long)
+    for (double offset : {0.0, 1e-4, 1e-3, 1e-2, 0.1, 0.5}) {
+        for (int i = 0; i < 400; ++i) {
+            const uint32_t t = uint32_t(unit(rng) * double(m.triangle_count())) % m.triangle_count();
+            double u = unit(rng), v = unit(rng);
+            if (u + v > 1) u = 1 - u, v = 1 - v;
+            double e1[3], e2[3], n[3];
+            for (int k = 0; k < 3; ++k) e1[k] = corner(t, 1, k) - corner(t, 0, k), e2[k] = corner(t, 2, k) - corner(t, 0, k);
+            n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            const double side = (i % 2 ? 1.0 : -1.0) * offset * diag / (len > 0 ? len : 1.0);
+            for (int k = 0; k < 3; ++k) points.push_back(corner(t, 0, k) + u * e1[k] + v * e2[k] + side * n[k]);
+        }
+    }
+    for (int i = 0; i < 400; ++i)  // anywhere in the box, enlarged by half its diagonal
+        for (int k = 0; k < 3; ++k) points.push_back(lo[k] - 0.5 * diag + unit(rng) * (hi[k] - lo[k] + diag));
+    const size_t count = points.size() / 3;
+    std::vector<double> fast(count), two(count);
+    tom::nearest_squared_distances(s, points.data(), count, fast.data(), 1);
+    tom::nearest_squared_distances(s, points.data(), count, two.data(), 2);
+    CHECK(fast == two);
+    size_t wrong = 0;
+    double worst = 0;
+    for (size_t i = 0; i < count; ++i) {
+        double best = INFINITY;
+        for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+            double a[3], b[3], c[3];
+            for (int k = 0; k < 3; ++k) a[k] = corner(t, 0, k), b[k] = corner(t, 1, k), c[k] = corner(t, 2, k);
+            best = std::min(best, reference_d2(&points[3 * i], a, b, c));
+        }
+        const double error = std::fabs(std::sqrt(fast[i]) - std::sqrt(best));
+        worst = std::max(worst, error);
+        if (error > 1e-9 * diag) ++wrong;
+    }
+    INFO("worst difference " << worst << " of a diagonal of " << diag);
+    CHECK(wrong == 0);
+}
+
 } // namespace
 
 TEST_CASE("nearest distances equal a brute-force search, on, near and far from real surfaces", "[metrics][nearest]") {
@@ -219,53 +269,20 @@ TEST_CASE("nearest distances equal a brute-force search, on, near and far from r
     for (const test::NamedMesh& nm : meshes) {
         if (nm.mesh.triangle_count() > 20000) continue;  // brute force over every triangle: keep it quick
         INFO(nm.name);
-        const tom::Mesh& m = nm.mesh;
-        const tom::Surface s = surface(m);
-        double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-        for (size_t i = 0; i < m.positions.size(); ++i) lo[i % 3] = std::min(lo[i % 3], double(m.positions[i])), hi[i % 3] = std::max(hi[i % 3], double(m.positions[i]));
-        const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-        std::mt19937 rng(11);
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
-        std::vector<double> points;
-        auto corner = [&](uint32_t t, int k, int axis) { return double(m.positions[3 * size_t(m.indices[3 * t + k]) + axis]); };
-        // points on random faces, then pushed off along the face normal by growing offsets: on the
-        // surface, near it (runs share candidate lists) and far (lists would be long)
-        for (double offset : {0.0, 1e-4, 1e-3, 1e-2, 0.1, 0.5}) {
-            for (int i = 0; i < 400; ++i) {
-                const uint32_t t = uint32_t(unit(rng) * double(m.triangle_count())) % m.triangle_count();
-                double u = unit(rng), v = unit(rng);
-                if (u + v > 1) u = 1 - u, v = 1 - v;
-                double e1[3], e2[3], n[3];
-                for (int k = 0; k < 3; ++k) e1[k] = corner(t, 1, k) - corner(t, 0, k), e2[k] = corner(t, 2, k) - corner(t, 0, k);
-                n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-                const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-                const double side = (i % 2 ? 1.0 : -1.0) * offset * diag / (len > 0 ? len : 1.0);
-                for (int k = 0; k < 3; ++k) points.push_back(corner(t, 0, k) + u * e1[k] + v * e2[k] + side * n[k]);
-            }
-        }
-        for (int i = 0; i < 400; ++i)  // anywhere in the box, enlarged by half its diagonal
-            for (int k = 0; k < 3; ++k) points.push_back(lo[k] - 0.5 * diag + unit(rng) * (hi[k] - lo[k] + diag));
-        const size_t count = points.size() / 3;
-        std::vector<double> fast(count), two(count);
-        tom::nearest_squared_distances(s, points.data(), count, fast.data(), 1);
-        tom::nearest_squared_distances(s, points.data(), count, two.data(), 2);
-        CHECK(fast == two);
-        size_t wrong = 0;
-        double worst = 0;
-        for (size_t i = 0; i < count; ++i) {
-            double best = INFINITY;
-            for (uint32_t t = 0; t < m.triangle_count(); ++t) {
-                double a[3], b[3], c[3];
-                for (int k = 0; k < 3; ++k) a[k] = corner(t, 0, k), b[k] = corner(t, 1, k), c[k] = corner(t, 2, k);
-                best = std::min(best, reference_d2(&points[3 * i], a, b, c));
-            }
-            const double error = std::fabs(std::sqrt(fast[i]) - std::sqrt(best));
-            worst = std::max(worst, error);
-            if (error > 1e-9 * diag) ++wrong;
-        }
-        INFO("worst difference " << worst << " of a diagonal of " << diag);
-        CHECK(wrong == 0);
+        check_nearest_against_brute_force(nm.mesh);
     }
+}
+
+TEST_CASE("nearest distances stay exact far from the origin (the searches' single-precision boxes)", "[metrics][nearest]") {
+    // fandisk (about 1 wide, edges about 0.02) moved 5000 to 6000 away from the origin, where a
+    // float's unit in the last place is 0.0005 to 0.001: box tests in single precision that
+    // rounded carelessly would drop candidates there
+    tom::ImportResult fandisk = tom::import_file(test::sample("meshes/fandisk.off"));
+    REQUIRE(fandisk.meshes.size() == 1);
+    tom::Mesh& m = fandisk.meshes[0];
+    tom::clean_mesh(m);
+    for (size_t i = 0; i < m.positions.size(); ++i) m.positions[i] += i % 3 == 1 ? -6000.0f : 5000.0f;
+    check_nearest_against_brute_force(m);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {
