@@ -51,7 +51,9 @@ struct DistanceParams {
     bool edge_samples = true;
     bool face_samples = true;
     unsigned threads = 0;            ///< 0: every core
-    double attribute_samples_per_face = 2.0;  ///< attribute deviation: samples = this x faces of the original
+    /// attribute deviation: about this x faces of the original samples, every k-th of the
+    /// forward direction's face samples (their nearest points serve both)
+    double attribute_samples_per_face = 2.0;
 };
 
 /// One direction: from the samples of one surface to the closest points of the other.

@@ -322,18 +322,103 @@ int cell_shift(const Samples& samples, const Mesh3& target) {
     return 3 * int(std::max(0.0, std::min(double(kMortonBits), level)));
 }
 
-OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads) {
+// An attribute of `width` floats interpolated in face t of s with weights w.
+void interpolate(const Surface& s, const float* attribute, int width, size_t t, const double w[3], double* out) {
+    for (int k = 0; k < width; ++k) {
+        out[k] = 0;
+        for (int c = 0; c < 3; ++c) out[k] += w[c] * attribute[size_t(width) * s.indices[3 * t + size_t(c)] + size_t(k)];
+    }
+}
+
+struct AttributePartial {
+    double normal_sum = 0, normal_max = 0, uv_sum = 0, uv_max = 0;
+    uint64_t normal_n = 0, uv_n = 0;
+};
+
+// The attribute deviation at the picked face samples of the original, from the nearest points
+// the forward direction finds for them (measure() calls add() for those).
+struct AttributeProbe {
+    const Surface& original;
+    const SurfaceAttributes& oa;
+    const PickedFaceSamples& picks;
+    const Surface& simplified;
+    const SurfaceAttributes& sa;
+    const Mesh3& target;
+    bool normals, texcoords;
+
+    void add(AttributePartial& r, const FaceSample& fs, V3 p, double d2, uint32_t slot) const {
+        constexpr double degrees = 180.0 / 3.14159265358979323846;
+        const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
+        const Flat& nearest = target.flat[slot];
+        const size_t t = target.triangle_of[slot];
+        double ws[3];
+        nearest_point(nearest, p, ws);
+        if (normals) {
+            double n0[3], n1[3];
+            interpolate(original, oa.normals, 3, fs.face, wo, n0);
+            interpolate(simplified, sa.normals, 3, t, ws, n1);
+            const double l0 = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]), l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+            if (l0 > 0 && l1 > 0) {
+                const double cosine = std::max(-1.0, std::min(1.0, (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]) / (l0 * l1)));
+                const double angle = std::acos(cosine) * degrees;
+                r.normal_sum += angle;
+                r.normal_max = std::max(r.normal_max, angle);
+                ++r.normal_n;
+            }
+        }
+        if (texcoords) {
+            // at the nearest point; but a displacement of more than a quarter of the texture
+            // there is a jump across a seam line that moved (the two charts meet along it), so
+            // then the nearest point within one triangle's reach (the nearest triangle's
+            // longest edge) with a displacement under that bound counts, if there is one
+            constexpr double jump = 0.25;
+            double t0[2], t1[2];
+            interpolate(original, oa.texcoords, 2, fs.face, wo, t0);
+            interpolate(simplified, sa.texcoords, 2, t, ws, t1);
+            double d = std::hypot(t0[0] - t1[0], t0[1] - t1[1]);
+            if (d > jump) {
+                const V3 e2 = nearest.e1 - nearest.e0;
+                const double reach2 = std::max({nearest.d00, nearest.d11, dot(e2, e2)});
+                const double radius = std::sqrt(d2) + std::sqrt(reach2);
+                double best_d2 = INFINITY;
+                auto consider = [&](uint32_t record) {
+                    double w[3], tc[2];
+                    const V3 at = nearest_point(target.flat[record], p, w);
+                    interpolate(simplified, sa.texcoords, 2, target.triangle_of[record], w, tc);
+                    const double du = std::hypot(t0[0] - tc[0], t0[1] - tc[1]);
+                    const V3 off = at - p;
+                    if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
+                };
+                WithinTraits<decltype(consider)> within{p, radius * radius, target, consider};
+                target.tree.traversal(Point(p.x, p.y, p.z), within);
+            }
+            r.uv_sum += d;
+            r.uv_max = std::max(r.uv_max, d);
+            ++r.uv_n;
+        }
+    }
+};
+
+// One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
+// its picked samples into `deviation`.
+OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
+                         AttributeDeviation* deviation = nullptr) {
     const size_t n = samples.points.size();
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
+    std::vector<AttributePartial> attribute_partial(probe ? partial.size() : 0);
     const int shift = cell_shift(samples, target);
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
         Partial& r = partial[c];
         RunSearch search(target, samples.points.data());
-        auto emit = [&r](size_t, double d2, uint32_t) {
+        auto emit = [&](size_t i, double d2, uint32_t slot) {
             const double d = std::sqrt(d2);
             r.max = std::max(r.max, d);
             r.sum += d;
             r.sum_squares += d2;
+            if (probe) {
+                const uint32_t k = probe->picks.of_point[i];
+                if (k != PickedFaceSamples::kNotPicked) probe->add(attribute_partial[c], probe->picks.picked[k], samples.points[i], d2, slot);
+            }
         };
         search.runs(samples.keys.data(), begin, end, shift, emit);
     });
@@ -351,6 +436,22 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
     out.sampled_area = samples.area;
     out.mean = n ? sum / double(n) : 0.0;
     out.rms = n ? std::sqrt(sum_squares / double(n)) : 0.0;
+    if (probe && deviation) {
+        AttributeDeviation& a = *deviation;
+        a = AttributeDeviation{};
+        a.normals = probe->normals && !probe->picks.picked.empty();  // (no face samples: nothing compared)
+        a.texcoords = probe->texcoords && !probe->picks.picked.empty();
+        double normal_sum = 0, uv_sum = 0;
+        uint64_t normal_n = 0, uv_n = 0;
+        for (const AttributePartial& p : attribute_partial) {
+            normal_sum += p.normal_sum, uv_sum += p.uv_sum, normal_n += p.normal_n, uv_n += p.uv_n;
+            a.normal_max_degrees = std::max(a.normal_max_degrees, p.normal_max);
+            a.uv_max = std::max(a.uv_max, p.uv_max);
+        }
+        a.samples = probe->picks.picked.size();
+        a.normal_mean_degrees = normal_n ? normal_sum / double(normal_n) : 0.0;
+        a.uv_mean = uv_n ? uv_sum / double(uv_n) : 0.0;
+    }
     return out;
 }
 
@@ -383,99 +484,6 @@ uint64_t sample_target(const Surface& sampled, const Surface& other, const Dista
 }
 
 
-// An attribute of `width` floats interpolated in face t of s with weights w.
-void interpolate(const Surface& s, const float* attribute, int width, size_t t, const double w[3], double* out) {
-    for (int k = 0; k < width; ++k) {
-        out[k] = 0;
-        for (int c = 0; c < 3; ++c) out[k] += w[c] * attribute[size_t(width) * s.indices[3 * t + size_t(c)] + size_t(k)];
-    }
-}
-
-struct AttributePartial {
-    double normal_sum = 0, normal_max = 0, uv_sum = 0, uv_max = 0;
-    uint64_t normal_n = 0, uv_n = 0;
-};
-
-AttributeDeviation measure_attributes(const Surface& original, const SurfaceAttributes& oa, const FaceSamples& face_samples,
-                                      const Surface& simplified, const SurfaceAttributes& sa, const Mesh3& target, unsigned threads) {
-    AttributeDeviation out;
-    out.normals = oa.normals && sa.normals;
-    out.texcoords = oa.texcoords && sa.texcoords;
-    if (!out.normals && !out.texcoords) return out;
-    const std::vector<FaceSample>& samples = face_samples.samples;
-    std::vector<AttributePartial> partial((samples.size() + kChunk - 1) / kChunk);
-    constexpr double degrees = 180.0 / 3.14159265358979323846;
-    const int shift = cell_shift(face_samples.at, target);
-    parallel_chunks(samples.size(), threads, [&](size_t c, size_t begin, size_t end) {
-        AttributePartial& r = partial[c];
-        RunSearch search(target, face_samples.at.points.data());
-        auto emit = [&](size_t i, double d2, uint32_t slot) {
-            const FaceSample& fs = samples[i];
-            const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
-            const V3 p = face_samples.at.points[i];
-            const Flat& nearest = target.flat[slot];
-            const size_t t = target.triangle_of[slot];
-            double ws[3];
-            nearest_point(nearest, p, ws);
-            if (out.normals) {
-                double n0[3], n1[3];
-                interpolate(original, oa.normals, 3, fs.face, wo, n0);
-                interpolate(simplified, sa.normals, 3, t, ws, n1);
-                const double l0 = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]), l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
-                if (l0 > 0 && l1 > 0) {
-                    const double cosine = std::max(-1.0, std::min(1.0, (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]) / (l0 * l1)));
-                    const double angle = std::acos(cosine) * degrees;
-                    r.normal_sum += angle;
-                    r.normal_max = std::max(r.normal_max, angle);
-                    ++r.normal_n;
-                }
-            }
-            if (out.texcoords) {
-                // at the nearest point; but a displacement of more than a quarter of the texture
-                // there is a jump across a seam line that moved (the two charts meet along it), so
-                // then the nearest point within one triangle's reach (the nearest triangle's
-                // longest edge) with a displacement under that bound counts, if there is one
-                constexpr double jump = 0.25;
-                double t0[2], t1[2];
-                interpolate(original, oa.texcoords, 2, fs.face, wo, t0);
-                interpolate(simplified, sa.texcoords, 2, t, ws, t1);
-                double d = std::hypot(t0[0] - t1[0], t0[1] - t1[1]);
-                if (d > jump) {
-                    const V3 e2 = nearest.e1 - nearest.e0;
-                    const double reach2 = std::max({nearest.d00, nearest.d11, dot(e2, e2)});
-                    const double radius = std::sqrt(d2) + std::sqrt(reach2);
-                    double best_d2 = INFINITY;
-                    auto consider = [&](uint32_t record) {
-                        double w[3], tc[2];
-                        const V3 at = nearest_point(target.flat[record], p, w);
-                        interpolate(simplified, sa.texcoords, 2, target.triangle_of[record], w, tc);
-                        const double du = std::hypot(t0[0] - tc[0], t0[1] - tc[1]);
-                        const V3 off = at - p;
-                        if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
-                    };
-                    WithinTraits<decltype(consider)> within{p, radius * radius, target, consider};
-                    target.tree.traversal(Point(p.x, p.y, p.z), within);
-                }
-                r.uv_sum += d;
-                r.uv_max = std::max(r.uv_max, d);
-                ++r.uv_n;
-            }
-        };
-        search.runs(face_samples.at.keys.data(), begin, end, shift, emit);
-    });
-    double normal_sum = 0, uv_sum = 0;
-    uint64_t normal_n = 0, uv_n = 0;
-    for (const AttributePartial& p : partial) {
-        normal_sum += p.normal_sum, uv_sum += p.uv_sum, normal_n += p.normal_n, uv_n += p.uv_n;
-        out.normal_max_degrees = std::max(out.normal_max_degrees, p.normal_max);
-        out.uv_max = std::max(out.uv_max, p.uv_max);
-    }
-    out.samples = samples.size();
-    out.normal_mean_degrees = normal_n ? normal_sum / double(normal_n) : 0.0;
-    out.uv_mean = uv_n ? uv_sum / double(uv_n) : 0.0;
-    return out;
-}
-
 } // namespace
 
 // compare() may run on several threads at once: what it makes on first use is made under the
@@ -490,25 +498,25 @@ struct MetroReference::Impl {
     SurfaceAttributes attributes;
     Mesh3 mesh;
     mutable std::mutex lock;
-    mutable std::deque<std::pair<uint64_t, Samples>> samples;  // by target count
-    mutable std::unique_ptr<FaceSamples> attribute_samples;     // made on first use
+    struct Forward {  // the original's samples for one target count, and the attribute samples picked from them
+        uint64_t target = 0;
+        Samples samples;
+        PickedFaceSamples picks;
+    };
+    mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
     Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s) {}
-    const Samples& samples_for(uint64_t target) const {
+    const Forward& forward_for(uint64_t target) const {
         std::lock_guard<std::mutex> hold(lock);
-        for (const auto& [t, smp] : samples)
-            if (t == target) return smp;
-        samples.emplace_back(target, Samples{});
+        for (const Forward& f : forward)
+            if (f.target == target) return f;
+        Forward& f = forward.emplace_back();
+        f.target = target;
         MortonScratch scratch;
-        sample_surface(original, target, params, samples.back().second, scratch);
-        return samples.back().second;
-    }
-    const FaceSamples& attribute_samples_once() const {
-        std::lock_guard<std::mutex> hold(lock);
-        if (!attribute_samples)
-            attribute_samples = std::make_unique<FaceSamples>(
-                face_samples(original, uint64_t(std::llround(params.attribute_samples_per_face * double(original.triangle_count))), params.seed, params.threads));
-        return *attribute_samples;
+        const bool pick = attributes.normals || attributes.texcoords;
+        const uint64_t picks = uint64_t(std::llround(std::max(0.0, params.attribute_samples_per_face) * double(original.triangle_count)));
+        sample_surface(original, target, params, f.samples, scratch, pick ? &f.picks : nullptr, picks);
+        return f;
     }
     std::unique_ptr<Workspace> borrow() const {
         std::lock_guard<std::mutex> hold(lock);
@@ -541,14 +549,12 @@ Distance MetroReference::compare(const Surface& simplified, const SurfaceAttribu
     const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
     const uint64_t backward_target = sample_target(simplified, impl_->original, impl_->params);
     const Mesh3 other(simplified);
-    if ((attributes.normals && impl_->attributes.normals) || (attributes.texcoords && impl_->attributes.texcoords)) {
-        deviation = measure_attributes(impl_->original, impl_->attributes, impl_->attribute_samples_once(), simplified, attributes, other, impl_->params.threads);
-    } else {
-        deviation = AttributeDeviation{};
-    }
+    const Impl::Forward& forward = impl_->forward_for(target);
+    const bool normals = attributes.normals && impl_->attributes.normals, texcoords = attributes.texcoords && impl_->attributes.texcoords;
+    const AttributeProbe probe{impl_->original, impl_->attributes, forward.picks, simplified, attributes, other, normals, texcoords};
+    deviation = AttributeDeviation{};
     Distance d;
-    const Samples& fs = impl_->samples_for(target);
-    d.forward = measure(fs, other, impl_->params.threads);
+    d.forward = measure(forward.samples, other, impl_->params.threads, normals || texcoords ? &probe : nullptr, &deviation);
     std::unique_ptr<Impl::Workspace> work = impl_->borrow();
     sample_surface(simplified, backward_target, impl_->params, work->backward, work->scratch);
     d.backward = measure(work->backward, impl_->mesh, impl_->params.threads);

@@ -92,7 +92,8 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
 
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
-void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch) {
+void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick,
+                    uint64_t pick_count) {
     out.points.clear();
     out.vertex = out.edge = out.face = 0;
     std::vector<double> areas;
@@ -135,6 +136,9 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         out.edge = out.points.size() - out.vertex;
     }
     const double remaining = double(target) - double(out.points.size());
+    size_t base = out.points.size();
+    uint64_t every = 0;  // picking every this-th face sample (0: none)
+    if (pick) pick->picked.clear();
     if (p.face_samples && remaining > 0 && out.area > 0) {
         // each face gets its expected share, the fraction rounded at random: area-uniform overall
         Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
@@ -143,8 +147,11 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
             const double expected = remaining * areas[t] / out.area;
             first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
         }
-        const size_t base = out.points.size();
         out.points.resize(base + first.back());
+        if (pick && pick_count > 0 && first.back() > 0) {
+            every = std::max<uint64_t>(1, uint64_t(std::llround(double(first.back()) / double(pick_count))));
+            pick->picked.resize((first.back() + every - 1) / every);
+        }
         // faces in parallel, each with its own generator: the same points whatever the threads
         parallel_chunks(first.back(), p.threads, [&](size_t, size_t begin, size_t end) {
             // the faces whose first sample falls in [begin, end)
@@ -154,18 +161,25 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
                 const uint64_t n = first[t + 1] - first[t];
                 if (n == 0) continue;
                 Random rng{(p.seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
-                V3* at = out.points.data() + base + first[t];
+                uint64_t index = first[t];  // of the face sample made next
                 const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
                 // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
                 // triangles, one random point in each, visited row by row in serpentine order so
-                // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face
+                // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face.
+                // A point is made from its weights (u, v) of the face's edges from a.
                 const uint64_t m = uint64_t(std::sqrt(double(n)));
-                auto random_in = [&](V3 p0, V3 p1, V3 p2) {
+                struct Weights {
                     double u, v;
-                    rng.in_triangle(u, v);
-                    *at++ = p0 + u * (p1 - p0) + v * (p2 - p0);
                 };
-                auto grid = [&](uint64_t i, uint64_t j) { return a + (double(i) / double(m)) * (b - a) + (double(j) / double(m)) * (c - a); };
+                auto random_in = [&](Weights w0, Weights w1, Weights w2) {
+                    double s1, s2;
+                    rng.in_triangle(s1, s2);
+                    const double u = w0.u + s1 * (w1.u - w0.u) + s2 * (w2.u - w0.u), v = w0.v + s1 * (w1.v - w0.v) + s2 * (w2.v - w0.v);
+                    out.points[base + index] = a + u * (b - a) + v * (c - a);
+                    if (every && index % every == 0) pick->picked[index / every] = {uint32_t(t), u, v};
+                    ++index;
+                };
+                auto grid = [&](uint64_t i, uint64_t j) { return Weights{double(i) / double(m), double(j) / double(m)}; };
                 for (uint64_t i = 0; i < m; ++i) {
                     const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
                     for (uint64_t k = 0; k < cells; ++k) {
@@ -177,39 +191,22 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
                             random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
                     }
                 }
-                for (uint64_t i = m * m; i < n; ++i) random_in(a, b, c);
+                for (uint64_t i = m * m; i < n; ++i) random_in({0, 0}, {1, 0}, {0, 1});
             }
         });
         out.face = out.points.size() - out.vertex - out.edge;
     }
-    order_morton(out.points, out.keys, out.extent, scratch, p.threads);
-}
-
-FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsigned threads) {
-    FaceSamples out;
-    std::vector<double> areas;
-    const double area = face_areas(s, areas);
-    if (!(area > 0)) return out;
-    std::vector<FaceSample> made;
-    Random rng{seed * 0x9E3779B97F4A7C15ULL + s.triangle_count};
-    for (size_t t = 0; t < s.triangle_count; ++t) {
-        const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
-        const double expected = double(target) * areas[t] / area;
-        for (uint64_t k = 0, n = uint64_t(expected + rng.uniform()); k < n; ++k) {
-            double u, v;
-            rng.in_triangle(u, v);
-            made.push_back({uint32_t(t), u, v});
-            out.at.points.push_back(a + u * (b - a) + v * (c - a));
-        }
+    if (!pick) {
+        order_morton(out.points, out.keys, out.extent, scratch, p.threads);
+        return;
     }
-    out.at.area = area;
-    out.at.face = made.size();
-    MortonScratch scratch;
-    std::vector<uint32_t> permutation;
-    order_morton(out.at.points, out.at.keys, out.at.extent, scratch, threads, &permutation);
-    out.samples.reserve(made.size());
-    for (uint32_t i : permutation) out.samples.push_back(made[i]);
-    return out;
+    std::vector<uint32_t> order;
+    order_morton(out.points, out.keys, out.extent, scratch, p.threads, &order);
+    pick->of_point.resize(order.size());
+    for (size_t i = 0; i < order.size(); ++i) {
+        const uint64_t made = order[i] >= base ? order[i] - base : 0;  // its index among the face samples
+        pick->of_point[i] = every && order[i] >= base && made % every == 0 ? uint32_t(made / every) : PickedFaceSamples::kNotPicked;
+    }
 }
 
 } // namespace tom::detail

@@ -59,21 +59,25 @@ struct MortonScratch {
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation = nullptr);
 
-// Fills `out` (its buffers reused) with about `target` samples of s.
-void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch);
-
-// Attribute samples: area-uniform random points of the faces, kept as (face, barycentrics) so
-// the original's attributes can be interpolated there.
+// Attribute samples: points of the faces kept as (face, barycentrics) too, so the attributes
+// can be interpolated there.
 struct FaceSample {
     uint32_t face;
     double u, v;  // weights of corners 1 and 2
 };
 
-struct FaceSamples {
-    std::vector<FaceSample> samples;
-    Samples at;  // their points, in the same (Morton) order
+// Face samples picked from a Samples for the attribute deviation: every `every`-th face sample
+// in the order made (area-uniform as they are), as (face, barycentrics); of each point in
+// Morton order, its index in `picked` or kNotPicked.
+struct PickedFaceSamples {
+    static constexpr uint32_t kNotPicked = 0xffffffffu;
+    std::vector<FaceSample> picked;
+    std::vector<uint32_t> of_point;
 };
 
-FaceSamples face_samples(const Surface& s, uint64_t target, uint64_t seed, unsigned threads);
+// Fills `out` (its buffers reused) with about `target` samples of s; with `pick`, about
+// `pick_count` of its face samples picked into it.
+void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch,
+                    PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0);
 
 } // namespace tom::detail
