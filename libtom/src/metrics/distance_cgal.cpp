@@ -69,31 +69,20 @@ void validate(const Surface& s, const char* which) {
 
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
 
-// A descent of CGAL's tree (its nodes, boxes and primitives): s.leaf(primitive) at the leaves;
-// of two children, the one with the smaller s.key(child) first, each entered when
-// s.enter(child, key) holds at its turn (so a bound found in the first can prune the second).
-template <class Search>
-void descend(Search& s, const Node& node, size_t primitives) {
+// Every leaf of CGAL's tree below `node` (of `primitives` leaves), left to right: leaf(primitive).
+// How CGAL lays a node out: two leaves under a node of 2, a leaf and a node of 2 under a node of
+// 3, otherwise nodes of primitives / 2 and the rest.
+template <class Leaf>
+void each_leaf(const Node& node, size_t primitives, Leaf&& leaf) {
     if (primitives == 2) {
-        s.leaf(node.left_data());
-        s.leaf(node.right_data());
-        return;
-    }
-    if (primitives == 3) {
-        s.leaf(node.left_data());
-        if (s.enter(node.right_child(), s.key(node.right_child()))) descend(s, node.right_child(), 2);
-        return;
-    }
-    const Node& l = node.left_child();
-    const Node& r = node.right_child();
-    const size_t nl = primitives / 2, nr = primitives - nl;
-    const double kl = s.key(l), kr = s.key(r);
-    if (kl <= kr) {
-        if (s.enter(l, kl)) descend(s, l, nl);
-        if (s.enter(r, kr)) descend(s, r, nr);
+        leaf(node.left_data());
+        leaf(node.right_data());
+    } else if (primitives == 3) {
+        leaf(node.left_data());
+        each_leaf(node.right_child(), 2, leaf);
     } else {
-        if (s.enter(r, kr)) descend(s, r, nr);
-        if (s.enter(l, kl)) descend(s, l, nl);
+        each_leaf(node.left_child(), primitives / 2, leaf);
+        each_leaf(node.right_child(), primitives - primitives / 2, leaf);
     }
 }
 
@@ -135,7 +124,7 @@ struct Mesh3 {
             size_t count;
             uint32_t first;
         };
-        auto split = [](const Sub& part, Sub& l, Sub& r) {  // as descend() reads CGAL's nodes
+        auto split = [](const Sub& part, Sub& l, Sub& r) {  // as each_leaf() reads CGAL's nodes
             if (part.count == 2) {
                 l = {nullptr, 1, part.first}, r = {nullptr, 1, part.first + 1};
             } else if (part.count == 3) {
@@ -159,13 +148,7 @@ struct Mesh3 {
 
 private:
     void enumerate(const Node& root, size_t primitives) {
-        struct Leaves {  // every leaf, left to right
-            Mesh3& mesh;
-            void leaf(const Primitive& p) { mesh.triangle_of.push_back(mesh.index(p)); }
-            double key(const Node&) const { return 0; }
-            bool enter(const Node&, double) const { return true; }
-        } leaves{*this};
-        descend(leaves, root, primitives);
+        each_leaf(root, primitives, [this](const Primitive& p) { triangle_of.push_back(index(p)); });
     }
 };
 
@@ -211,10 +194,11 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2) {
 }
 
 // Nearest triangles for runs of Morton-sorted points that share a grid cell, exactly. Two
-// descents per run (the centre's nearest triangle c, then CollectWithin) find every triangle that
-// can be the nearest of one of its points; then each point computes a lower bound of its
-// distance to every candidate (box or plane, four at a time: candidates.h) and the exact distance
-// only where the bound is below the best found, starting from c or the previous point's nearest.
+// descents per run (the centre's nearest triangle c, then every triangle whose box is within
+// reach) find every triangle that can be the nearest of one of its points; then each point
+// computes a lower bound of its distance to every candidate (box or plane, four at a time:
+// candidates.h) and the exact distance only where the bound is below the best found, starting
+// from c or the previous point's nearest.
 struct RunSearch {
     const Mesh3& target;
     const V3* points;
