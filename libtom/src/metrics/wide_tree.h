@@ -54,16 +54,22 @@ public:
     // squared distance d2 is below r2 computes below (sqrt(r2) + delta)^2 <= 1.001 r2 + 1001
     // delta^2 (2ab <= a^2 e + b^2 / e with e = 1e-3), up to the squares' own rounding (relative,
     // inside the 1.001)
+    //
+    // `enough`: a squared distance so small that nearest() stops there, (2^-40 of the tree's
+    // size)^2. Without it a point on the surface (squared distance 1e-30 from rounding, not 0)
+    // made the search open every box around it, in case a triangle were nearer still: on CAD
+    // meshes, whose long thin triangles' boxes overlap, that was 60% of the error curve's time.
+    // What it can cost a distance, 2^-40 of the size, is far below the input's own precision.
     struct Query {
         float x0, y0, z0, x1, y1, z1;  // the box queried (a point: both corners the same)
-        double slack;
+        double slack, enough;
         float limit(double r2) const { return float(r2 * 1.001 + slack); }
     };
     Query query(V3 lo, V3 hi) const {
         const V3 a = lo - centre_, b = hi - centre_;
         const double m = std::max({extent_, std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y), std::fabs(b.z)});
-        const double delta = 64.0 * m * std::ldexp(1.0, -24);
-        return {float(a.x), float(a.y), float(a.z), float(b.x), float(b.y), float(b.z), m < 1e15 ? 1001.0 * delta * delta : INFINITY};
+        const double delta = 64.0 * m * std::ldexp(1.0, -24), close = std::ldexp(extent_, -40);
+        return {float(a.x), float(a.y), float(a.z), float(b.x), float(b.y), float(b.z), m < 1e15 ? 1001.0 * delta * delta : INFINITY, close * close};
     }
 
     // Squared distances (single precision) from the query's box to node n's four child boxes.
@@ -106,7 +112,7 @@ public:
 
     // Nearest-first search: leaf(record) for the leaves of the nodes whose box may be nearer
     // than the current best, bound() (a squared distance, read again after each leaf), nearer
-    // children first.
+    // children first; it stops once the best is within the query's `enough`.
     template <class Leaf, class Bound>
     void nearest(const Query& q, Leaf&& leaf, Bound&& bound, int32_t n = 0) const {
         float d2[4];
@@ -117,7 +123,8 @@ public:
         const WideNode& w = nodes_[size_t(n)];
         for (int i = 0; i < 4; ++i) {
             const int k = order[i];
-            if (!(d2[k] < q.limit(bound()))) break;  // sorted: the rest are farther
+            const double best = bound();
+            if (best <= q.enough || !(d2[k] < q.limit(best))) return;  // sorted: the rest are farther
             if (w.child[k] >= 0)
                 nearest(q, leaf, bound, w.child[k]);
             else
