@@ -30,7 +30,8 @@ namespace tom::detail {
 struct WideNode {
     alignas(16) float lo[3][4];  // child boxes by axis, relative to the tree's centre; unused: empty (+inf, -inf)
     alignas(16) float hi[3][4];
-    int32_t child[4];  // >= 0: a node; < 0: the leaf ~child (a record of the Flat array); unused: -1
+    int32_t child[4];  // >= 0: a node; kUnused; otherwise < 0: the leaf ~child (a record of the Flat array)
+    static constexpr int32_t kUnused = INT32_MIN;  // (its box is empty, so only an infinite limit reaches it)
 };
 
 class WideTree {
@@ -102,7 +103,7 @@ public:
         const float limit = q.limit(r2);
         const WideNode& w = nodes_[size_t(n)];
         for (int k = 0; k < 4; ++k) {
-            if (!(d2[k] <= limit)) continue;
+            if (!(d2[k] <= limit) || w.child[k] == WideNode::kUnused) continue;
             if (w.child[k] >= 0)
                 within(q, r2, leaf, w.child[k]);
             else
@@ -124,7 +125,7 @@ public:
         for (int i = 0; i < 4; ++i) {
             const int k = order[i];
             const double best = bound();
-            if (best <= q.enough || !(d2[k] < q.limit(best))) return;  // sorted: the rest are farther
+            if (best <= q.enough || !(d2[k] < q.limit(best)) || w.child[k] == WideNode::kUnused) return;  // sorted: the rest are farther
             if (w.child[k] >= 0)
                 nearest(q, leaf, bound, w.child[k]);
             else
@@ -156,7 +157,7 @@ private:
             WideNode& w = nodes_[size_t(index)];
             if (size_t(k) >= parts.size()) {
                 for (int a = 0; a < 3; ++a) w.lo[a][k] = inf, w.hi[a][k] = -inf;
-                w.child[k] = -1;
+                w.child[k] = WideNode::kUnused;
                 continue;
             }
             V3 lo, hi;
