@@ -273,7 +273,7 @@ TEST_CASE("nearest distances equal a brute-force search, on, near and far from r
     }
 }
 
-TEST_CASE("nearest distances stay exact far from the origin (the searches' single-precision boxes)", "[metrics][nearest]") {
+TEST_CASE("nearest distances stay exact far from the origin and at huge scale (the searches' single-precision boxes)", "[metrics][nearest]") {
     // fandisk (about 1 wide, edges about 0.02) moved 5000 to 6000 away from the origin, where a
     // float's unit in the last place is 0.0005 to 0.001: box tests in single precision that
     // rounded carelessly would drop candidates there
@@ -281,8 +281,12 @@ TEST_CASE("nearest distances stay exact far from the origin (the searches' singl
     REQUIRE(fandisk.meshes.size() == 1);
     tom::Mesh& m = fandisk.meshes[0];
     tom::clean_mesh(m);
+    tom::Mesh huge = m;
     for (size_t i = 0; i < m.positions.size(); ++i) m.positions[i] += i % 3 == 1 ? -6000.0f : 5000.0f;
     check_nearest_against_brute_force(m);
+    // and scaled to 1e17 (squares near single precision's limit: every box counts as near)
+    for (float& x : huge.positions) x *= 1e17f;
+    check_nearest_against_brute_force(huge);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {
