@@ -15,9 +15,10 @@ namespace tom::detail {
 constexpr size_t kParallelSortItems = size_t(1) << 16, kSmallSortItems = size_t(1) << 14;
 
 /// Sorts `items` by key(item) (keys below 2^key_bits), equal keys in their input order: 12 bits
-/// a pass (8 below kSmallSortItems items), passes where every key has the same digit skipped; `other` is scratch. With a team and
-/// at least 65,536 items, each team thread counts and then places one contiguous part, the
-/// parts' places in each bucket in part order: the same result as on one thread.
+/// a pass (8 below kSmallSortItems items), passes where every key has the same digit skipped;
+/// `other` is scratch. With a team and at least 65,536 items, each team thread counts and then
+/// places one contiguous part, the parts' places in each bucket in part order: the same result
+/// as on one thread.
 template <class T, class Key>
 void radix_sort(std::vector<T>& items, std::vector<T>& other, int key_bits, Key key, Team* team = nullptr) {
     const size_t n = items.size();

@@ -15,8 +15,9 @@
 // computed four at a time with AVX, and the exact distance only for the few under the best
 // found. Exact: the figures are those of a full nearest search per sample (to 2^-40 of the
 // target's size, where a search stops: wide_tree.h). Samples are processed in fixed chunks
-// combined in order, so the figures do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
-// from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
+// combined in order, so the figures do not depend on the number of threads. (Measured on
+// bunny00's 7-level report: 1.8x faster than one tree descent per sample from the previous
+// sample's triangle.) The descents read CGAL's hierarchy from a compact
 // four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
 // them by distance, as the nearest search must, cost two box distances a node for nothing):
 // together, bunny00's report in 1.78 s instead of 2.09 s (medians of 5 interleaved runs).
@@ -86,17 +87,15 @@ void each_leaf(const Node& node, size_t primitives, Leaf&& leaf) {
     }
 }
 
-// The corners of a CGAL box, and the squared distance from p to it (0 inside).
+// The corners of a CGAL box.
 inline V3 low(const CGAL::Bbox_3& b) { return {b.xmin(), b.ymin(), b.zmin()}; }
 inline V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
-inline double box_d2(const CGAL::Bbox_3& b, V3 p) { return point_box_d2(p, low(b), high(b)); }
 
 // A target mesh: its triangles for CGAL's tree, and the same triangles as Flat records in the
 // order of the tree's leaves (a descent reads neighbouring records, not scattered ones).
 struct Mesh3 {
     std::vector<Triangle> triangles;
     std::vector<Flat> flat;              // in leaf order
-    std::vector<uint32_t> slot;          // triangle -> its record in flat
     std::vector<uint32_t> triangle_of;   // record -> its triangle
     Tree tree;
     explicit Mesh3(const Surface& s) {
@@ -110,11 +109,9 @@ struct Mesh3 {
             triangle_of.push_back(0);
         else
             enumerate(*tree.root_node(), triangles.size());
-        slot.resize(triangles.size());
         flat.reserve(triangles.size());
         scale = std::sqrt(surface_area(s) / double(triangles.size()));
         for (uint32_t i = 0; i < triangle_of.size(); ++i) {
-            slot[triangle_of[i]] = i;
             const Triangle& t = triangles[triangle_of[i]];
             flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
         }
@@ -155,21 +152,6 @@ private:
 
 struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
-};
-
-// Visits every triangle within sqrt(radius2) of query: visit(its record in flat).
-template <class Visit>
-struct WithinTraits {
-    V3 query;
-    double radius2;
-    const Mesh3& target;
-    Visit& visit;
-    bool go_further() const { return true; }
-    bool do_intersect(const Point&, const Node& node) const { return box_d2(node.bbox(), query) <= radius2; }
-    void intersection(const Point&, const Primitive& primitive) {
-        const uint32_t t = target.slot[target.index(primitive)];
-        if (distance2(target.flat[t], query) <= radius2) visit(t);
-    }
 };
 
 // The record of the triangle of `target` nearest to p, and its squared distance `d2`; `hint` (a
@@ -374,8 +356,10 @@ struct AttributeProbe {
                     const V3 off = at - p;
                     if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
                 };
-                WithinTraits<decltype(consider)> within{p, radius * radius, target, consider};
-                target.tree.traversal(Point(p.x, p.y, p.z), within);
+                const double radius2 = radius * radius;
+                target.wide.within(target.wide.query(p, p), radius2, [&](uint32_t record) {
+                    if (distance2(target.flat[record], p) <= radius2) consider(record);
+                });
             }
             r.uv_sum += d;
             r.uv_max = std::max(r.uv_max, d);

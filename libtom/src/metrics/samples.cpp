@@ -136,7 +136,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         out.edge = out.points.size() - out.vertex;
     }
     const double remaining = double(target) - double(out.points.size());
-    size_t base = out.points.size();
+    const size_t base = out.points.size();  // the first face sample's
     uint64_t every = 0;  // picking every this-th face sample (0: none)
     if (pick) pick->picked.clear();
     if (p.face_samples && remaining > 0 && out.area > 0) {
@@ -204,8 +204,8 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
     order_morton(out.points, out.keys, out.extent, scratch, p.threads, &order);
     pick->of_point.resize(order.size());
     for (size_t i = 0; i < order.size(); ++i) {
-        const uint64_t made = order[i] >= base ? order[i] - base : 0;  // its index among the face samples
-        pick->of_point[i] = every && order[i] >= base && made % every == 0 ? uint32_t(made / every) : PickedFaceSamples::kNotPicked;
+        const bool picked = every && order[i] >= base && (order[i] - base) % every == 0;  // (index among the face samples)
+        pick->of_point[i] = picked ? uint32_t((order[i] - base) / every) : PickedFaceSamples::kNotPicked;
     }
 }
 

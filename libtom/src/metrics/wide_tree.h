@@ -133,8 +133,6 @@ public:
         }
     }
 
-    bool empty() const { return nodes_.empty(); }
-
 private:
     template <class Sub, class Split, class Box>
     int32_t add(const Sub& sub, Split& split, Box& box) {
