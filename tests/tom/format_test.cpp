@@ -241,7 +241,7 @@ TEST_CASE("rule 1: shorter than the header", "[format][corrupt]") {
     for (size_t n = 0; n < kHeaderBytes; ++n) CHECK(rule_of(std::vector<uint8_t>(good.begin(), good.begin() + n)) == 1);
 }
 
-TEST_CASE("rule 2: bad magic; rule 3: unsupported version; rule 4: header checksum", "[format][corrupt]") {
+TEST_CASE("rules 2 to 4: bad magic, unsupported version, header checksum", "[format][corrupt]") {
     const std::vector<uint8_t> good = tom::serialize({small_mesh()});
     std::vector<uint8_t> b = good;
     b[1] = 'X';
@@ -415,7 +415,7 @@ TEST_CASE("rule 19: coarse corners are the active triangles' corners mapped to t
     CHECK(rule_of(b) == 19);
 }
 
-TEST_CASE("scenes: materials with texture references and instances survive the round trip; rules 17 and 18", "[format][scene]") {
+TEST_CASE("scenes: materials with texture references and instances survive the round trip (rules 17 and 18)", "[format][scene]") {
     tom::TomMesh a = small_mesh(), b = small_mesh();
     a.material = 1;
     b.material = -1;

@@ -64,7 +64,7 @@ std::string attributes_of(const tom::Mesh& m) {
 
 } // namespace
 
-TEST_CASE("every glTF2 sample with triangles converts with its attributes, materials and instances; no new border edges",
+TEST_CASE("every glTF2 sample with triangles converts with its attributes, materials and instances, and no new border edges",
           "[scene][gltf][samples]") {
     const fs::path root = test::sample("assimp/glTF2");
     std::vector<fs::path> files;
