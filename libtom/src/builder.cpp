@@ -1122,8 +1122,10 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     for (uint32_t t = 0; t < m; ++t) ++bucket[key_of(t) + 1];
     for (uint32_t k = 0; k <= n; ++k) bucket[k + 1] += bucket[k];
     out.triangles.resize(size_t(m) * 3);
+    out.original_triangle.resize(m);
     for (uint32_t t = 0; t < m; ++t) {
         const uint32_t slot = bucket[key_of(t)]++;
+        out.original_triangle[slot] = t;
         for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[input.indices[3 * size_t(t) + k]];
     }
 

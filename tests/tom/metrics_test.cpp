@@ -180,6 +180,66 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
     CHECK(tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, one)) == tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, three)));
 }
 
+TEST_CASE("face hints change only the speed: the same figures with the curve's, poor or no hints (and a hint out of range is an error)", "[metrics][hints]") {
+    // the engine's largest part (long thin CAD triangles, where the curve's searches were slowest)
+    // and fandisk; dense (Metro's 10 per face) and sparse (the curve's 4096) samples
+    const std::vector<test::NamedMesh> meshes = test::real_meshes();
+    for (const test::NamedMesh* named : {&meshes[8], &meshes[1]}) {
+        const tom::Mesh& mesh = named->mesh;
+        const tom::TomMesh t = tom::build(mesh);
+        REQUIRE(t.original_triangle.size() == t.triangle_count());
+        tom::DistanceParams sparse;
+        sparse.vertex_samples = sparse.edge_samples = false;
+        sparse.samples_per_face = 1e9;
+        sparse.max_samples = 4096;
+        for (const tom::DistanceParams& params : {tom::DistanceParams{}, sparse}) {
+            const tom::MetroReference reference(surface(mesh), params);
+            for (double fraction : {0.3, 0.05, 0.005}) {
+                INFO(named->name << " at " << fraction << ", " << (params.max_samples ? "sparse" : "dense"));
+                std::vector<uint32_t> idx;
+                const tom::Surface level = level_surface(t, fraction, idx);
+                // the curve's hints: level face i is sorted face i; an original face alive at the
+                // level is itself, a dead one points at a face around its first corner's substitute
+                std::vector<uint32_t> sorted_of(t.triangle_count()), around(level.vertex_count, tom::FaceHints::kNone), to_level(t.triangle_count());
+                for (uint32_t i = 0; i < t.triangle_count(); ++i) sorted_of[t.original_triangle[i]] = i;
+                for (size_t c = 0; c < level.triangle_count * 3; ++c)
+                    if (around[idx[c]] == tom::FaceHints::kNone) around[idx[c]] = uint32_t(c / 3);
+                for (uint32_t f = 0; f < t.triangle_count(); ++f) {
+                    uint32_t x = t.triangles[3 * size_t(sorted_of[f])];
+                    while (x >= level.vertex_count) x = t.substitute[x];
+                    to_level[f] = sorted_of[f] < level.triangle_count ? sorted_of[f] : around[x];
+                }
+                // poor hints: every face points at one far corner of the other surface
+                const std::vector<uint32_t> poor_forward(t.triangle_count(), uint32_t(level.triangle_count - 1)), poor_backward(level.triangle_count, 0);
+                const tom::Distance plain = reference.compare(level);
+                const tom::Distance curve = reference.compare(level, tom::FaceHints{to_level.data(), t.original_triangle.data()});
+                const tom::Distance poor = reference.compare(level, tom::FaceHints{poor_forward.data(), poor_backward.data()});
+                // exact searches, which stop within 2^-40 of the size: equal to far below any printed digit
+                const double tolerance = 1e-11 * plain.diagonal;
+                for (const tom::Distance* d : {&curve, &poor}) {
+                    CHECK(std::fabs(d->forward.mean - plain.forward.mean) <= tolerance);
+                    CHECK(std::fabs(d->backward.mean - plain.backward.mean) <= tolerance);
+                    CHECK(std::fabs(d->forward.rms - plain.forward.rms) <= tolerance);
+                    CHECK(std::fabs(d->backward.rms - plain.backward.rms) <= tolerance);
+                    CHECK(std::fabs(d->hausdorff - plain.hausdorff) <= tolerance);
+                    CHECK(d->forward.samples == plain.forward.samples);
+                    CHECK(d->backward.samples == plain.backward.samples);
+                }
+                CHECK(plain.forward.mean > 0);
+                std::vector<uint32_t> bad(to_level);
+                bad[bad.size() / 2] = uint32_t(level.triangle_count);
+                CHECK_THROWS_AS(reference.compare(level, tom::FaceHints{bad.data(), nullptr}), std::invalid_argument);
+            }
+        }
+    }
+    // the curve uses the built mesh's hints when it has them; without, the same curve
+    const test::NamedMesh& engine_part = meshes[8];
+    tom::TomMesh t = tom::build(engine_part.mesh);
+    const std::vector<uint8_t> hinted = tom::encode_error_curve(tom::measure_error_curve(engine_part.mesh, t));
+    t.original_triangle.clear();
+    CHECK(tom::encode_error_curve(tom::measure_error_curve(engine_part.mesh, t)) == hinted);
+}
+
 namespace {
 
 // Squared distance from p to triangle (a, b, c) by the Voronoi regions of its vertices, edges and

@@ -69,6 +69,7 @@ struct TomMesh {
     std::vector<uint32_t> substitute;     ///< per vertex: substitute[i] < i, or i for survivors
     std::vector<uint32_t> triangles;      ///< 3 per triangle, original corners, sorted by death
     std::vector<uint32_t> original_index; ///< sorted vertex -> index in the cleaned input (not stored in files)
+    std::vector<uint32_t> original_triangle; ///< sorted triangle -> index in the cleaned input (not stored in files)
     std::vector<uint8_t> pair_bits;       ///< bit i (LSB first): vertices i and i + 1 are a seam pair, removed together; empty if none
     std::vector<MetadataEntry> metadata;
     float bounds_min[3] = {0, 0, 0};

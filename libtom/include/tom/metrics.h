@@ -71,6 +71,20 @@ struct Distance {
     double percent(double object_units) const noexcept { return diagonal > 0 ? 100.0 * object_units / diagonal : 0.0; }
 };
 
+/// Where the faces of two related surfaces lie on each other (a level of a Totally Ordered Mesh
+/// and the mesh it was built from: a level's face is one of the original's with some corners
+/// substituted), for MetroReference::compare: each closest-point search that runs on its own
+/// starts from the hinted face of the sample's face too, near its answer, and a sample's
+/// distance to it narrows the candidates of the sample's grid cell. Only the speed depends on
+/// them: the searches are exact, so the figures are those without (up to 2^-40 of the surface's
+/// size, where a search stops). The error curve uses them: 2CylinderEngine's curves took 1.62 s
+/// with one thread before, 1.06 s with them.
+struct FaceHints {
+    static constexpr uint32_t kNone = 0xffffffffu;  ///< no hint for this face
+    const uint32_t* original_to_simplified = nullptr;  ///< per face of the original: a face of the simplified near it, or kNone
+    const uint32_t* simplified_to_original = nullptr;  ///< per face of the simplified: a face of the original near it, or kNone
+};
+
 /// Distance between two surfaces in both directions.
 /// \throw std::invalid_argument when a surface has no triangle or an index out of range.
 Distance metro_distance(const Surface& original, const Surface& simplified, const DistanceParams& params = {});
@@ -97,6 +111,9 @@ public:
     Distance compare(const Surface& simplified) const;
     /// The same, and the attribute deviation of `simplified` (whose attributes are given).
     Distance compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const;
+    /// The same figures as compare(simplified), faster where `hints` are good (see FaceHints).
+    /// \throw std::invalid_argument as compare(), or when a hint is not a face of its surface.
+    Distance compare(const Surface& simplified, const FaceHints& hints) const;
 
 private:
     struct Impl;

@@ -21,6 +21,9 @@
 // four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
 // them by distance, as the nearest search must, cost two box distances a node for nothing):
 // together, bunny00's report in 1.78 s instead of 2.09 s (medians of 5 interleaved runs).
+// With FaceHints (the error curve's: a level's faces over the original's), each point also
+// starts from its face's hint: a descent of its own starts near its answer, and in a cell the
+// nearer of the centre's triangle and the hint bounds the reach.
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -97,6 +100,7 @@ struct Mesh3 {
     std::vector<Triangle> triangles;
     std::vector<Flat> flat;              // in leaf order
     std::vector<uint32_t> triangle_of;   // record -> its triangle
+    std::vector<uint32_t> slot;          // triangle -> its record
     Tree tree;
     explicit Mesh3(const Surface& s) {
         triangles.reserve(s.triangle_count);
@@ -110,10 +114,12 @@ struct Mesh3 {
         else
             enumerate(*tree.root_node(), triangles.size());
         flat.reserve(triangles.size());
+        slot.resize(triangles.size());
         scale = std::sqrt(surface_area(s) / double(triangles.size()));
         for (uint32_t i = 0; i < triangle_of.size(); ++i) {
             const Triangle& t = triangles[triangle_of[i]];
             flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
+            slot[triangle_of[i]] = i;
         }
         // the searches read CGAL's hierarchy from a compact four-way copy (wide_tree.h)
         struct Sub {
@@ -154,12 +160,19 @@ struct Partial {
     double max = 0, sum = 0, sum_squares = 0;
 };
 
+constexpr uint32_t kNoRecord = FaceHints::kNone;
+
 // The record of the triangle of `target` nearest to p, and its squared distance `d2`; `hint` (a
-// triangle near p) bounds the search from the start. Nearer nodes first, and a farther one only
-// if its box is still nearer than the best triangle found.
-uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2) {
+// triangle near p) and `other` (another, or kNoRecord), the nearer of them, bound the search from
+// the start. Nearer nodes first, and a farther one only if its box is still nearer than the best
+// triangle found.
+uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t other = kNoRecord) {
     double best_d2 = distance2(target.flat[hint], p);
     uint32_t best = hint;
+    if (other != kNoRecord && other != hint) {
+        const double d = distance2(target.flat[other], p);
+        if (d < best_d2) best_d2 = d, best = other;
+    }
     const WideTree::Query q = target.wide.query(p, p);
     if (target.triangles.size() >= 2 && best_d2 > q.enough) {
         auto leaf = [&](uint32_t t) {
@@ -185,9 +198,11 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2) {
 struct RunSearch {
     const Mesh3& target;
     const V3* points;
+    const uint32_t* starts = nullptr;  // per point: a record near it (FaceHints), or kNoRecord; or none
     uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
     std::vector<uint32_t> list;
-    std::vector<double> upper;  // each point's distance to the run centre's nearest triangle
+    std::vector<double> upper;  // each point's distance to the run centre's nearest triangle, or to its own start if nearer
+    std::vector<uint8_t> own;   // whether that is its own start's
     CandidateBounds bounds;
     RunSearch(const Mesh3& t, const V3* p) : target(t), points(p) {}
 
@@ -196,7 +211,7 @@ struct RunSearch {
     void each(size_t b, size_t e, Emit& emit) {
         for (size_t i = b; i < e; ++i) {
             double d2;
-            hint = nearest(target, points[i], hint, d2);
+            hint = nearest(target, points[i], hint, d2, starts ? starts[i] : kNoRecord);
             emit(i, d2, hint);
         }
     }
@@ -233,10 +248,18 @@ struct RunSearch {
         // the candidate bounds; with |p - q| for U (q: the centre's nearest point, no
         // point-triangle distance per point) 6% fewer
         double centre_d2;
-        const uint32_t c = nearest(target, centre, hint, centre_d2);
+        const uint32_t c = nearest(target, centre, hint, centre_d2, starts ? starts[b + (e - b) / 2] : kNoRecord);
         upper.resize(e - b);
+        own.assign(e - b, 0);
         double reach2 = 0;
-        for (size_t i = b; i < e; ++i) reach2 = std::max(reach2, upper[i - b] = distance2(target.flat[c], points[i]));
+        for (size_t i = b; i < e; ++i) {
+            double u = distance2(target.flat[c], points[i]);
+            if (starts && starts[i] != kNoRecord && starts[i] != c) {  // a point's own start, when nearer, shrinks the reach
+                const double d2 = distance2(target.flat[starts[i]], points[i]);
+                if (d2 < u) u = d2, own[i - b] = 1;
+            }
+            reach2 = std::max(reach2, upper[i - b] = u);
+        }
         reach2 *= 1.0 + 1e-9;  // widened against rounding
         list.clear();
         target.wide.within(target.wide.query(lo, hi), reach2, [&](uint32_t t) {
@@ -252,28 +275,32 @@ struct RunSearch {
         // cheaper than the scan
         if (m > 1024) return each(b, e, emit);
         bounds.fill(target.flat, list);
-        size_t last = of_c;
+        constexpr size_t kUnlisted = ~size_t(0);
+        size_t last = of_c;  // the candidate nearest to the previous point
         for (size_t i = b; i < e; ++i) {
             const V3 p = points[i];
-            // the better start of c and the previous point's nearest
-            size_t from = of_c;
+            // the best start of c, the point's own (its record, perhaps not a candidate) and the
+            // previous point's nearest
+            size_t from = own[i - b] ? kUnlisted : of_c;
+            uint32_t record = own[i - b] ? starts[i] : c;
             double best = upper[i - b];
             if (last != of_c) {
                 const double d2 = distance2(target.flat[list[last]], p);
-                if (d2 < best) best = d2, from = last;
+                if (d2 < best) best = d2, from = last, record = list[last];
             }
-            last = from;
+            size_t now = from;
             const size_t count = bounds.below(p, best);
             const double* low = bounds.low();
             for (size_t h = 0; h < count; ++h) {
                 const uint32_t k = bounds.hits[h];
                 if (low[k] >= best || k == from) continue;
                 const double d2 = distance2(target.flat[list[k]], p);
-                if (d2 < best) best = d2, last = k;
+                if (d2 < best) best = d2, now = k, record = list[k];
             }
-            emit(i, best, list[last]);
+            emit(i, best, record);
+            if (now != kUnlisted) last = now;
+            hint = record;
         }
-        hint = list[last];
     }
 };
 
@@ -369,16 +396,26 @@ struct AttributeProbe {
 };
 
 // One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
-// its picked samples into `deviation`.
+// its picked samples into `deviation`; with `hint` (per face of the sampled surface: a triangle
+// of `target` near it, or kNoRecord), each search starts there too.
 OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
-                         AttributeDeviation* deviation = nullptr) {
+                         AttributeDeviation* deviation = nullptr, const uint32_t* hint = nullptr) {
     const size_t n = samples.points.size();
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
     std::vector<AttributePartial> attribute_partial(probe ? partial.size() : 0);
     const int shift = cell_shift(samples, target);
+    std::vector<uint32_t> starts;  // per point: the record of its face's hint
+    if (hint) {
+        starts.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t t = hint[samples.faces[i]];
+            starts[i] = t == kNoRecord ? kNoRecord : target.slot[t];
+        }
+    }
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
         Partial& r = partial[c];
         RunSearch search(target, samples.points.data());
+        if (hint) search.starts = starts.data();
         auto emit = [&](size_t i, double d2, uint32_t slot) {
             const double d = std::sqrt(d2);
             r.max = std::max(r.max, d);
@@ -498,6 +535,42 @@ struct MetroReference::Impl {
         std::lock_guard<std::mutex> hold(lock);
         idle.push_back(std::move(w));
     }
+
+    Distance compare(const Surface& simplified, const SurfaceAttributes& simplified_attributes, AttributeDeviation* deviation,
+                     const FaceHints* hints) const {
+        validate(simplified, "simplified");
+        if (hints) {
+            check_hints(hints->original_to_simplified, original.triangle_count, simplified.triangle_count, "original_to_simplified");
+            check_hints(hints->simplified_to_original, simplified.triangle_count, original.triangle_count, "simplified_to_original");
+        }
+        const uint64_t target = sample_target(original, simplified, params);
+        const uint64_t backward_target = sample_target(simplified, original, params);
+        const Mesh3 other(simplified);
+        const Forward& f = forward_for(target);
+        const bool normals = deviation && simplified_attributes.normals && attributes.normals,
+                   texcoords = deviation && simplified_attributes.texcoords && attributes.texcoords;
+        const AttributeProbe probe{original, attributes, f.picks, simplified, simplified_attributes, other, normals, texcoords};
+        if (deviation) *deviation = AttributeDeviation{};
+        Distance d;
+        d.forward = measure(f.samples, other, params.threads, normals || texcoords ? &probe : nullptr, deviation,
+                            hints ? hints->original_to_simplified : nullptr);
+        std::unique_ptr<Workspace> work = borrow();
+        sample_surface(simplified, backward_target, params, work->backward, work->scratch);
+        d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? hints->simplified_to_original : nullptr);
+        give_back(std::move(work));
+        d.hausdorff = std::max(d.forward.max, d.backward.max);
+        d.diagonal = enlarged_union_diagonal(original, simplified);
+        return d;
+    }
+
+    // every hint of the `count` faces is a face of the other surface (`faces`) or none
+    static void check_hints(const uint32_t* hint, size_t count, size_t faces, const char* which) {
+        if (!hint) return;
+        for (size_t i = 0; i < count; ++i)
+            if (hint[i] != FaceHints::kNone && hint[i] >= faces)
+                throw std::invalid_argument(std::string("FaceHints::") + which + ": face " + std::to_string(i) + " hints face " +
+                                            std::to_string(hint[i]) + ", the other surface has " + std::to_string(faces));
+    }
 };
 
 MetroReference::MetroReference(const Surface& original, const DistanceParams& params, const SurfaceAttributes& attributes) {
@@ -509,28 +582,15 @@ MetroReference::MetroReference(MetroReference&&) noexcept = default;
 MetroReference& MetroReference::operator=(MetroReference&&) noexcept = default;
 
 Distance MetroReference::compare(const Surface& simplified) const {
-    AttributeDeviation unused;
-    return compare(simplified, SurfaceAttributes{}, unused);
+    return impl_->compare(simplified, SurfaceAttributes{}, nullptr, nullptr);
 }
 
 Distance MetroReference::compare(const Surface& simplified, const SurfaceAttributes& attributes, AttributeDeviation& deviation) const {
-    validate(simplified, "simplified");
-    const uint64_t target = sample_target(impl_->original, simplified, impl_->params);
-    const uint64_t backward_target = sample_target(simplified, impl_->original, impl_->params);
-    const Mesh3 other(simplified);
-    const Impl::Forward& forward = impl_->forward_for(target);
-    const bool normals = attributes.normals && impl_->attributes.normals, texcoords = attributes.texcoords && impl_->attributes.texcoords;
-    const AttributeProbe probe{impl_->original, impl_->attributes, forward.picks, simplified, attributes, other, normals, texcoords};
-    deviation = AttributeDeviation{};
-    Distance d;
-    d.forward = measure(forward.samples, other, impl_->params.threads, normals || texcoords ? &probe : nullptr, &deviation);
-    std::unique_ptr<Impl::Workspace> work = impl_->borrow();
-    sample_surface(simplified, backward_target, impl_->params, work->backward, work->scratch);
-    d.backward = measure(work->backward, impl_->mesh, impl_->params.threads);
-    impl_->give_back(std::move(work));
-    d.hausdorff = std::max(d.forward.max, d.backward.max);
-    d.diagonal = enlarged_union_diagonal(impl_->original, simplified);
-    return d;
+    return impl_->compare(simplified, attributes, &deviation, nullptr);
+}
+
+Distance MetroReference::compare(const Surface& simplified, const FaceHints& hints) const {
+    return impl_->compare(simplified, SurfaceAttributes{}, nullptr, &hints);
 }
 
 void nearest_squared_distances(const Surface& target, const double* points, size_t count, double* squared_distances, unsigned threads) {

@@ -95,21 +95,24 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick,
                     uint64_t pick_count) {
     out.points.clear();
+    std::vector<uint32_t>& faces = scratch.faces;  // of each point, in the order made
+    faces.clear();
     out.vertex = out.edge = out.face = 0;
     std::vector<double> areas;
     out.area = face_areas(s, areas);
     out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
     const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
     if (p.vertex_samples) {
-        std::vector<uint8_t> used(s.vertex_count, 0);
-        for (size_t i = 0; i < s.triangle_count * 3; ++i) used[s.indices[i]] = 1;
+        constexpr uint32_t kUnused = 0xffffffffu;
+        std::vector<uint32_t> face_of(s.vertex_count, kUnused);  // a vertex's first face
+        for (size_t i = s.triangle_count * 3; i-- > 0;) face_of[s.indices[i]] = uint32_t(i / 3);
         for (uint32_t v = 0; v < s.vertex_count; ++v)
-            if (used[v]) out.points.push_back(vertex(s, v));
+            if (face_of[v] != kUnused) out.points.push_back(vertex(s, v)), faces.push_back(face_of[v]);
         out.vertex = out.points.size();
     }
     if (p.edge_samples && per_area > 0) {
         // every edge once, in the order of (lower vertex, higher vertex): a radix sort of the two
-        // packed into one key
+        // packed into one key, with the first face that has the edge
         int bits = 1;
         while (bits < 32 && (uint64_t(1) << bits) < s.vertex_count) ++bits;
         std::vector<std::pair<uint64_t, uint32_t>>& edges = scratch.keyed;
@@ -118,10 +121,10 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         for (size_t t = 0; t < s.triangle_count; ++t)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
-                edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), 0u});
+                edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), uint32_t(t)});
             }
         radix_sort(edges, scratch.other, 2 * bits, key_of, p.threads);
-        edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+        edges.erase(std::unique(edges.begin(), edges.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), edges.end());
         const double per_length = std::sqrt(per_area);
         const uint64_t low = (uint64_t(1) << bits) - 1;
         for (const auto& edge : edges) {
@@ -131,6 +134,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
             for (int i = 1; i <= n; ++i) {
                 const double t = double(i) / double(n + 1);
                 out.points.push_back(pa + t * (pb - pa));
+                faces.push_back(edge.second);
             }
         }
         out.edge = out.points.size() - out.vertex;
@@ -148,6 +152,8 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
             first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
         }
         out.points.resize(base + first.back());
+        faces.resize(base + first.back());
+        for (size_t t = 0; t < s.triangle_count; ++t) std::fill(faces.begin() + std::ptrdiff_t(base + first[t]), faces.begin() + std::ptrdiff_t(base + first[t + 1]), uint32_t(t));
         if (pick && pick_count > 0 && first.back() > 0) {
             every = std::max<uint64_t>(1, uint64_t(std::llround(double(first.back()) / double(pick_count))));
             pick->picked.resize((first.back() + every - 1) / every);
@@ -196,12 +202,11 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         });
         out.face = out.points.size() - out.vertex - out.edge;
     }
-    if (!pick) {
-        order_morton(out.points, out.keys, out.extent, scratch, p.threads);
-        return;
-    }
-    std::vector<uint32_t> order;
+    std::vector<uint32_t>& order = scratch.order;
     order_morton(out.points, out.keys, out.extent, scratch, p.threads, &order);
+    out.faces.resize(order.size());
+    for (size_t i = 0; i < order.size(); ++i) out.faces[i] = faces[order[i]];
+    if (!pick) return;
     pick->of_point.resize(order.size());
     for (size_t i = 0; i < order.size(); ++i) {
         const bool picked = every && order[i] >= base && (order[i] - base) % every == 0;  // (index among the face samples)

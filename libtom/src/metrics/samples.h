@@ -37,6 +37,7 @@ double surface_area(const Surface& s);
 struct Samples {
     std::vector<V3> points;
     std::vector<uint64_t> keys;  // per point: its Morton code; points are sorted by it
+    std::vector<uint32_t> faces; // per point: a face it lies on (a vertex's or an edge's: one of theirs)
     double extent = 0;           // the side of the Morton grid's cube
     uint64_t vertex = 0, edge = 0, face = 0;
     double area = 0;
@@ -50,6 +51,7 @@ constexpr int kMortonBits = 16;
 struct MortonScratch {
     std::vector<std::pair<uint64_t, uint32_t>> keyed, other;
     std::vector<V3> sorted;
+    std::vector<uint32_t> faces, order;  // sample_surface()'s faces in the order made, and the sort's permutation
 };
 
 // Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube, so that the
@@ -75,8 +77,8 @@ struct PickedFaceSamples {
     std::vector<uint32_t> of_point;
 };
 
-// Fills `out` (its buffers reused) with about `target` samples of s; with `pick`, about
-// `pick_count` of its face samples picked into it.
+// Fills `out` (its buffers reused) with about `target` samples of s and the face of each; with
+// `pick`, about `pick_count` of its face samples picked into it.
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch,
                     PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0);
 
