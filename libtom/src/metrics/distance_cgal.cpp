@@ -396,26 +396,30 @@ struct AttributeProbe {
 };
 
 // One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
-// its picked samples into `deviation`; with `hint` (per face of the sampled surface: a triangle
-// of `target` near it, or kNoRecord), each search starts there too.
+// its picked samples into `deviation`; with `hint` (face of the sampled surface -> a triangle of
+// `target` near it, or kNoRecord; `which` names it in errors), each search starts there too.
 OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
-                         AttributeDeviation* deviation = nullptr, const uint32_t* hint = nullptr) {
+                         AttributeDeviation* deviation = nullptr, const std::function<uint32_t(uint32_t)>* hint = nullptr,
+                         const char* which = "") {
     const size_t n = samples.points.size();
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
     std::vector<AttributePartial> attribute_partial(probe ? partial.size() : 0);
     const int shift = cell_shift(samples, target);
     std::vector<uint32_t> starts;  // per point: the record of its face's hint
-    if (hint) {
+    if (hint && *hint) {
         starts.resize(n);
         for (size_t i = 0; i < n; ++i) {
-            const uint32_t t = hint[samples.faces[i]];
+            const uint32_t t = (*hint)(samples.faces[i]);
+            if (t != kNoRecord && t >= target.slot.size())
+                throw std::invalid_argument(std::string("FaceHints::") + which + ": face " + std::to_string(samples.faces[i]) + " hints face " +
+                                            std::to_string(t) + ", the other surface has " + std::to_string(target.slot.size()));
             starts[i] = t == kNoRecord ? kNoRecord : target.slot[t];
         }
     }
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
         Partial& r = partial[c];
         RunSearch search(target, samples.points.data());
-        if (hint) search.starts = starts.data();
+        if (!starts.empty()) search.starts = starts.data();
         auto emit = [&](size_t i, double d2, uint32_t slot) {
             const double d = std::sqrt(d2);
             r.max = std::max(r.max, d);
@@ -539,10 +543,6 @@ struct MetroReference::Impl {
     Distance compare(const Surface& simplified, const SurfaceAttributes& simplified_attributes, AttributeDeviation* deviation,
                      const FaceHints* hints) const {
         validate(simplified, "simplified");
-        if (hints) {
-            check_hints(hints->original_to_simplified, original.triangle_count, simplified.triangle_count, "original_to_simplified");
-            check_hints(hints->simplified_to_original, simplified.triangle_count, original.triangle_count, "simplified_to_original");
-        }
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
         const Mesh3 other(simplified);
@@ -553,23 +553,15 @@ struct MetroReference::Impl {
         if (deviation) *deviation = AttributeDeviation{};
         Distance d;
         d.forward = measure(f.samples, other, params.threads, normals || texcoords ? &probe : nullptr, deviation,
-                            hints ? hints->original_to_simplified : nullptr);
+                            hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
         std::unique_ptr<Workspace> work = borrow();
         sample_surface(simplified, backward_target, params, work->backward, work->scratch);
-        d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? hints->simplified_to_original : nullptr);
+        d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
+                             "simplified_to_original");
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
         d.diagonal = enlarged_union_diagonal(original, simplified);
         return d;
-    }
-
-    // every hint of the `count` faces is a face of the other surface (`faces`) or none
-    static void check_hints(const uint32_t* hint, size_t count, size_t faces, const char* which) {
-        if (!hint) return;
-        for (size_t i = 0; i < count; ++i)
-            if (hint[i] != FaceHints::kNone && hint[i] >= faces)
-                throw std::invalid_argument(std::string("FaceHints::") + which + ": face " + std::to_string(i) + " hints face " +
-                                            std::to_string(hint[i]) + ", the other surface has " + std::to_string(faces));
     }
 };
 

@@ -25,7 +25,7 @@ struct Level {
 Level extract_level(const TomMesh& t, uint32_t n) {
     Level l;
     l.n = n;
-    l.indices.resize(size_t(t.triangle_count()) * 3);
+    l.indices.resize(size_t(active_triangle_count(t.view(), n)) * 3);  // (the full size was 24 MB a level on 2M triangles)
     l.e = extract(t.view(), n, l.indices.data(), l.indices.size());
     l.indices.resize(size_t(l.e.triangle_count) * 3);
     return l;
@@ -34,28 +34,23 @@ Level extract_level(const TomMesh& t, uint32_t n) {
 Surface surface_of(const Mesh& m) { return {m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count()}; }
 
 // FaceHints between a level and the original the mesh was built from (`sorted_of`: original face
-// -> sorted face): a level's face i is sorted face i with its corners substituted, so it lies
-// over the original's face built.original_triangle[i] (the hints back). Forward, into `to_level`:
-// an original face alive at the level is that face, and one that died is near the faces around
-// the vertex its first corner became.
-FaceHints level_hints(const TomMesh& built, const Level& l, const std::vector<uint32_t>& sorted_of, std::vector<uint32_t>& to_level) {
+// -> sorted face; `around`: a level face of each level vertex): a level's face i is sorted face i
+// with its corners substituted, so it lies over the original's face built.original_triangle[i]
+// (the hints back). Forward: an original face alive at the level is that face, and one that died
+// is near the faces around the vertex its first corner became.
+FaceHints level_hints(const TomMesh& built, const Level& l, const std::vector<uint32_t>& sorted_of, std::vector<uint32_t>& around) {
     const uint32_t faces = l.e.triangle_count;
-    std::vector<uint32_t> around(l.n, FaceHints::kNone);  // a level face of each level vertex
+    around.assign(l.n, FaceHints::kNone);
     for (uint32_t c = faces * 3; c-- > 0;) around[l.indices[c]] = c / 3;
-    to_level.resize(sorted_of.size());
-    for (size_t f = 0; f < sorted_of.size(); ++f) {
-        const uint32_t t = sorted_of[f];
-        if (t < faces) {
-            to_level[f] = t;
-            continue;
-        }
-        uint32_t x = built.triangles[3 * size_t(t)];
-        while (x >= l.n) x = built.substitute[x];
-        to_level[f] = around[x];
-    }
     FaceHints h;
-    h.original_to_simplified = to_level.data();
-    h.simplified_to_original = built.original_triangle.data();
+    h.original_to_simplified = [&built, &sorted_of, &around, faces, n = l.n](uint32_t f) {
+        const uint32_t t = sorted_of[f];
+        if (t < faces) return t;
+        uint32_t x = built.triangles[3 * size_t(t)];
+        while (x >= n) x = built.substitute[x];
+        return around[x];
+    };
+    h.simplified_to_original = [&built](uint32_t i) { return built.original_triangle[i]; };
     return h;
 }
 
@@ -166,8 +161,8 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
         p.triangles = l.e.triangle_count;
         if (n == hi || l.e.triangle_count == 0) return;  // full resolution is the original itself: error 0
         const Surface level{built.positions.data(), n, l.indices.data(), l.e.triangle_count};
-        std::vector<uint32_t> to_level;
-        const Distance d = hinted ? reference.compare(level, level_hints(built, l, sorted_of, to_level)) : reference.compare(level);
+        std::vector<uint32_t> around;
+        const Distance d = hinted ? reference.compare(level, level_hints(built, l, sorted_of, around)) : reference.compare(level);
         p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
         p.max = float(d.hausdorff / d.diagonal);
         diagonals[i] = float(d.diagonal);
