@@ -16,9 +16,20 @@ check "the scene file lists meshes and instances" test "$(grep -c '^instance' "$
 check "calibration on the headless renderer" "$walk" --scene "$work/scene.txt" --calibrate "$work/calibration.txt" --width 320 --height 240
 check "the calibration file has every key" bash -c "for k in t_init_ms t_final_ms t_setup_ms t_tri_ms t_vert_ms t_pix_ms safety_ms noise_rel; do grep -q \"^\$k \" '$work/calibration.txt' || exit 1; done"
 
+# the budget follows this machine: a quarter of what the calibrated model says full detail
+# costs to extract and render along the path (a fixed 6 ms was only 2.9x below full detail on a
+# fast stretch of the machine, too light a scenario for the checks below)
+check "a simulated path at full detail" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --simulate --selector none \
+  --frames 300 --budget-ms 1000 --out "$work/full"
+budget="$(/usr/bin/python3 -c "
+import csv
+rows = list(csv.DictReader(open('$work/full/frames-none.csv')))
+print('%.3f' % (sum(float(r['render_ms']) for r in rows) / len(rows) / 4))")"
+echo "budget: $budget ms (a quarter of full detail along the path)"
+
 # a short real-rendered path
 check "a real-rendered path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --selector none,exact,barrier \
-  --frames 30 --budget-ms 6 --width 320 --height 240 --out "$work/real" --json
+  --frames 30 --budget-ms "$budget" --width 320 --height 240 --out "$work/real" --json
 for s in none exact barrier; do
   check "frames-$s.csv has a row per frame" test "$(wc -l < "$work/real/frames-$s.csv")" -eq 31
 done
@@ -32,7 +43,7 @@ for r in runs:
     assert set(r['frame_ms']) >= {'mean', 'max', 'std'}
 none, exact = runs[0], runs[1]
 assert exact['drawn_triangles_mean'] < none['drawn_triangles_mean'], (exact, none)   # the budget cut triangles
-assert none['frame_ms']['mean'] > 6, none                                          # full detail does not fit
+assert none['frame_ms']['mean'] > $budget, none                                    # full detail does not fit
 "
 check "screenshots at A, B, C, normal and LOD views, non-empty and different" /usr/bin/python3 -c "
 import csv, json
@@ -54,19 +65,18 @@ check "the plots exist" test -s "$work/real/frame-times.png" -a -s "$work/real/t
 
 # the simulated path: every selector, barrier and exact never over budget
 check "a simulated path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --simulate --selector all --frames 300 \
-  --budget-ms 6 --out "$work/sim" --json
+  --budget-ms "$budget" --out "$work/sim" --json
 check "barrier and exact keep every simulated frame within budget" /usr/bin/python3 -c "
 import csv
 for s in ['barrier', 'exact']:
     rows = list(csv.DictReader(open('$work/sim/frames-%s.csv' % s)))
     assert len(rows) == 300
     worst = max(float(r['measured_ms']) for r in rows)
-    assert worst <= 6.0, (s, worst)
+    assert worst <= $budget, (s, worst)
 "
-check "full detail would take at least 3x the budget" /usr/bin/python3 -c "
+check "at a quarter of full detail's cost, exact draws under a third of its triangles" /usr/bin/python3 -c "
 import json
 runs = {r['selector']: r for r in json.load(open('$work/sim/summary.json'))}
-assert runs['none']['frame_ms']['mean'] >= 3 * 6, runs['none']
 assert runs['exact']['drawn_triangles_mean'] < runs['none']['drawn_triangles_mean'] / 3, runs['exact']
 "
 # tomview: a whole glTF scene (34 meshes, 115 instances, 34 materials) drawn from its .tom
@@ -87,7 +97,7 @@ check "tomview on a file that is not a .tom exits 1" bash -c "'$view' '$data/mes
 check "the noise test draws one frame again and again and reports its spread" /usr/bin/python3 -c "
 import json, subprocess
 out = subprocess.run(['$walk', '--scene', '$work/scene.txt', '--calibration', '$work/calibration.txt', '--noise-test', '40',
-                      '--budget-ms', '6', '--width', '320', '--height', '240', '--json'], capture_output=True, text=True, check=True).stdout
+                      '--budget-ms', '$budget', '--width', '320', '--height', '240', '--json'], capture_output=True, text=True, check=True).stdout
 j = json.loads(out)
 assert j['renders'] == 40 and j['triangles'] > 0 and j['objects'] > 0, j
 assert j['median_ms'] > 0 and j['std_percent'] > 0, j                          # real frames vary
