@@ -402,12 +402,17 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
     std::vector<uint32_t> starts;  // per point: the record of its face's hint
     if (hint && *hint) {
         starts.resize(n);
+        uint32_t face = kNoRecord, start = kNoRecord;  // the last face asked about (neighbouring points share faces)
         for (size_t i = 0; i < n; ++i) {
-            const uint32_t t = (*hint)(samples.faces[i]);
-            if (t != kNoRecord && t >= target.slot.size())
-                throw std::invalid_argument(std::string("FaceHints::") + which + ": face " + std::to_string(samples.faces[i]) + " hints face " +
-                                            std::to_string(t) + ", the other surface has " + std::to_string(target.slot.size()));
-            starts[i] = t == kNoRecord ? kNoRecord : target.slot[t];
+            if (samples.faces[i] != face) {
+                face = samples.faces[i];
+                const uint32_t t = (*hint)(face);
+                if (t != kNoRecord && t >= target.slot.size())
+                    throw std::invalid_argument(std::string("FaceHints::") + which + ": face " + std::to_string(face) + " hints face " +
+                                                std::to_string(t) + ", the other surface has " + std::to_string(target.slot.size()));
+                start = t == kNoRecord ? kNoRecord : target.slot[t];
+            }
+            starts[i] = start;
         }
     }
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
