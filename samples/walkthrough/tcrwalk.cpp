@@ -131,6 +131,11 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
     return s;
 }
 
+// Every instance of the scene into the runtime, in scene order (its object ids are the instances').
+void add_objects(tcr::Runtime& rt, const World& w) {
+    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+}
+
 // Object colours of the shaded view, and of the warm-up frames (never shown).
 constexpr float kSand[3] = {0.85f, 0.78f, 0.62f}, kGrey[3] = {0.8f, 0.8f, 0.8f};
 
@@ -188,7 +193,7 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
     // the allowance for the renderer's noise at this budget: `safety_sigma` standard deviations
     model.safety_ms = std::max(model.safety_ms, o.safety_sigma * model.noise_rel * o.budget_ms);
     tcr::Runtime rt(model, kind);
-    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+    add_objects(rt, w);
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
     uint32_t shots[3];
@@ -323,7 +328,7 @@ nlohmann::ordered_json noise_test(const World& w, const Options& o, const tcr::C
     uint32_t shots[3];
     walk::viewpoints(o.frames, shots);
     tcr::Runtime rt(model, tcr::SelectorKind::exact);
-    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+    add_objects(rt, w);
     const tcr::Camera cam = camera_for(shots[0], o.frames, o.width, o.height);
     tcr::FrameParams fp;
     fp.camera = cam;

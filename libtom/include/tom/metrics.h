@@ -80,8 +80,9 @@ struct Distance {
 /// them: the searches are exact, so the figures are those without (up to 2^-40 of the surface's
 /// size, where a search stops). The error curve uses them: 2CylinderEngine's curves took 1.62 s
 /// with one thread before, 1.06 s with them.
-/// Each is asked only about the faces that carry samples (once per sample), so a hint costs
-/// nothing for the faces never sampled (most of a large mesh's, with the curve's 4096 samples).
+/// Each is asked only about the faces that carry samples (once for each run of neighbouring
+/// samples on a face), so a hint costs nothing for the faces never sampled (most of a large
+/// mesh's, with the curve's 4096 samples).
 struct FaceHints {
     static constexpr uint32_t kNone = 0xffffffffu;  ///< no hint for this face
     std::function<uint32_t(uint32_t)> original_to_simplified;  ///< face of the original -> a face of the simplified near it, or kNone

@@ -27,7 +27,6 @@ Level extract_level(const TomMesh& t, uint32_t n) {
     l.n = n;
     l.indices.resize(size_t(active_triangle_count(t.view(), n)) * 3);  // (the full size was 24 MB a level on 2M triangles)
     l.e = extract(t.view(), n, l.indices.data(), l.indices.size());
-    l.indices.resize(size_t(l.e.triangle_count) * 3);
     return l;
 }
 
