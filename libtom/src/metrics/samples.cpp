@@ -68,25 +68,37 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
     }
     extent = n ? std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) : 0.0;
     const double scale = extent > 0 ? double((1u << kMortonBits) - 1) / extent : 0.0;
-    std::vector<std::pair<uint64_t, uint32_t>>& keyed = scratch.keyed;
-    keyed.resize(n);
+    // each point's code and index in one 64-bit word, the index below: half the bytes a sort pass
+    // moves of (code, index) pairs. Where the index needs more than 16 bits, the code keeps fewer
+    // (14 bits an axis up to 4M points): those points still come in the order of the full code,
+    // but where it only differs below (within 2^-14 of the extent, far below the spacing of so
+    // many samples), in the order made
+    int index_bits = 1;
+    while (index_bits < 32 && (uint64_t(1) << index_bits) < n) ++index_bits;
+    const int axis_bits = std::min(kMortonBits, (64 - index_bits) / 3), drop = kMortonBits - axis_bits;
+    std::vector<uint64_t>& packed = scratch.packed;
+    packed.resize(n);
     parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
             const V3 q = scale * (points[i] - lo);
-            keyed[i] = {spread_bits(uint64_t(q.x)) << 2 | spread_bits(uint64_t(q.y)) << 1 | spread_bits(uint64_t(q.z)), uint32_t(i)};
+            const uint64_t x = uint64_t(q.x) >> drop, y = uint64_t(q.y) >> drop, z = uint64_t(q.z) >> drop;
+            packed[i] = (spread_bits(x) << 2 | spread_bits(y) << 1 | spread_bits(z)) << index_bits | i;
         }
     });
-    radix_sort(keyed, scratch.other, 3 * kMortonBits, key_of, threads);
+    radix_sort(packed, scratch.packed_other, 3 * axis_bits, [index_bits](uint64_t item) { return item >> index_bits; }, threads);
     std::vector<V3>& sorted = scratch.sorted;
     sorted.resize(n);
     keys.resize(n);
+    if (permutation) permutation->resize(n);
+    const uint64_t index_mask = (uint64_t(1) << index_bits) - 1;
     parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) sorted[i] = points[keyed[i].second], keys[i] = keyed[i].first;
+        for (size_t i = begin; i < end; ++i) {
+            const uint32_t from = uint32_t(packed[i] & index_mask);
+            sorted[i] = points[from];
+            keys[i] = (packed[i] >> index_bits) << (3 * drop);  // the full code's place (zeros below)
+            if (permutation) (*permutation)[i] = from;
+        }
     });
-    if (permutation) {
-        permutation->resize(n);
-        for (size_t i = 0; i < n; ++i) (*permutation)[i] = keyed[i].second;
-    }
     points.swap(sorted);
 }
 
@@ -205,7 +217,9 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
     std::vector<uint32_t>& order = scratch.order;
     order_morton(out.points, out.keys, out.extent, scratch, p.threads, &order);
     out.faces.resize(order.size());
-    for (size_t i = 0; i < order.size(); ++i) out.faces[i] = faces[order[i]];
+    parallel_chunks(order.size(), p.threads, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out.faces[i] = faces[order[i]];
+    });
     if (!pick) return;
     pick->of_point.resize(order.size());
     for (size_t i = 0; i < order.size(); ++i) {

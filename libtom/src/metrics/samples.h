@@ -49,14 +49,16 @@ constexpr int kMortonBits = 16;
 // Buffers order_morton() reuses from call to call (fresh ones of this size cost more in page
 // faults than the sort itself).
 struct MortonScratch {
-    std::vector<std::pair<uint64_t, uint32_t>> keyed, other;
+    std::vector<std::pair<uint64_t, uint32_t>> keyed, other;  // (the edges')
+    std::vector<uint64_t> packed, packed_other;              // (code, index) words
     std::vector<V3> sorted;
     std::vector<uint32_t> faces, order;  // sample_surface()'s faces in the order made, and the sort's permutation
 };
 
-// Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube, so that the
+// Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube (over 65,536
+// points, of a coarser one, 2^14 up to 4M points, and ties in the order given), so that the
 // points of every octree cell are a contiguous range (measure() groups them by cell); keys get
-// each point's code, extent the cube's side; `permutation`, when given, the order applied (new
+// each point's code (as a 48-bit code, zeros where the grid is coarser), extent the cube's side; `permutation`, when given, the order applied (new
 // position -> old). Deterministic; `threads` as parallel_chunks.
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation = nullptr);
