@@ -2,6 +2,7 @@
 // and the report over a real mesh.
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include <thread>
@@ -16,6 +17,7 @@
 #include "tom/import.h"
 #include "tom/metrics.h"
 #include "tom/report.h"
+#include "metrics/candidates.h"  // internal: the search's bounds and batched distances
 
 namespace {
 
@@ -346,6 +348,81 @@ TEST_CASE("nearest distances stay exact far from the origin and at huge scale (t
     // and scaled to 1e17 (squares near single precision's limit: every box counts as near)
     for (float& x : huge.positions) x *= 1e17f;
     check_nearest_against_brute_force(huge);
+}
+
+// The search's float bounds (metrics/candidates.h) against doubles, on the triangles of real meshes
+// (also moved 5000 away from the origin) and a degenerate one, for runs of points on, near and
+// far from them: every bound is at most the exact distance (a candidate it drops cannot be the
+// nearest) and within a fifth of a percent and the slack of the exact box-or-plane bound (it
+// still prunes);
+// below() keeps exactly the bounds under the best; distances2() equals distance2() bit for bit.
+TEST_CASE("the search's float bounds never exceed the exact distance, and its batched distances equal distance2", "[metrics][nearest]") {
+    using tom::detail::V3;
+    std::vector<tom::Mesh> meshes;
+    for (const test::NamedMesh& nm : test::real_meshes())
+        if (nm.mesh.triangle_count() <= 20000) meshes.push_back(nm.mesh);
+    REQUIRE(meshes.size() >= 3);
+    tom::Mesh far = meshes.back();
+    for (size_t i = 0; i < far.positions.size(); ++i) far.positions[i] += i % 3 == 1 ? -6000.0f : 5000.0f;
+    meshes.push_back(far);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    size_t compared = 0, pruned = 0;
+    for (const tom::Mesh& m : meshes) {
+        std::vector<tom::detail::Flat> flat;
+        auto at = [&](uint32_t v) { return V3{m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]}; };
+        for (size_t t = 0; t < m.triangle_count(); ++t) flat.push_back(tom::detail::make_flat(at(m.indices[3 * t]), at(m.indices[3 * t + 1]), at(m.indices[3 * t + 2])));
+        flat.push_back(tom::detail::make_flat(at(0), at(0), at(1)));  // degenerate: two corners at one place
+        tom::detail::CandidateBounds bounds;
+        for (int run = 0; run < 40; ++run) {
+            // a run: 37 points around a random face, spread by up to `reach` (face sizes to
+            // object sizes), and 64 candidates drawn from everywhere, the degenerate one among them
+            const tom::detail::Flat& home = flat[size_t(unit(rng) * double(m.triangle_count())) % m.triangle_count()];
+            const double reach = std::sqrt(home.d00) * std::pow(10.0, 3.0 * unit(rng));
+            std::vector<V3> points;
+            for (int i = 0; i < 37; ++i) {
+                double u = unit(rng), v = unit(rng);
+                if (u + v > 1) u = 1 - u, v = 1 - v;
+                const double off = i % 3 == 0 ? 0.0 : reach * (unit(rng) - 0.5);
+                const V3 jitter{reach * (unit(rng) - 0.5) * (i % 4 == 3), 0.0, 0.0};
+                points.push_back(home.a + u * home.e0 + v * home.e1 + off * home.normal + jitter);
+            }
+            V3 lo = points[0], hi = points[0];
+            for (const V3& p : points)
+                lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)}, hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+            std::vector<uint32_t> list;
+            for (int k = 0; k < 63; ++k) list.push_back(uint32_t(unit(rng) * double(flat.size())) % uint32_t(flat.size()));
+            list.push_back(uint32_t(flat.size() - 1));
+            bounds.fill(flat, list, 0.5 * (lo + hi), 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+            for (const V3& p : points) {
+                const double best = tom::detail::distance2(flat[list[size_t(unit(rng) * 64.0) % 64]], p);
+                const size_t count = bounds.below(p, best);
+                const float* low = bounds.low();
+                size_t expected = 0;
+                for (size_t k = 0; k < list.size(); ++k) {
+                    const tom::detail::Flat& f = flat[list[k]];
+                    const double above = tom::detail::dot(f.normal, p) + f.offset;
+                    const double exact = std::max(tom::detail::point_box_d2(p, f.lo, f.hi), above * above);
+                    CHECK(double(low[k]) <= tom::detail::distance2(f, p));
+                    CHECK(double(low[k]) >= exact * 0.997 - double(bounds.slack) * 1.001);  // kKeep and the absolute slack
+                    if (double(low[k]) < exact) ++pruned;
+                    expected += low[k] < float(best);
+                    ++compared;
+                }
+                CHECK(count == expected);
+            }
+            for (uint32_t t : list) {
+                std::vector<double> batched(points.size());
+                tom::detail::distances2(flat[t], points.data(), points.size(), batched.data());
+                for (size_t i = 0; i < points.size(); ++i) {
+                    const double one = tom::detail::distance2(flat[t], points[i]);
+                    CHECK(std::memcmp(&one, &batched[i], sizeof one) == 0);
+                }
+            }
+        }
+    }
+    INFO(pruned << " of " << compared << " float bounds under the exact box-or-plane bound");
+    CHECK(compared > 100000);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {

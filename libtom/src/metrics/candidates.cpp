@@ -64,6 +64,48 @@ __attribute__((target("avx2"))) size_t below_avx(float* column, size_t padded, c
     }
     return count;
 }
+// distance2() of four points (x, y, z: their coordinates) to f, operation for operation
+__attribute__((target("avx"))) inline __m256d dot_avx(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz) {
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz));
+}
+// segment_d2(w, e, we, ie): w - clamp01(we ie) e, squared; clamp01 as min(1, max(0, t))
+__attribute__((target("avx"))) inline __m256d segment_avx(__m256d wx, __m256d wy, __m256d wz, __m256d ex, __m256d ey, __m256d ez, __m256d we, double ie) {
+    const __m256d t = _mm256_min_pd(_mm256_max_pd(_mm256_mul_pd(we, _mm256_set1_pd(ie)), _mm256_setzero_pd()), _mm256_set1_pd(1.0));
+    const __m256d dx = _mm256_sub_pd(wx, _mm256_mul_pd(t, ex)), dy = _mm256_sub_pd(wy, _mm256_mul_pd(t, ey)), dz = _mm256_sub_pd(wz, _mm256_mul_pd(t, ez));
+    return dot_avx(dx, dy, dz, dx, dy, dz);
+}
+__attribute__((target("avx"))) inline __m256d distance2_avx(const Flat& f, __m256d x, __m256d y, __m256d z) {
+    const __m256d e0x = _mm256_set1_pd(f.e0.x), e0y = _mm256_set1_pd(f.e0.y), e0z = _mm256_set1_pd(f.e0.z);
+    const __m256d e1x = _mm256_set1_pd(f.e1.x), e1y = _mm256_set1_pd(f.e1.y), e1z = _mm256_set1_pd(f.e1.z);
+    const __m256d wx = _mm256_sub_pd(x, _mm256_set1_pd(f.a.x)), wy = _mm256_sub_pd(y, _mm256_set1_pd(f.a.y)), wz = _mm256_sub_pd(z, _mm256_set1_pd(f.a.z));
+    const __m256d w0 = dot_avx(e0x, e0y, e0z, wx, wy, wz), w1 = dot_avx(e1x, e1y, e1z, wx, wy, wz);
+    const __m256d d00 = _mm256_set1_pd(f.d00), d01 = _mm256_set1_pd(f.d01), d11 = _mm256_set1_pd(f.d11), inverse = _mm256_set1_pd(f.inverse);
+    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(d11, w0), _mm256_mul_pd(d01, w1)), inverse);
+    const __m256d v = _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(d00, w1), _mm256_mul_pd(d01, w0)), inverse);
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+    const __m256d inside = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(u, zero, _CMP_GE_OQ), _mm256_cmp_pd(v, zero, _CMP_GE_OQ)),
+                                         _mm256_cmp_pd(_mm256_add_pd(u, v), one, _CMP_LE_OQ));
+    const __m256d above =
+        _mm256_add_pd(dot_avx(_mm256_set1_pd(f.normal.x), _mm256_set1_pd(f.normal.y), _mm256_set1_pd(f.normal.z), x, y, z), _mm256_set1_pd(f.offset));
+    const __m256d wbx = _mm256_sub_pd(wx, e0x), wby = _mm256_sub_pd(wy, e0y), wbz = _mm256_sub_pd(wz, e0z);
+    const __m256d e2x = _mm256_sub_pd(e1x, e0x), e2y = _mm256_sub_pd(e1y, e0y), e2z = _mm256_sub_pd(e1z, e0z);
+    const __m256d s0 = segment_avx(wx, wy, wz, e0x, e0y, e0z, w0, f.i00), s1 = segment_avx(wx, wy, wz, e1x, e1y, e1z, w1, f.i11),
+                  s2 = segment_avx(wbx, wby, wbz, e2x, e2y, e2z, dot_avx(e2x, e2y, e2z, wbx, wby, wbz), f.i22);
+    return _mm256_blendv_pd(_mm256_min_pd(s0, _mm256_min_pd(s1, s2)), _mm256_mul_pd(above, above), inside);
+}
+__attribute__((target("avx"))) void distances2_avx(const Flat& f, const V3* p, size_t n, double* d2) {
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+        const __m256d x = _mm256_set_pd(p[i + 3].x, p[i + 2].x, p[i + 1].x, p[i].x), y = _mm256_set_pd(p[i + 3].y, p[i + 2].y, p[i + 1].y, p[i].y),
+                      z = _mm256_set_pd(p[i + 3].z, p[i + 2].z, p[i + 1].z, p[i].z);
+        _mm256_storeu_pd(d2 + i, distance2_avx(f, x, y, z));
+    }
+    for (; i < n; ++i) d2[i] = distance2(f, p[i]);
+}
+bool cpu_has_plain_avx() {
+    static const bool has = __builtin_cpu_supports("avx") && simd_enabled();
+    return has;
+}
 bool cpu_has_avx() {
     static const bool has = __builtin_cpu_supports("avx2") && simd_enabled();
     return has;
@@ -99,6 +141,13 @@ void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint
     slack = everything ? 0.0f : float(3.0 * 2049.0 * e * e);
     if (everything) std::fill(column(10), column(10) + padded, 0.0f);
     listed = m;
+}
+
+void distances2(const Flat& f, const V3* p, size_t n, double* d2) {
+#if defined(__x86_64__) || defined(__i386__)
+    if (cpu_has_plain_avx()) return distances2_avx(f, p, n, d2);
+#endif
+    for (size_t i = 0; i < n; ++i) d2[i] = distance2(f, p[i]);
 }
 
 size_t CandidateBounds::below(V3 p, double best) {

@@ -39,4 +39,9 @@ struct CandidateBounds {
     size_t below(V3 p, double best);
 };
 
+// d2[i] = distance2(f, p[i]) for i < n, bit for bit: four points at a time with AVX (the same
+// operations in the same order, both branches computed and the right one kept), one by one
+// otherwise. (A run's distances to its centre's nearest triangle, once for each of its points.)
+void distances2(const Flat& f, const V3* p, size_t n, double* d2);
+
 } // namespace tom::detail

@@ -245,9 +245,10 @@ struct RunSearch {
         const uint32_t c = nearest(target, centre, hint, centre_d2, starts ? starts[b + (e - b) / 2] : kNoRecord);
         upper.resize(e - b);
         own.assign(e - b, 0);
+        distances2(target.flat[c], points + b, e - b, upper.data());
         double reach2 = 0;
         for (size_t i = b; i < e; ++i) {
-            double u = distance2(target.flat[c], points[i]);
+            double u = upper[i - b];
             if (starts && starts[i] != kNoRecord && starts[i] != c) {  // a point's own start, when nearer, shrinks the reach
                 const double d2 = distance2(target.flat[starts[i]], points[i]);
                 if (d2 < u) u = d2, own[i - b] = 1;
