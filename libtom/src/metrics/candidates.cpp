@@ -1,4 +1,5 @@
-// Lower bounds of point-to-candidate distances, eight candidates per AVX instruction.
+// Lower bounds of point-to-candidate distances, eight candidates per AVX2 instruction; the
+// distances of a run's points to one triangle, four per AVX instruction.
 
 #include "candidates.h"
 
@@ -22,7 +23,8 @@ namespace {
 // scale bounds both. An error e in a distance d moves d^2 by 2 d e + e^2 <= 2^-10 d^2 + (2^10 + 1)
 // e^2, so kKeep = 1 - 2^-9 (with the squares' and sums' own rounding) and slack = 3 (axes) 2049
 // e^2 cover it twice over; the bound loses a fifth of a percent, which prunes as well. Outside
-// [kSmallestScale, kLargestScale] float squares could overflow or vanish: then every candidate is kept (bound 0).
+// [kSmallestScale, kLargestScale] float squares could overflow or vanish: then every candidate
+// is kept (bound 0).
 constexpr float kKeep = 1.0f - 1.0f / 512.0f;
 constexpr double kSmallestScale = 1e-12, kLargestScale = 1e12;
 
@@ -102,11 +104,11 @@ __attribute__((target("avx"))) void distances2_avx(const Flat& f, const V3* p, s
     }
     for (; i < n; ++i) d2[i] = distance2(f, p[i]);
 }
-bool cpu_has_plain_avx() {
+bool cpu_has_avx() {
     static const bool has = __builtin_cpu_supports("avx") && simd_enabled();
     return has;
 }
-bool cpu_has_avx() {
+bool cpu_has_avx2() {
     static const bool has = __builtin_cpu_supports("avx2") && simd_enabled();
     return has;
 }
@@ -145,7 +147,7 @@ void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint
 
 void distances2(const Flat& f, const V3* p, size_t n, double* d2) {
 #if defined(__x86_64__) || defined(__i386__)
-    if (cpu_has_plain_avx()) return distances2_avx(f, p, n, d2);
+    if (cpu_has_avx()) return distances2_avx(f, p, n, d2);
 #endif
     for (size_t i = 0; i < n; ++i) d2[i] = distance2(f, p[i]);
 }
@@ -159,7 +161,7 @@ size_t CandidateBounds::below(V3 p, double best) {
         return listed;
     }
 #if defined(__x86_64__) || defined(__i386__)
-    if (cpu_has_avx()) return below_avx(data.data(), padded, q, limit, slack, hits.data());
+    if (cpu_has_avx2()) return below_avx(data.data(), padded, q, limit, slack, hits.data());
 #endif
     const float *lx = column(0), *ly = column(1), *lz = column(2), *hx = column(3), *hy = column(4), *hz = column(5), *nx = column(6),
                 *ny = column(7), *nz = column(8), *off = column(9);

@@ -13,11 +13,11 @@
 // surface, so a second descent collects every triangle that can be the nearest of one of the
 // cell's samples; per sample, lower bounds (box, plane) of the distance to all of those are
 // computed eight at a time (AVX2, in floats made conservative), and the exact distance only
-// for the few under the best found. Exact: the figures are those of a full nearest search per sample (to 2^-40 of the
-// target's size, where a search stops: wide_tree.h). Samples are processed in fixed chunks
-// combined in order, so the figures do not depend on the number of threads. (Measured on
-// bunny00's 7-level report: 1.8x faster than one tree descent per sample from the previous
-// sample's triangle.) The descents read CGAL's hierarchy from a compact
+// for the few under the best found. Exact: the figures are those of a full nearest search per
+// sample (to 2^-40 of the target's size, where a search stops: wide_tree.h). Samples are
+// processed in fixed chunks combined in order, so the figures do not depend on the number of
+// threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
+// from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
 // four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
 // them by distance, as the nearest search must, cost two box distances a node for nothing):
 // together, bunny00's report in 1.78 s instead of 2.09 s (medians of 5 interleaved runs).
