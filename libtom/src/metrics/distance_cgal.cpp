@@ -246,16 +246,16 @@ struct RunSearch {
         upper.resize(e - b);
         own.assign(e - b, 0);
         distances2(target.flat[c], points + b, e - b, upper.data());
-        double reach2 = 0;
+        double widest = 0;  // (a local: reach2 is captured below, which kept it in memory through this loop)
         for (size_t i = b; i < e; ++i) {
             double u = upper[i - b];
             if (starts && starts[i] != kNoRecord && starts[i] != c) {  // a point's own start, when nearer, shrinks the reach
                 const double d2 = distance2(target.flat[starts[i]], points[i]);
                 if (d2 < u) u = d2, own[i - b] = 1;
             }
-            reach2 = std::max(reach2, upper[i - b] = u);
+            widest = std::max(widest, upper[i - b] = u);
         }
-        reach2 *= 1.0 + 1e-9;  // widened against rounding
+        const double reach2 = widest * (1.0 + 1e-9);  // widened against rounding
         list.clear();
         target.wide.within(target.wide.query(lo, hi), reach2, [&](uint32_t t) {
             const Flat& f = target.flat[t];
