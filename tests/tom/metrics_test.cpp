@@ -586,6 +586,36 @@ TEST_CASE("attribute deviation: 0 against itself, the known angle and shift agai
     CHECK(!normals_only.texcoords);
 }
 
+TEST_CASE("attribute deviation where long edges take Metro's budget: face samples of its own", "[metrics][attributes]") {
+    // a grid stretched 300 times along x: the points along its edges take the whole budget (the
+    // forward direction has fewer face samples than one per face), as on CAD parts
+    tom::Mesh a = tom::make_grid(20, 20);
+    a.normals.clear();
+    for (uint32_t v = 0; v < a.vertex_count(); ++v) {
+        a.positions[3 * v] *= 300.0f;
+        a.normals.insert(a.normals.end(), {0.0f, 0.0f, 1.0f});
+    }
+    const tom::SurfaceAttributes aa{a.normals.data(), nullptr};
+    const tom::MetroReference reference(surface(a), {}, aa);
+    tom::AttributeDeviation same;
+    const tom::Distance d = reference.compare(surface(a), aa, same);
+    CHECK(d.forward.face_samples < a.triangle_count());
+    CHECK(same.normals);
+    CHECK(!same.texcoords);
+    CHECK(same.samples >= 2 * a.triangle_count() - 20);
+    CHECK(same.normal_mean_degrees < 1e-3);
+    tom::Mesh b = a;
+    const double angle = 10.0 * 3.14159265358979 / 180.0;
+    for (size_t i = 0; i < b.normals.size(); i += 3) b.normals[i + 1] = float(std::sin(angle)), b.normals[i + 2] = float(std::cos(angle));
+    tom::AttributeDeviation moved;
+    const tom::Distance e = reference.compare(surface(b), {b.normals.data(), nullptr}, moved);
+    CHECK(moved.normal_mean_degrees == Approx(10.0).epsilon(1e-4));
+    CHECK(moved.normal_max_degrees == Approx(10.0).epsilon(1e-4));
+    // the distances are those of Metro's samples alone
+    CHECK(e.forward.samples == d.forward.samples);
+    CHECK(e.forward.max < 1e-9);
+}
+
 namespace {
 
 // Metro mean error (relative), mean normal deviation and UV displacement of a level

@@ -53,7 +53,8 @@ struct DistanceParams {
     bool face_samples = true;
     unsigned threads = 0;            ///< 0: every core
     /// attribute deviation: about this x faces of the original samples, every k-th of the
-    /// forward direction's face samples (their nearest points serve both)
+    /// forward direction's face samples (their nearest points serve both); where those are fewer
+    /// than half that (vertices and long edges took the budget), face samples of its own
     double attribute_samples_per_face = 2.0;
 };
 

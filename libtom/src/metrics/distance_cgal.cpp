@@ -512,6 +512,12 @@ struct MetroReference::Impl {
         uint64_t target = 0;
         Samples samples;
         PickedFaceSamples picks;
+        // where the face samples were too few to pick from (long edges took the budget: the parts
+        // of CAD models, 2CylinderEngine's had 0 to 395 for 1678 to 2750 faces), the attribute
+        // deviation's own face samples, all picked, searched apart
+        bool separate = false;
+        Samples attribute_samples;
+        PickedFaceSamples attribute_picks;
     };
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
@@ -526,6 +532,13 @@ struct MetroReference::Impl {
         const bool pick = attributes.normals || attributes.texcoords;
         const uint64_t picks = uint64_t(std::llround(std::max(0.0, params.attribute_samples_per_face) * double(original.triangle_count)));
         sample_surface(original, target, params, f.samples, scratch, pick ? &f.picks : nullptr, picks);
+        if (pick && f.picks.picked.size() < picks / 2) {
+            DistanceParams faces_only = params;
+            faces_only.vertex_samples = faces_only.edge_samples = false;
+            faces_only.face_samples = true;
+            sample_surface(original, picks, faces_only, f.attribute_samples, scratch, &f.attribute_picks, picks);
+            f.separate = true;
+        }
         return f;
     }
     std::unique_ptr<Workspace> borrow() const {
@@ -549,11 +562,13 @@ struct MetroReference::Impl {
         const Forward& f = forward_for(target);
         const bool normals = deviation && simplified_attributes.normals && attributes.normals,
                    texcoords = deviation && simplified_attributes.texcoords && attributes.texcoords;
-        const AttributeProbe probe{original, attributes, f.picks, simplified, simplified_attributes, other, normals, texcoords};
+        const AttributeProbe probe{original, attributes, f.separate ? f.attribute_picks : f.picks, simplified, simplified_attributes, other, normals, texcoords};
         if (deviation) *deviation = AttributeDeviation{};
+        const bool probing = normals || texcoords;
         Distance d;
-        d.forward = measure(f.samples, other, params.threads, normals || texcoords ? &probe : nullptr, deviation,
+        d.forward = measure(f.samples, other, params.threads, probing && !f.separate ? &probe : nullptr, deviation,
                             hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
+        if (probing && f.separate) measure(f.attribute_samples, other, params.threads, &probe, deviation);  // (only its deviation)
         std::unique_ptr<Workspace> work = borrow();
         sample_surface(simplified, backward_target, params, work->backward, work->scratch);
         d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
