@@ -513,8 +513,8 @@ struct MetroReference::Impl {
         Samples samples;
         PickedFaceSamples picks;
         // where the face samples were too few to pick from (long edges took the budget: the parts
-        // of CAD models, 2CylinderEngine's had 0 to 395 for 1678 to 2750 faces), the attribute
-        // deviation's own face samples, all picked, searched apart
+        // of CAD models; 32 of 2CylinderEngine's 34 had fewer than one a face, many none), the
+        // attribute deviation's own face samples, all picked, searched apart
         bool separate = false;
         Samples attribute_samples;
         PickedFaceSamples attribute_picks;
