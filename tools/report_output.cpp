@@ -120,6 +120,17 @@ std::string report_table(const tom::MeshReport& r, const ReportContext& ctx) {
                       l.chain.max_steps, l.overhead, 1e6 * l.extract_seconds, normal.c_str(), uv.c_str());
         o << line;
     }
+    // levels past the coarsest mesh (it stops simplifying above their counts) repeat it: say so once
+    for (size_t i = 1; i < r.levels.size(); ++i) {
+        size_t first = 0;
+        while (r.levels[first].vertices != r.levels[i].vertices) ++first;
+        if (first == i || (i + 1 < r.levels.size() && r.levels[i + 1].vertices == r.levels[i].vertices)) continue;  // (the last of a run)
+        std::string which;
+        for (size_t k = first + 1; k <= i; ++k) which += format(k == first + 1 ? "%.1f%%" : ", %.1f%%", 100 * r.levels[k].fraction);
+        std::snprintf(line, sizeof line, "  %s: the %.1f%% level's mesh again (%u vertices, %u triangles: the mesh simplifies no further)\n", which.c_str(),
+                      100 * r.levels[first].fraction, r.levels[i].vertices, r.levels[i].triangles);
+        o << line;
+    }
     o << "  normal deg, uv: mean angle between interpolated normals and mean texture-coordinate displacement at the closest point,\n"
          "  over " << (r.levels.empty() ? 0 : r.levels[0].attributes.samples) << " area-uniform samples of the original's faces\n";
     const double fv = double(r.memory.face_vertex_bytes);
