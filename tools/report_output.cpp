@@ -1,5 +1,6 @@
 #include "report_output.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -120,15 +121,17 @@ std::string report_table(const tom::MeshReport& r, const ReportContext& ctx) {
                       l.chain.max_steps, l.overhead, 1e6 * l.extract_seconds, normal.c_str(), uv.c_str());
         o << line;
     }
-    // levels past the coarsest mesh (it stops simplifying above their counts) repeat it: say so once
-    for (size_t i = 1; i < r.levels.size(); ++i) {
-        size_t first = 0;
-        while (r.levels[first].vertices != r.levels[i].vertices) ++first;
-        if (first == i || (i + 1 < r.levels.size() && r.levels[i + 1].vertices == r.levels[i].vertices)) continue;  // (the last of a run)
+    // levels at the vertex count of an earlier one (a mesh that stops simplifying above them)
+    // repeat its mesh: said once, under the first of them, in any order of --levels
+    for (size_t i = 0; i < r.levels.size(); ++i) {
+        const uint32_t n = r.levels[i].vertices;
+        if (std::any_of(r.levels.begin(), r.levels.begin() + std::ptrdiff_t(i), [n](const tom::LevelReport& l) { return l.vertices == n; })) continue;
         std::string which;
-        for (size_t k = first + 1; k <= i; ++k) which += format(k == first + 1 ? "%.1f%%" : ", %.1f%%", 100 * r.levels[k].fraction);
-        std::snprintf(line, sizeof line, "  %s: the %.1f%% level's mesh again (%u vertices, %u triangles: the mesh simplifies no further)\n", which.c_str(),
-                      100 * r.levels[first].fraction, r.levels[i].vertices, r.levels[i].triangles);
+        for (size_t k = i + 1; k < r.levels.size(); ++k)
+            if (r.levels[k].vertices == n) which += format(which.empty() ? "%.1f%%" : ", %.1f%%", 100 * r.levels[k].fraction);
+        if (which.empty()) continue;
+        std::snprintf(line, sizeof line, "  %s: the %.1f%% level's mesh again (%u vertices, %u triangles)\n", which.c_str(), 100 * r.levels[i].fraction, n,
+                      r.levels[i].triangles);
         o << line;
     }
     o << "  normal deg, uv: mean angle between interpolated normals and mean texture-coordinate displacement at the closest point,\n"

@@ -112,6 +112,8 @@ assert [l['vertices'] for l in levels[3:]] == [4, 4, 4, 4], [l['vertices'] for l
 assert all(l['error'] == levels[3]['error'] and l['attributes'] == levels[3]['attributes'] for l in levels[4:])
 assert levels[2]['vertices'] > 4
 "
+check "tombuild --report with --levels in any order" expect_exit 0 "$tools/tombuild" "$data/meshes/cross.off" -o "$work/floor2" --report --levels 10,50,2,25,1
+check "names the repeats of each level, and only those" grep -qx "  1.0%: the 2.0% level's mesh again (4 vertices, 4 triangles)" "$work/stdout"
 check "one JSON per input" test -s "$work/r/reports/fandisk.json" -a -s "$work/r/reports/cow.json"
 check "the JSON reports follow tools/report.schema.json" /usr/bin/python3 -c "
 import json, jsonschema, sys
