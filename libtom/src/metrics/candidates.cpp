@@ -28,21 +28,21 @@ namespace {
 constexpr float kKeep = 1.0f - 1.0f / 512.0f;
 constexpr double kSmallestScale = 1e-12, kLargestScale = 1e12;
 
-// lane indices of the set bits of each 8-bit mask, in order, for a branch-free compaction
+#if defined(__x86_64__) || defined(__i386__)
+// lane indices of the set bits of each 8-bit mask, in order, for a branch-free compaction (made
+// at compile time)
 struct Lanes {
     alignas(32) uint32_t of[256][8];
-    Lanes() {
+    constexpr Lanes() : of{} {
         for (unsigned mask = 0; mask < 256; ++mask) {
             unsigned n = 0;
             for (unsigned lane = 0; lane < 8; ++lane)
                 if (mask >> lane & 1) of[mask][n++] = lane;
-            while (n < 8) of[mask][n++] = 0;
         }
     }
 };
-const Lanes kLanes;
+constexpr Lanes kLanes;
 
-#if defined(__x86_64__) || defined(__i386__)
 __attribute__((target("avx2"))) size_t below_avx(float* column, size_t padded, const float q[3], float limit, float slack, uint32_t* hits) {
     const float *lx = column, *ly = lx + padded, *lz = ly + padded, *hx = lz + padded, *hy = hx + padded, *hz = hy + padded, *nx = hz + padded,
                 *ny = nx + padded, *nz = ny + padded, *off = nz + padded;

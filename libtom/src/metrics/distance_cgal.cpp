@@ -73,21 +73,36 @@ void validate(const Surface& s, const char* which) {
 
 using Node = CGAL::AABB_node<CGAL::AABB_traits<K, Primitive>>;
 
-// Every leaf of CGAL's tree below `node` (of `primitives` leaves), left to right: leaf(primitive).
-// How CGAL lays a node out: two leaves under a node of 2, a leaf and a node of 2 under a node of
-// 3, otherwise nodes of primitives / 2 and the rest.
-template <class Leaf>
-void each_leaf(const Node& node, size_t primitives, Leaf&& leaf) {
-    if (primitives == 2) {
-        leaf(node.left_data());
-        leaf(node.right_data());
-    } else if (primitives == 3) {
-        leaf(node.left_data());
-        each_leaf(node.right_child(), 2, leaf);
+// A part of CGAL's tree: a node of `count` leaves, or one leaf (count 1); `first`, the place of
+// its first leaf in left-to-right order.
+struct Part {
+    const Node* node;
+    const Primitive* leaf;
+    size_t count;
+    uint32_t first;
+};
+
+// A part's two halves, as CGAL lays a node out: two leaves under a node of 2, a leaf and a node
+// of 2 under a node of 3, otherwise nodes of count / 2 and the rest.
+void split(const Part& part, Part& l, Part& r) {
+    if (part.count == 2) {
+        l = {nullptr, &part.node->left_data(), 1, part.first}, r = {nullptr, &part.node->right_data(), 1, part.first + 1};
+    } else if (part.count == 3) {
+        l = {nullptr, &part.node->left_data(), 1, part.first}, r = {&part.node->right_child(), nullptr, 2, part.first + 1};
     } else {
-        each_leaf(node.left_child(), primitives / 2, leaf);
-        each_leaf(node.right_child(), primitives - primitives / 2, leaf);
+        const size_t nl = part.count / 2;
+        l = {&part.node->left_child(), nullptr, nl, part.first}, r = {&part.node->right_child(), nullptr, part.count - nl, part.first + uint32_t(nl)};
     }
+}
+
+// Every leaf of a part, left to right: leaf(primitive).
+template <class Leaf>
+void each_leaf(const Part& part, Leaf&& leaf) {
+    if (part.count == 1) return leaf(*part.leaf);
+    Part l, r;
+    split(part, l, r);
+    each_leaf(l, leaf);
+    each_leaf(r, leaf);
 }
 
 // The corners of a CGAL box.
@@ -109,11 +124,12 @@ struct Mesh3 {
             triangles.emplace_back(point(s, s.indices[3 * t]), point(s, s.indices[3 * t + 1]), point(s, s.indices[3 * t + 2]));
         Tree tree(triangles.begin(), triangles.end());
         tree.build();
+        const Part root{triangles.size() >= 2 ? tree.root_node() : nullptr, nullptr, triangles.size(), 0};  // (a tree of one triangle has no node)
         triangle_of.reserve(triangles.size());
         if (triangles.size() == 1)
             triangle_of.push_back(0);
         else
-            each_leaf(*tree.root_node(), triangles.size(), [&](const Primitive& p) { triangle_of.push_back(uint32_t(p.id() - triangles.begin())); });
+            each_leaf(root, [&](const Primitive& p) { triangle_of.push_back(uint32_t(p.id() - triangles.begin())); });
         flat.reserve(triangles.size());
         slot.resize(triangles.size());
         scale = std::sqrt(surface_area(s) / double(triangles.size()));
@@ -122,28 +138,13 @@ struct Mesh3 {
             flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
             slot[triangle_of[i]] = i;
         }
-        struct Sub {
-            const Node* node;  // null for a single leaf
-            size_t count;
-            uint32_t first;
-        };
-        auto split = [](const Sub& part, Sub& l, Sub& r) {  // as each_leaf() reads CGAL's nodes
-            if (part.count == 2) {
-                l = {nullptr, 1, part.first}, r = {nullptr, 1, part.first + 1};
-            } else if (part.count == 3) {
-                l = {nullptr, 1, part.first}, r = {&part.node->right_child(), 2, part.first + 1};
-            } else {
-                const size_t nl = part.count / 2;
-                l = {&part.node->left_child(), nl, part.first}, r = {&part.node->right_child(), part.count - nl, part.first + uint32_t(nl)};
-            }
-        };
-        auto box = [this](const Sub& part, V3& lo, V3& hi) {
+        auto box = [this](const Part& part, V3& lo, V3& hi) {
             if (part.count == 1)
                 lo = flat[part.first].lo, hi = flat[part.first].hi;
             else
                 lo = low(part.node->bbox()), hi = high(part.node->bbox());
         };
-        wide.build(Sub{triangles.size() >= 2 ? tree.root_node() : nullptr, triangles.size(), 0}, split, box);
+        wide.build(root, split, box);
     }
     double scale = 0;  // the side of a square of a triangle's mean area
     WideTree wide;

@@ -30,9 +30,6 @@ struct Random {
     }
 };
 
-// The key of a (key, index) pair, for radix_sort.
-uint64_t key_of(const std::pair<uint64_t, uint32_t>& item) { return item.first; }
-
 } // namespace
 
 double face_area(const Surface& s, size_t t) {
@@ -135,7 +132,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
                 const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
                 edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), uint32_t(t)});
             }
-        radix_sort(edges, scratch.other, 2 * bits, key_of, p.threads);
+        radix_sort(edges, scratch.other, 2 * bits, [](const std::pair<uint64_t, uint32_t>& edge) { return edge.first; }, p.threads);
         edges.erase(std::unique(edges.begin(), edges.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), edges.end());
         const double per_length = std::sqrt(per_area);
         const uint64_t low = (uint64_t(1) << bits) - 1;

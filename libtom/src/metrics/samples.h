@@ -58,8 +58,9 @@ struct MortonScratch {
 // Sorts points in Morton order of a 2^16-per-axis grid over their bounding cube (over 65,536
 // points, of a coarser one, 2^14 up to 4M points, and ties in the order given), so that the
 // points of every octree cell are a contiguous range (measure() groups them by cell); keys get
-// each point's code (as a 48-bit code, zeros where the grid is coarser), extent the cube's side; `permutation`, when given, the order applied (new
-// position -> old). Deterministic; `threads` as parallel_chunks.
+// each point's code (as a 48-bit code, zeros where the grid is coarser), extent the cube's side;
+// `permutation`, when given, the order applied (new position -> old). Deterministic; `threads`
+// as parallel_chunks.
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation = nullptr);
 
