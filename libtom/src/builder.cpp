@@ -732,11 +732,22 @@ void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candi
     items.insert(items.end(), rest.begin(), rest.end());
 }
 
+// What the team found out ahead of the sequential loop about one candidate v -> u of a pass.
+enum : uint8_t { kLegal, kIllegal, kUnknown };
+constexpr uint32_t kRingMax = 15, kChunkMax = 256;
+constexpr uint8_t kRingUnknown = 255;
+struct Foresight {
+    uint8_t verdict;  // the oracle's: kLegal, kIllegal, or kUnknown (not asked)
+    uint8_t ring;     // v's neighbours below (when legal, quadric predicate), or kRingUnknown
+    uint32_t w[kRingMax];
+    float cost[kRingMax];  // quadric_cost(w[i], u) for an interior w[i] other than u
+};
+
 // Runs f(i, scratch) for i in [0, count) on the team's threads (the caller's with `own`, each
-// helper with its own scratch), in blocks of 512. f must only write state that belongs to i.
+// helper with its own scratch), in blocks (of 512). f must only write state that belongs to i.
 template <class F>
-void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
-    team.blocks(count, 512, [&](unsigned worker, size_t begin, size_t end) {
+void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f, size_t block = 512) {
+    team.blocks(count, block, [&](unsigned worker, size_t begin, size_t end) {
         Scratch& sc = worker == 0 ? own : helpers[worker - 1];
         for (size_t i = begin; i < end; ++i) f(i, sc);
     });
@@ -763,6 +774,22 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
     for (Scratch& h : helpers) h.stamp.assign(b.n, 0);
     uint32_t alive_count = b.n;
     bool full_rescan_done = false;
+    // Foresight (with helpers): before the sequential loop reaches a chunk of candidates, the team
+    // takes their oracle verdicts and their neighbours' costs of the target. A substitution applied
+    // marks the position classes whose fans it changed (every corner of v's triangles, and u) with
+    // the chunk's number, and its target's quadric as merged: a verdict whose v and u are unmarked
+    // is what the oracle would say now, and so is a cost whose quadric is unmerged. Same
+    // substitutions, same files, with the oracle's and the costs' cold reads off the sequential path.
+    const bool speculate = team.size() > 1;
+    std::vector<Foresight> foresight(kChunkMax);
+    std::vector<uint32_t> touched(b.n, 0), merged(b.n, 0);
+    uint32_t chunk = 0;
+    auto touch_ring = [&](uint32_t x) {
+        if (!speculate) return;
+        adj.each(x, [&](uint32_t t) {
+            for (int k = 0; k < 3; ++k) touched[b.wedge[b.idx[3 * t + k]]] = chunk;
+        });
+    };
     for (uint32_t pass = 1;; ++pass) {
         candidates.clear();
         evaluate.clear();
@@ -789,9 +816,43 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                 sort_candidates(candidates, tmp);
                 quota = candidates.size();
             }
+            size_t chunk_begin = 0, chunk_end = 0;
             for (size_t ci = 0; ci < candidates.size(); ++ci) {
                 const Candidate& c = candidates[ci];
                 if (executed >= quota) break;
+                if (ci == chunk_end && speculate) {
+                    // the oracle's verdicts for the next candidates, on the team, from the state
+                    // as it is now (a chunk of about what the quota still needs)
+                    ++chunk;
+                    chunk_begin = ci;
+                    chunk_end = std::min(candidates.size(), ci + std::min<size_t>(kChunkMax, std::max<size_t>(32, (quota - executed) * 5 / 4)));
+                    parallel_for(team, chunk_end - chunk_begin, b.scratch, helpers, [&](size_t k, Scratch& sc) {
+                        const Candidate& e = candidates[chunk_begin + k];
+                        Foresight& f = foresight[k];
+                        f.verdict = kUnknown;
+                        f.ring = kRingUnknown;
+                        if (pass_mark[e.v] == pass || pass_mark[e.u] == pass || b.kind[e.v] == kSeam || b.removed[e.u]) return;
+                        f.verdict = b.illegal(adj, e.v, e.u, sc) ? kIllegal : kLegal;
+                        if (f.verdict == kIllegal || b.predicate != Predicate::quadric) return;
+                        // v's neighbours (its triangles' corners but v) and, for the interior ones, Q_w(p_u)
+                        const uint32_t seen = sc.next_visit();
+                        sc.stamp[e.v] = seen;
+                        uint32_t ring = 0;
+                        adj.each(e.v, [&](uint32_t t) {
+                            for (int j = 0; j < 3; ++j) {
+                                const uint32_t w = b.idx[3 * t + j];
+                                if (sc.stamp[w] == seen) continue;
+                                sc.stamp[w] = seen;
+                                if (ring < kRingMax) {
+                                    f.w[ring] = w;
+                                    f.cost[ring] = w != e.u && b.kind[w] == kInterior ? b.quadric_cost(w, e.u) : 0.0f;
+                                }
+                                ++ring;
+                            }
+                        });
+                        if (ring <= kRingMax) f.ring = uint8_t(ring);
+                    }, 16);
+                }
                 if (ci + 4 < candidates.size()) b.prefetch(adj, candidates[ci + 4].v);
                 if (ci + 2 < candidates.size()) adj.prefetch_fan(candidates[ci + 2].v);
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
@@ -804,19 +865,26 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         needs_oracle[c.v] = 1;
                         continue;
                     }
-                    for (const uint32_t x : {c.v, c.u, v2, u2}) b.mark_ring(adj, x, dirty);
+                    for (const uint32_t x : {c.v, c.u, v2, u2}) {
+                        b.mark_ring(adj, x, dirty);
+                        touch_ring(x);
+                    }
                     b.pair_steps.push_back(uint32_t(b.removed_order.size()));
                     b.apply(adj, c.v, c.u);
                     adj.splice(c.v, c.u);
                     b.apply(adj, v2, u2);
                     adj.splice(v2, u2);
+                    merged[c.u] = merged[u2] = chunk;
                     b.partner[c.u] = u2;  // the targets are the seam's copies from now on
                     b.partner[u2] = c.u;
                     pass_mark[c.v] = pass_mark[c.u] = pass_mark[v2] = pass_mark[u2] = pass;
                     executed += 2;
                     continue;
                 }
-                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || b.illegal(adj, c.v, c.u, b.scratch)) {
+                // a verdict taken for this chunk holds while nothing applied since has touched
+                // the fans the oracle reads: those of v's and u's position classes
+                const uint8_t known = speculate && touched[b.wedge[c.v]] != chunk && touched[b.wedge[c.u]] != chunk ? foresight[ci - chunk_begin].verdict : uint8_t(kUnknown);
+                if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || (known == kUnknown ? b.illegal(adj, c.v, c.u, b.scratch) : known == kIllegal)) {
                     dirty[c.v] = 1;  // look again next pass, through the oracle
                     needs_oracle[c.v] = 1;
                     continue;
@@ -825,28 +893,48 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                 // target v becomes u; legality elsewhere is re-checked when applied
                 if (b.predicate == Predicate::quadric) {
                     // a neighbour w keeps its candidate unless that was v; it gains u as a target,
-                    // whose cost Q_w(p_u) is one evaluation
-                    const uint32_t seen = b.scratch.next_visit();
-                    std::vector<uint32_t>& stamp = b.scratch.stamp;
-                    adj.each(c.v, [&](uint32_t t) {
-                        for (int k = 0; k < 3; ++k) {
-                            const uint32_t w = b.idx[3 * t + k];
-                            if (stamp[w] == seen) continue;
-                            stamp[w] = seen;
-                            if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) continue;
-                            if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {  // borders, seams: look again
-                                dirty[w] = 1;
-                                continue;
-                            }
-                            float cw;
-                            if (b.quadric_cost_within(w, c.u, best[w].cost, best[w].u, cw) && (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)))
-                                best[w] = {cw, w, c.u};
+                    // whose cost Q_w(p_u) is one evaluation (the team's, while w's quadric is as it was)
+                    auto neighbour = [&](uint32_t w, const float* foreseen) {
+                        if (w == c.v || w == c.u || dirty[w] || b.kind[w] == kLocked) return;
+                        if (!has[w] || best[w].u == c.v || b.kind[w] != kInterior) {  // borders, seams: look again
+                            dirty[w] = 1;
+                            return;
                         }
-                    });
+                        float cw;
+                        if (foreseen && merged[w] != chunk) {
+                            cw = *foreseen;
+                        } else if (!b.quadric_cost_within(w, c.u, best[w].cost, best[w].u, cw)) {
+                            return;
+                        }
+                        if (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)) best[w] = {cw, w, c.u};
+                    };
+                    const Foresight* f = known == kLegal ? &foresight[ci - chunk_begin] : nullptr;
+                    if (f && f->ring != kRingUnknown) {
+                        touched[b.wedge[c.v]] = chunk;
+                        for (uint32_t i = 0; i < f->ring; ++i) {
+                            touched[b.wedge[f->w[i]]] = chunk;
+                            neighbour(f->w[i], &f->cost[i]);
+                        }
+                    } else {
+                        const uint32_t seen = b.scratch.next_visit();
+                        std::vector<uint32_t>& stamp = b.scratch.stamp;
+                        adj.each(c.v, [&](uint32_t t) {
+                            for (int k = 0; k < 3; ++k) {
+                                const uint32_t w = b.idx[3 * t + k];
+                                touched[b.wedge[w]] = chunk;
+                                if (stamp[w] == seen) continue;
+                                stamp[w] = seen;
+                                neighbour(w, nullptr);
+                            }
+                        });
+                    }
                     dirty[c.u] = 1;
+                    merged[c.u] = chunk;
                 } else {
                     b.mark_ring(adj, c.v, dirty);
+                    touch_ring(c.v);
                 }
+                touched[b.wedge[c.u]] = chunk;  // a pair target gains v's fan
                 b.apply(adj, c.v, c.u);
                 adj.splice(c.v, c.u);
                 pass_mark[c.v] = pass_mark[c.u] = pass;
