@@ -49,18 +49,37 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     channels_ = (normals ? 3 : 0) + (uv ? 2 : 0) + (colors ? 4 : 0);
     if (channels_ == 0) return;
     // scales: mean edge length; surface area over UV area
-    double edges = 0, area = 0, uv_area = 0;
+    // each triangle's terms on the team, a tile at a time, then summed in triangle order (the
+    // same sums whatever the thread count)
     const float* p = mesh.positions.data();
-    for (uint32_t t = 0; t < m; ++t) {
-        const uint32_t* c = &mesh.indices[3 * size_t(t)];
-        for (int k = 0; k < 3; ++k) edges += std::sqrt(dot(sub(at(p, c[(k + 1) % 3]), at(p, c[k])), sub(at(p, c[(k + 1) % 3]), at(p, c[k]))));
-        const D3 nrm = cross(sub(at(p, c[1]), at(p, c[0])), sub(at(p, c[2]), at(p, c[0])));
-        area += 0.5 * std::sqrt(dot(nrm, nrm));
-        if (uv) {
-            const float* t0 = &mesh.texcoords[2 * size_t(c[0])];
-            const float* t1 = &mesh.texcoords[2 * size_t(c[1])];
-            const float* t2 = &mesh.texcoords[2 * size_t(c[2])];
-            uv_area += 0.5 * std::fabs(double(t1[0] - t0[0]) * (t2[1] - t0[1]) - double(t1[1] - t0[1]) * (t2[0] - t0[0]));
+    constexpr size_t kTile = 65536;
+    std::vector<double> terms(std::min<size_t>(m, kTile) * 5);  // a triangle's three edge lengths, area, UV area
+    double edges = 0, area = 0, uv_area = 0;
+    for (size_t first = 0; first < m; first += kTile) {
+        const size_t count = std::min<size_t>(kTile, m - first);
+        team.blocks(count, 4096, [&](unsigned, size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) {
+                const uint32_t* c = &mesh.indices[3 * (first + i)];
+                double* out = &terms[5 * i];
+                for (int k = 0; k < 3; ++k) out[k] = std::sqrt(dot(sub(at(p, c[(k + 1) % 3]), at(p, c[k])), sub(at(p, c[(k + 1) % 3]), at(p, c[k]))));
+                const D3 nrm = cross(sub(at(p, c[1]), at(p, c[0])), sub(at(p, c[2]), at(p, c[0])));
+                out[3] = 0.5 * std::sqrt(dot(nrm, nrm));
+                out[4] = 0;
+                if (uv) {
+                    const float* t0 = &mesh.texcoords[2 * size_t(c[0])];
+                    const float* t1 = &mesh.texcoords[2 * size_t(c[1])];
+                    const float* t2 = &mesh.texcoords[2 * size_t(c[2])];
+                    out[4] = 0.5 * std::fabs(double(t1[0] - t0[0]) * (t2[1] - t0[1]) - double(t1[1] - t0[1]) * (t2[0] - t0[0]));
+                }
+            }
+        });
+        for (size_t i = 0; i < count; ++i) {
+            const double* in = &terms[5 * i];
+            edges += in[0];
+            edges += in[1];
+            edges += in[2];
+            area += in[3];
+            uv_area += in[4];
         }
     }
     const double h = edges / (3.0 * m);

@@ -489,7 +489,7 @@ void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp)
     });
 }
 
-void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allow_seams) {
+void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allow_seams, detail::Team& team) {
     const uint32_t n = b.n;
     b.kind.assign(n, kInterior);
     b.border_next.assign(n, kNone);
@@ -499,59 +499,64 @@ void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allo
     // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
     // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
     // inconsistently oriented) locks both ends; an edge without its reverse is open.
-    std::vector<uint32_t> outs, ins;  // of v, in corner order; sorted copies for a high valence
-    for (uint32_t v = 0; v < n; ++v) {
-        outs.clear();
-        ins.clear();
-        adj.each(v, [&](uint32_t t) {
-            uint32_t e, w;
-            b.others(t, v, e, w);
-            outs.push_back(e);
-            ins.push_back(w);
-        });
-        const uint32_t valence = uint32_t(outs.size());
-        outs.resize(2 * size_t(valence));
-        ins.resize(2 * size_t(valence));
-        const uint32_t* out = outs.data();
-        const uint32_t* in = ins.data();
-        const bool wide = valence > 32;  // count by binary search in sorted copies
-        if (wide) {
-            std::copy(outs.begin(), outs.begin() + valence, outs.begin() + valence);
-            std::copy(ins.begin(), ins.begin() + valence, ins.begin() + valence);
-            std::sort(outs.begin() + valence, outs.end());
-            std::sort(ins.begin() + valence, ins.end());
-        }
-        auto count = [&](const uint32_t* list, uint32_t x) {
+    // each vertex writes only its own class and border links: blocks of vertices on the team
+    std::vector<std::vector<uint32_t>> lists(2 * size_t(team.size()));
+    team.blocks(n, 4096, [&](unsigned worker, size_t begin, size_t end) {
+        std::vector<uint32_t>& outs = lists[2 * worker];  // of v, in corner order; sorted copies for a high valence
+        std::vector<uint32_t>& ins = lists[2 * worker + 1];
+        for (uint32_t v = uint32_t(begin); v < uint32_t(end); ++v) {
+            outs.clear();
+            ins.clear();
+            adj.each(v, [&](uint32_t t) {
+                uint32_t e, w;
+                b.others(t, v, e, w);
+                outs.push_back(e);
+                ins.push_back(w);
+            });
+            const uint32_t valence = uint32_t(outs.size());
+            outs.resize(2 * size_t(valence));
+            ins.resize(2 * size_t(valence));
+            const uint32_t* out = outs.data();
+            const uint32_t* in = ins.data();
+            const bool wide = valence > 32;  // count by binary search in sorted copies
             if (wide) {
-                const auto range = std::equal_range(list + valence, list + 2 * valence, x);
-                return uint32_t(range.second - range.first);
+                std::copy(outs.begin(), outs.begin() + valence, outs.begin() + valence);
+                std::copy(ins.begin(), ins.begin() + valence, ins.begin() + valence);
+                std::sort(outs.begin() + valence, outs.end());
+                std::sort(ins.begin() + valence, ins.end());
             }
-            uint32_t k = 0;
-            for (uint32_t i = 0; i < valence; ++i) k += list[i] == x;
-            return k;
-        };
-        uint32_t open_out = 0, open_in = 0;
-        bool locked = false;
-        // the edge between v and x, x taken from `mine` (out or in): its multiplicity in that
-        // direction is x's count in mine, the reverse's x's count in `theirs`
-        auto edge = [&](uint32_t x, const uint32_t* mine, const uint32_t* theirs, uint32_t& link, uint32_t& open) {
-            const uint32_t fwd = count(mine, x), rev = count(theirs, x);
-            if (fwd > 1 || rev > 1) {
-                locked = true;
-            } else if (rev == 0) {
-                link = x;
-                ++open;
+            auto count = [&](const uint32_t* list, uint32_t x) {
+                if (wide) {
+                    const auto range = std::equal_range(list + valence, list + 2 * valence, x);
+                    return uint32_t(range.second - range.first);
+                }
+                uint32_t k = 0;
+                for (uint32_t i = 0; i < valence; ++i) k += list[i] == x;
+                return k;
+            };
+            uint32_t open_out = 0, open_in = 0;
+            bool locked = false;
+            // the edge between v and x, x taken from `mine` (out or in): its multiplicity in that
+            // direction is x's count in mine, the reverse's x's count in `theirs`
+            auto edge = [&](uint32_t x, const uint32_t* mine, const uint32_t* theirs, uint32_t& link, uint32_t& open) {
+                const uint32_t fwd = count(mine, x), rev = count(theirs, x);
+                if (fwd > 1 || rev > 1) {
+                    locked = true;
+                } else if (rev == 0) {
+                    link = x;
+                    ++open;
+                }
+            };
+            for (uint32_t i = 0; i < valence; ++i) {
+                edge(out[i], out, in, b.border_next[v], open_out);
+                edge(in[i], in, out, b.border_prev[v], open_in);
             }
-        };
-        for (uint32_t i = 0; i < valence; ++i) {
-            edge(out[i], out, in, b.border_next[v], open_out);
-            edge(in[i], in, out, b.border_prev[v], open_in);
+            if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
+                b.kind[v] = kLocked;
+            else if (open_out == 1)
+                b.kind[v] = kBorder;
         }
-        if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
-            b.kind[v] = kLocked;
-        else if (open_out == 1)
-            b.kind[v] = kBorder;
-    }
+    });
     // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
     // An open-addressing table of exact position bits groups them: a group of two border vertices
     // whose border neighbours are coincident too is a seam (the two collapse together); any other
@@ -1157,7 +1162,7 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     detail::Team team(thread_count(params.threads));
     ListAdjacency adj;  // the triangles around each vertex, from classification to the last substitution
     adj.build(b);
-    classify(b, adj, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f));
+    classify(b, adj, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), team);
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
     b.attributes.init(mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
     find_pairs(b, params.pair_threshold, stats);
