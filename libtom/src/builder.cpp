@@ -749,9 +749,11 @@ struct Foresight {
 };
 
 // Runs f(i, scratch) for i in [0, count) on the team's threads (the caller's with `own`, each
-// helper with its own scratch), in blocks (of 512). f must only write state that belongs to i.
+// helper with its own scratch), in blocks of 16 to 512: eight or more a thread, so that a short
+// loop (a late pass, a small mesh) is shared too. f must only write state that belongs to i.
 template <class F>
-void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f, size_t block = 512) {
+void parallel_for(detail::Team& team, size_t count, Scratch& own, std::vector<Scratch>& helpers, F&& f) {
+    const size_t block = std::min<size_t>(512, std::max<size_t>(16, count / (8 * size_t(team.size()))));
     team.blocks(count, block, [&](unsigned worker, size_t begin, size_t end) {
         Scratch& sc = worker == 0 ? own : helpers[worker - 1];
         for (size_t i = begin; i < end; ++i) f(i, sc);
@@ -822,15 +824,18 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                 quota = candidates.size();
             }
             size_t chunk_begin = 0, chunk_end = 0;
+            // a chunk's substitutions touch about 7 classes each: on a small mesh most of the next
+            // verdicts would be stale, and their work lost (chunks of at most 1/64 of the mesh)
+            const bool ahead = speculate && alive_count >= 64 * 32;
             for (size_t ci = 0; ci < candidates.size(); ++ci) {
                 const Candidate& c = candidates[ci];
                 if (executed >= quota) break;
-                if (ci == chunk_end && speculate) {
+                if (ci == chunk_end && ahead) {
                     // the oracle's verdicts for the next candidates, on the team, from the state
                     // as it is now (a chunk of about what the quota still needs)
                     ++chunk;
                     chunk_begin = ci;
-                    chunk_end = std::min(candidates.size(), ci + std::min<size_t>(kChunkMax, std::max<size_t>(32, (quota - executed) * 5 / 4)));
+                    chunk_end = std::min(candidates.size(), ci + std::min<size_t>(std::min<size_t>(kChunkMax, alive_count / 64), std::max<size_t>(32, (quota - executed) * 5 / 4)));
                     parallel_for(team, chunk_end - chunk_begin, b.scratch, helpers, [&](size_t k, Scratch& sc) {
                         const Candidate& e = candidates[chunk_begin + k];
                         Foresight& f = foresight[k];
@@ -856,7 +861,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                             }
                         });
                         if (ring <= kRingMax) f.ring = uint8_t(ring);
-                    }, 16);
+                    });
                 }
                 if (ci + 4 < candidates.size()) b.prefetch(adj, candidates[ci + 4].v);
                 if (ci + 2 < candidates.size()) adj.prefetch_fan(candidates[ci + 2].v);
@@ -888,7 +893,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                 }
                 // a verdict taken for this chunk holds while nothing applied since has touched
                 // the fans the oracle reads: those of v's and u's position classes
-                const uint8_t known = speculate && touched[b.wedge[c.v]] != chunk && touched[b.wedge[c.u]] != chunk ? foresight[ci - chunk_begin].verdict : uint8_t(kUnknown);
+                const uint8_t known = ahead && touched[b.wedge[c.v]] != chunk && touched[b.wedge[c.u]] != chunk ? foresight[ci - chunk_begin].verdict : uint8_t(kUnknown);
                 if (b.removed[c.u] || !b.border_move_allowed(c.v, c.u) || (known == kUnknown ? b.illegal(adj, c.v, c.u, b.scratch) : known == kIllegal)) {
                     dirty[c.v] = 1;  // look again next pass, through the oracle
                     needs_oracle[c.v] = 1;
