@@ -61,7 +61,10 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
             for (size_t i = begin; i < end; ++i) {
                 const uint32_t* c = &mesh.indices[3 * (first + i)];
                 double* out = &terms[5 * i];
-                for (int k = 0; k < 3; ++k) out[k] = std::sqrt(dot(sub(at(p, c[(k + 1) % 3]), at(p, c[k])), sub(at(p, c[(k + 1) % 3]), at(p, c[k]))));
+                for (int k = 0; k < 3; ++k) {
+                    const D3 e = sub(at(p, c[(k + 1) % 3]), at(p, c[k]));
+                    out[k] = std::sqrt(dot(e, e));
+                }
                 const D3 nrm = cross(sub(at(p, c[1]), at(p, c[0])), sub(at(p, c[2]), at(p, c[0])));
                 out[3] = 0.5 * std::sqrt(dot(nrm, nrm));
                 out[4] = 0;

@@ -236,10 +236,13 @@ struct Builder {
         return bad;
     }
 
-    // marks every vertex of x's live triangles
-    template <class Adj>
-    void mark_ring(const Adj& adj, uint32_t x, std::vector<uint8_t>& mark) const {
-        adj.each(x, [&](uint32_t t) { mark[idx[3 * t]] = mark[idx[3 * t + 1]] = mark[idx[3 * t + 2]] = 1; });
+    // f(w) for every corner w of x's live triangles (x among them; a neighbour once per
+    // triangle it shares with x)
+    template <class Adj, class F>
+    void each_corner(const Adj& adj, uint32_t x, F&& f) const {
+        adj.each(x, [&](uint32_t t) {
+            for (int k = 0; k < 3; ++k) f(idx[3 * t + k]);
+        });
     }
 
     // starts loading what evaluating v's substitutions reads first
@@ -787,14 +790,15 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
     // the chunk's number, and its target's quadric as merged: a verdict whose v and u are unmarked
     // is what the oracle would say now, and so is a cost whose quadric is unmerged. Same
     // substitutions, same files, with the oracle's and the costs' cold reads off the sequential path.
-    const bool speculate = team.size() > 1;
     std::vector<Foresight> foresight(kChunkMax);
     std::vector<uint32_t> touched(b.n, 0), merged(b.n, 0);
     uint32_t chunk = 0;
-    auto touch_ring = [&](uint32_t x) {
-        if (!speculate) return;
-        adj.each(x, [&](uint32_t t) {
-            for (int k = 0; k < 3; ++k) touched[b.wedge[b.idx[3 * t + k]]] = chunk;
+    // a substitution of x changes its ring: each vertex is looked at again next pass, and the
+    // fans of their classes are no longer what the foresight saw
+    auto ring_changed = [&](uint32_t x) {
+        b.each_corner(adj, x, [&](uint32_t w) {
+            dirty[w] = 1;
+            touched[b.wedge[w]] = chunk;
         });
     };
     for (uint32_t pass = 1;; ++pass) {
@@ -826,7 +830,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
             size_t chunk_begin = 0, chunk_end = 0;
             // a chunk's substitutions touch about 7 classes each: on a small mesh most of the next
             // verdicts would be stale, and their work lost (chunks of at most 1/64 of the mesh)
-            const bool ahead = speculate && alive_count >= 64 * 32;
+            const bool ahead = team.size() > 1 && alive_count >= 64 * 32;
             for (size_t ci = 0; ci < candidates.size(); ++ci) {
                 const Candidate& c = candidates[ci];
                 if (executed >= quota) break;
@@ -835,7 +839,8 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     // as it is now (a chunk of about what the quota still needs)
                     ++chunk;
                     chunk_begin = ci;
-                    chunk_end = std::min(candidates.size(), ci + std::min<size_t>(std::min<size_t>(kChunkMax, alive_count / 64), std::max<size_t>(32, (quota - executed) * 5 / 4)));
+                    const size_t length = std::min({size_t(kChunkMax), size_t(alive_count / 64), std::max<size_t>(32, (quota - executed) * 5 / 4)});
+                    chunk_end = std::min(candidates.size(), ci + length);
                     parallel_for(team, chunk_end - chunk_begin, b.scratch, helpers, [&](size_t k, Scratch& sc) {
                         const Candidate& e = candidates[chunk_begin + k];
                         Foresight& f = foresight[k];
@@ -848,17 +853,14 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         const uint32_t seen = sc.next_visit();
                         sc.stamp[e.v] = seen;
                         uint32_t ring = 0;
-                        adj.each(e.v, [&](uint32_t t) {
-                            for (int j = 0; j < 3; ++j) {
-                                const uint32_t w = b.idx[3 * t + j];
-                                if (sc.stamp[w] == seen) continue;
-                                sc.stamp[w] = seen;
-                                if (ring < kRingMax) {
-                                    f.w[ring] = w;
-                                    f.cost[ring] = w != e.u && b.kind[w] == kInterior ? b.quadric_cost(w, e.u) : 0.0f;
-                                }
-                                ++ring;
+                        b.each_corner(adj, e.v, [&](uint32_t w) {
+                            if (sc.stamp[w] == seen) return;
+                            sc.stamp[w] = seen;
+                            if (ring < kRingMax) {
+                                f.w[ring] = w;
+                                f.cost[ring] = w != e.u && b.kind[w] == kInterior ? b.quadric_cost(w, e.u) : 0.0f;
                             }
+                            ++ring;
                         });
                         if (ring <= kRingMax) f.ring = uint8_t(ring);
                     });
@@ -875,10 +877,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         needs_oracle[c.v] = 1;
                         continue;
                     }
-                    for (const uint32_t x : {c.v, c.u, v2, u2}) {
-                        b.mark_ring(adj, x, dirty);
-                        touch_ring(x);
-                    }
+                    for (const uint32_t x : {c.v, c.u, v2, u2}) ring_changed(x);
                     b.pair_steps.push_back(uint32_t(b.removed_order.size()));
                     b.apply(adj, c.v, c.u);
                     adj.splice(c.v, c.u);
@@ -928,21 +927,17 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     } else {
                         const uint32_t seen = b.scratch.next_visit();
                         std::vector<uint32_t>& stamp = b.scratch.stamp;
-                        adj.each(c.v, [&](uint32_t t) {
-                            for (int k = 0; k < 3; ++k) {
-                                const uint32_t w = b.idx[3 * t + k];
-                                touched[b.wedge[w]] = chunk;
-                                if (stamp[w] == seen) continue;
-                                stamp[w] = seen;
-                                neighbour(w, nullptr);
-                            }
+                        b.each_corner(adj, c.v, [&](uint32_t w) {
+                            touched[b.wedge[w]] = chunk;
+                            if (stamp[w] == seen) return;
+                            stamp[w] = seen;
+                            neighbour(w, nullptr);
                         });
                     }
                     dirty[c.u] = 1;
                     merged[c.u] = chunk;
                 } else {
-                    b.mark_ring(adj, c.v, dirty);
-                    touch_ring(c.v);
+                    ring_changed(c.v);
                 }
                 touched[b.wedge[c.u]] = chunk;  // a pair target gains v's fan
                 b.apply(adj, c.v, c.u);
@@ -1011,13 +1006,10 @@ void run_heap(Builder& b, ListAdjacency& adj) {
         ring.clear();
         ring.push_back(e.u);
         ring_mark[e.u] = e.v;
-        adj.each(e.u, [&](uint32_t t) {
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t w = b.idx[3 * t + k];
-                if (ring_mark[w] != e.v) {
-                    ring_mark[w] = e.v;
-                    ring.push_back(w);
-                }
+        b.each_corner(adj, e.u, [&](uint32_t w) {
+            if (ring_mark[w] != e.v) {
+                ring_mark[w] = e.v;
+                ring.push_back(w);
             }
         });
         for (uint32_t w : ring) {
