@@ -410,6 +410,35 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
                 }
                 CHECK(count == expected);
             }
+            // sorted by their boxes' distance to the run's box, as the search lists them: below()
+            // may stop at the first block whose floor is at the best, but never drops a candidate
+            // nearer than the best, nor keeps one whose bound is not under it
+            std::vector<uint64_t> keyed;
+            for (uint32_t t : list) {
+                const float g = float(tom::detail::boxes_d2(lo, hi, flat[t].lo, flat[t].hi));
+                uint32_t bits;
+                std::memcpy(&bits, &g, sizeof bits);
+                keyed.push_back(uint64_t(bits) << 32 | t);
+            }
+            std::sort(keyed.begin(), keyed.end());
+            std::vector<uint32_t> sorted;
+            for (uint64_t k : keyed) sorted.push_back(uint32_t(k));
+            bounds.fill(flat, sorted, 0.5 * (lo + hi), 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}), keyed.data());
+            size_t skipped = 0;
+            for (const V3& p : points) {
+                const double best = tom::detail::distance2(flat[sorted[size_t(unit(rng) * 64.0) % 64]], p);
+                const size_t count = bounds.below(p, best);
+                std::vector<uint8_t> hit(sorted.size(), 0);
+                for (size_t h = 0; h < count; ++h) {
+                    hit[bounds.hits[h]] = 1;
+                    CHECK(bounds.low()[bounds.hits[h]] < float(best));
+                }
+                for (size_t k = 0; k < sorted.size(); ++k) {
+                    if (tom::detail::distance2(flat[sorted[k]], p) < best) CHECK(hit[k]);
+                    skipped += !hit[k];
+                }
+            }
+            if (run == 0) CHECK(skipped > 0);
             for (uint32_t t : list) {
                 std::vector<double> batched(points.size());
                 tom::detail::distances2(flat[t], points.data(), points.size(), batched.data());

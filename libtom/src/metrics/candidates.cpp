@@ -4,6 +4,7 @@
 #include "candidates.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "../simd.h"
@@ -43,14 +44,15 @@ struct Lanes {
 };
 constexpr Lanes kLanes;
 
-__attribute__((target("avx2"))) size_t below_avx(float* column, size_t padded, const float q[3], float limit, float slack, uint32_t* hits) {
+__attribute__((target("avx2"))) size_t below_avx(float* column, size_t padded, const float* floor, float beyond, const float q[3], float limit, float slack,
+                                                      uint32_t* hits) {
     const float *lx = column, *ly = lx + padded, *lz = ly + padded, *hx = lz + padded, *hy = hx + padded, *hz = hy + padded, *nx = hz + padded,
                 *ny = nx + padded, *nz = ny + padded, *off = nz + padded;
     float* low = column + 10 * padded;
     const __m256 x = _mm256_set1_ps(q[0]), y = _mm256_set1_ps(q[1]), z = _mm256_set1_ps(q[2]), zero = _mm256_setzero_ps(), below = _mm256_set1_ps(limit),
                  keep = _mm256_set1_ps(kKeep), lower = _mm256_set1_ps(slack);
     size_t count = 0;
-    for (size_t k = 0; k < padded; k += 8) {
+    for (size_t k = 0; k < padded && floor[k / 8] < beyond; k += 8) {
         const __m256 dx = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(lx + k), x), _mm256_sub_ps(x, _mm256_loadu_ps(hx + k))), zero);
         const __m256 dy = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(ly + k), y), _mm256_sub_ps(y, _mm256_loadu_ps(hy + k))), zero);
         const __m256 dz = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(lz + k), z), _mm256_sub_ps(z, _mm256_loadu_ps(hz + k))), zero);
@@ -116,7 +118,7 @@ bool cpu_has_avx2() {
 
 } // namespace
 
-void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread) {
+void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread, const uint64_t* sorted) {
     const size_t m = list.size();
     padded = (m + 7) & ~size_t(7);
     data.resize(11 * padded);
@@ -138,6 +140,12 @@ void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint
         column(9)[k] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
         scale = std::max({scale, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
     }
+    floor.assign(padded / 8, -std::numeric_limits<float>::infinity());  // (unsorted: every block scanned)
+    if (sorted)
+        for (size_t j = 0; j < floor.size(); ++j) {
+            const uint32_t bits = uint32_t(sorted[8 * j] >> 32);
+            std::memcpy(&floor[j], &bits, sizeof bits);
+        }
     everything = !(scale >= kSmallestScale && scale <= kLargestScale);
     const double e = std::ldexp(scale, -18);
     slack = everything ? 0.0f : float(3.0 * 2049.0 * e * e);
@@ -156,18 +164,21 @@ size_t CandidateBounds::below(V3 p, double best) {
     const V3 r = p - origin;
     const float q[3] = {float(r.x), float(r.y), float(r.z)};
     const float limit = float(best);
+    // the blocks that may hold a candidate under `best`: the floors are non-decreasing, and a
+    // block whose floor is at best or above (the floats' rounding allowed for) holds none
+    const float beyond = float(best * (1.0 + 1e-6));
     if (everything) {
         for (size_t k = 0; k < listed; ++k) hits[k] = uint32_t(k);
         return listed;
     }
 #if defined(__x86_64__) || defined(__i386__)
-    if (cpu_has_avx2()) return below_avx(data.data(), padded, q, limit, slack, hits.data());
+    if (cpu_has_avx2()) return below_avx(data.data(), padded, floor.data(), beyond, q, limit, slack, hits.data());
 #endif
     const float *lx = column(0), *ly = column(1), *lz = column(2), *hx = column(3), *hy = column(4), *hz = column(5), *nx = column(6),
                 *ny = column(7), *nz = column(8), *off = column(9);
     float* low = column(10);
     size_t count = 0;
-    for (size_t k = 0; k < padded; ++k) {
+    for (size_t k = 0; k < padded && floor[k / 8] < beyond; ++k) {
         const float dx = std::max(std::max(lx[k] - q[0], q[0] - hx[k]), 0.0f), dy = std::max(std::max(ly[k] - q[1], q[1] - hy[k]), 0.0f),
                     dz = std::max(std::max(lz[k] - q[2], q[2] - hz[k]), 0.0f);
         const float above = (nx[k] * q[0] + ny[k] * q[1]) + (nz[k] * q[2] + off[k]);

@@ -11,7 +11,10 @@
 // exact bound keeps is never dropped (a few more are kept, and their exact distance decides).
 // The hits are compacted without branches (a table of lane indices per mask). Against the same
 // bounds in doubles four at a time with a branch per hit: the backward searches of bunny00's
-// report 15% faster, the same figures. Internal to tom::metrics.
+// report 15% faster, the same figures. The search lists a run's candidates nearest box first,
+// with each block's least box distance (a floor for every point of the run): a point's scan
+// stops at the first block whose floor is at its best. On bunny00's 7 levels (callgrind) the
+// scans took 2.0G instructions instead of 3.4G, everything 7% fewer. Internal to tom::metrics.
 
 #include <cstddef>
 #include <cstdint>
@@ -25,17 +28,21 @@ struct CandidateBounds {
     size_t padded = 0;  // the candidates, rounded up to a multiple of 8
     std::vector<float> data;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off, low: `padded` each
     std::vector<uint32_t> hits;
+    std::vector<float> floor;  // per block of eight: a lower bound of every point's squared distance to its boxes
     V3 origin{0, 0, 0};
     float slack = 0;  // the absolute part of the lowering (squared distance)
     size_t listed = 0;
     bool everything = false;  // coordinates out of float's comfortable range: every candidate kept
     float* column(int c) { return data.data() + size_t(c) * padded; }
     // the candidates `list` of `flat`, relative to `origin`; `spread`: how far the points to
-    // bound lie from it at most (along any axis)
-    void fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 origin, double spread);
+    // bound lie from it at most (along any axis); `sorted`, per candidate, the float bits of a
+    // lower bound of every point's squared distance to its box in the high half (non-decreasing
+    // along the list; the run's box's distance), or null: below() then skips the blocks beyond
+    // a point's best
+    void fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 origin, double spread, const uint64_t* sorted = nullptr);
     const float* low() { return column(10); }
     // the candidates whose lower bound for p is under `best`, in hits[0, returned count); low()
-    // then holds every candidate's bound for p
+    // then holds the bound for p of every candidate of the blocks scanned (those of the hits)
     size_t below(V3 p, double best);
 };
 

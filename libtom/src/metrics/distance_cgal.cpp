@@ -32,6 +32,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <memory>
 #include <mutex>
@@ -56,6 +57,14 @@ using Triangle = K::Triangle_3;
 using TriangleIterator = std::vector<Triangle>::const_iterator;
 using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+// The bits of float(x) (x >= 0): ordered as the values.
+inline uint32_t float_bits(double x) {
+    const float f = float(x);
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    return bits;
+}
 
 inline V3 v3(const Point& p) { return {p.x(), p.y(), p.z()}; }
 inline Point point(const Surface& s, uint32_t v) {
@@ -196,6 +205,7 @@ struct RunSearch {
     const uint32_t* starts = nullptr;  // per point: a record near it (FaceHints), or kNoRecord; or none
     uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
     std::vector<uint32_t> list;
+    std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, sorted into `list`
     std::vector<double> upper;  // each point's distance to the run centre's nearest triangle, or to its own start if nearer
     std::vector<uint8_t> own;   // whether that is its own start's
     CandidateBounds bounds;
@@ -257,20 +267,30 @@ struct RunSearch {
             widest = std::max(widest, upper[i - b] = u);
         }
         const double reach2 = widest * (1.0 + 1e-9);  // widened against rounding
-        list.clear();
+        // the candidates in order of their boxes' distance to the run's box, which no point of the
+        // run is nearer to them than: CandidateBounds::below() stops at the first block of eight
+        // that lies beyond a point's best distance. Keys: that distance as float bits (ordered as
+        // the floats: non-negative), the record below
+        keyed.clear();
         target.wide.within(target.wide.query(lo, hi), reach2, [&](uint32_t t) {
             const Flat& f = target.flat[t];
-            if (boxes_d2(lo, hi, f.lo, f.hi) <= reach2) list.push_back(t);
+            const double g = boxes_d2(lo, hi, f.lo, f.hi);
+            if (g <= reach2) keyed.push_back(uint64_t(float_bits(g)) << 32 | t);
         });
         // c is within the reach, but where the reach is a few ulps (points on c) rounding may
         // leave it out: the starts below are distances to c, so it must be a candidate
-        const size_t of_c = size_t(std::find(list.begin(), list.end(), c) - list.begin());  // each triangle is listed once
-        if (of_c == list.size()) list.push_back(c);
-        const size_t m = list.size();
+        if (std::none_of(keyed.begin(), keyed.end(), [c](uint64_t k) { return uint32_t(k) == c; }))
+            keyed.push_back(uint64_t(float_bits(boxes_d2(lo, hi, target.flat[c].lo, target.flat[c].hi))) << 32 | c);
+        const size_t m = keyed.size();
         // with many candidates, every point is far from a fine surface and its own descent is
         // cheaper than the scan
         if (m > 1024) return each(b, e, emit);
-        bounds.fill(target.flat, list, centre, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+        std::sort(keyed.begin(), keyed.end());
+        list.resize(m);
+        size_t of_c = 0;
+        for (size_t k = 0; k < m; ++k)
+            if ((list[k] = uint32_t(keyed[k])) == c) of_c = k;
+        bounds.fill(target.flat, list, centre, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}), keyed.data());
         constexpr size_t kUnlisted = ~size_t(0);
         size_t last = of_c;  // the candidate nearest to the previous point
         for (size_t i = b; i < e; ++i) {
