@@ -61,7 +61,7 @@ void radix_sort(std::vector<T>& items, std::vector<T>& other, int key_bits, Key 
 template <class T, class Key>
 void radix_sort(std::vector<T>& items, std::vector<T>& other, int key_bits, Key key, unsigned threads) {
     if (items.size() >= kParallelSortItems && thread_count(threads) > 1) {
-        Team team(thread_count(threads));
+        Team team(thread_count(threads), false);
         radix_sort(items, other, key_bits, key, &team);
     } else {
         radix_sort(items, other, key_bits, key);

@@ -495,9 +495,19 @@ void bounds(const Surface& s, double lo[3], double hi[3]) {
         }
 }
 
-double enlarged_union_diagonal(const Surface& a, const Surface& b) {
+// The box of a surface's corners.
+struct Box {
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    bounds(a, lo, hi);
+};
+Box box_of(const Surface& s) {
+    Box b;
+    bounds(s, b.lo, b.hi);
+    return b;
+}
+
+// `a`: the box of the first surface (the original's, made once)
+double enlarged_union_diagonal(const Box& a, const Surface& b) {
+    double lo[3] = {a.lo[0], a.lo[1], a.lo[2]}, hi[3] = {a.hi[0], a.hi[1], a.hi[2]};
     bounds(b, lo, hi);
     const double diag = std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
     const double grow = 2.0 * 0.02 * diag;  // each side moves out by 2% of the diagonal
@@ -528,6 +538,7 @@ struct MetroReference::Impl {
     DistanceParams params;
     SurfaceAttributes attributes;
     Mesh3 mesh;
+    Box box;  // of the original's corners
     mutable std::mutex lock;
     struct Forward {  // the original's samples for one target count, and the attribute samples picked from them
         uint64_t target = 0;
@@ -542,7 +553,7 @@ struct MetroReference::Impl {
     };
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
-    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s) {}
+    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s), box(box_of(s)) {}
     const Forward& forward_for(uint64_t target) const {
         std::lock_guard<std::mutex> hold(lock);
         for (const Forward& f : forward)
@@ -591,12 +602,12 @@ struct MetroReference::Impl {
                             hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
         if (probing && f.separate) measure(f.attribute_samples, other, params.threads, &probe, deviation);  // (only its deviation)
         std::unique_ptr<Workspace> work = borrow();
-        sample_surface(simplified, backward_target, params, work->backward, work->scratch);
+        sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
         d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
                              "simplified_to_original");
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
-        d.diagonal = enlarged_union_diagonal(original, simplified);
+        d.diagonal = enlarged_union_diagonal(box, simplified);
         return d;
     }
 };

@@ -102,7 +102,8 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick,
-                    uint64_t pick_count) {
+                    uint64_t pick_count, bool with_faces) {
+    with_faces = with_faces || pick;
     out.points.clear();
     std::vector<uint32_t>& faces = scratch.faces;  // of each point, in the order made
     faces.clear();
@@ -116,7 +117,10 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         std::vector<uint32_t> face_of(s.vertex_count, kUnused);  // a vertex's first face
         for (size_t i = s.triangle_count * 3; i-- > 0;) face_of[s.indices[i]] = uint32_t(i / 3);
         for (uint32_t v = 0; v < s.vertex_count; ++v)
-            if (face_of[v] != kUnused) out.points.push_back(vertex(s, v)), faces.push_back(face_of[v]);
+            if (face_of[v] != kUnused) {
+                out.points.push_back(vertex(s, v));
+                if (with_faces) faces.push_back(face_of[v]);
+            }
         out.vertex = out.points.size();
     }
     if (p.edge_samples && per_area > 0) {
@@ -143,7 +147,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
             for (int i = 1; i <= n; ++i) {
                 const double t = double(i) / double(n + 1);
                 out.points.push_back(pa + t * (pb - pa));
-                faces.push_back(edge.second);
+                if (with_faces) faces.push_back(edge.second);
             }
         }
         out.edge = out.points.size() - out.vertex;
@@ -161,8 +165,11 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
             first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
         }
         out.points.resize(base + first.back());
-        faces.resize(base + first.back());
-        for (size_t t = 0; t < s.triangle_count; ++t) std::fill(faces.begin() + std::ptrdiff_t(base + first[t]), faces.begin() + std::ptrdiff_t(base + first[t + 1]), uint32_t(t));
+        if (with_faces) {
+            faces.resize(base + first.back());
+            for (size_t t = 0; t < s.triangle_count; ++t)
+                std::fill(faces.begin() + std::ptrdiff_t(base + first[t]), faces.begin() + std::ptrdiff_t(base + first[t + 1]), uint32_t(t));
+        }
         if (pick && pick_count > 0 && first.back() > 0) {
             every = std::max<uint64_t>(1, uint64_t(std::llround(double(first.back()) / double(pick_count))));
             pick->picked.resize((first.back() + every - 1) / every);
@@ -212,7 +219,11 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
         out.face = out.points.size() - out.vertex - out.edge;
     }
     std::vector<uint32_t>& order = scratch.order;
-    order_morton(out.points, out.keys, out.extent, scratch, p.threads, &order);
+    order_morton(out.points, out.keys, out.extent, scratch, p.threads, with_faces ? &order : nullptr);
+    if (!with_faces) {
+        out.faces.clear();
+        return;
+    }
     out.faces.resize(order.size());
     parallel_chunks(order.size(), p.threads, [&](size_t, size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) out.faces[i] = faces[order[i]];

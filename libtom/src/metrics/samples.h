@@ -80,9 +80,10 @@ struct PickedFaceSamples {
     std::vector<uint32_t> of_point;
 };
 
-// Fills `out` (its buffers reused) with about `target` samples of s and the face of each; with
-// `pick`, about `pick_count` of its face samples picked into it.
+// Fills `out` (its buffers reused) with about `target` samples of s and, `with_faces`, the face
+// of each (left empty otherwise: a search without hints does not read them); with `pick`, about
+// `pick_count` of its face samples picked into it (and the faces kept).
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch,
-                    PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0);
+                    PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0, bool with_faces = true);
 
 } // namespace tom::detail
