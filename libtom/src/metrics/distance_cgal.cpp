@@ -345,29 +345,52 @@ struct AttributePartial {
     uint64_t normal_n = 0, uv_n = 0;
 };
 
+// The original's attributes at its picked face samples, interpolated once for every level
+// compared (the same values add() interpolated each time before): per pick, the normal and its
+// length (four), the texture coordinates (two).
+struct PickedAttributes {
+    std::vector<double> normal, uv;
+    void make(const Surface& original, const SurfaceAttributes& oa, const PickedFaceSamples& picks, unsigned threads) {
+        const size_t n = picks.picked.size();
+        normal.resize(oa.normals ? 4 * n : 0);
+        uv.resize(oa.texcoords ? 2 * n : 0);
+        parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
+            for (size_t k = begin; k < end; ++k) {
+                const FaceSample& fs = picks.picked[k];
+                const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
+                if (oa.normals) {
+                    double* n0 = &normal[4 * k];
+                    interpolate(original, oa.normals, 3, fs.face, wo, n0);
+                    n0[3] = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
+                }
+                if (oa.texcoords) interpolate(original, oa.texcoords, 2, fs.face, wo, &uv[2 * k]);
+            }
+        });
+    }
+};
+
 // The attribute deviation at the picked face samples of the original, from the nearest points
 // the forward direction finds for them (measure() calls add() for those).
 struct AttributeProbe {
-    const Surface& original;
-    const SurfaceAttributes& oa;
     const PickedFaceSamples& picks;
+    const PickedAttributes& at_picks;
     const Surface& simplified;
     const SurfaceAttributes& sa;
     const Mesh3& target;
     bool normals, texcoords;
 
-    void add(AttributePartial& r, const FaceSample& fs, V3 p, double d2, uint32_t slot) const {
+    // at pick k, point p, whose nearest triangle (record `slot`) is at squared distance d2
+    void add(AttributePartial& r, uint32_t k, V3 p, double d2, uint32_t slot) const {
         constexpr double degrees = 180.0 / 3.14159265358979323846;
-        const double wo[3] = {1.0 - fs.u - fs.v, fs.u, fs.v};
         const Flat& nearest = target.flat[slot];
         const size_t t = target.triangle_of[slot];
         double ws[3];
         nearest_point(nearest, p, ws);
         if (normals) {
-            double n0[3], n1[3];
-            interpolate(original, oa.normals, 3, fs.face, wo, n0);
+            double n1[3];
+            const double* n0 = &at_picks.normal[4 * size_t(k)];
             interpolate(simplified, sa.normals, 3, t, ws, n1);
-            const double l0 = std::sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]), l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
+            const double l0 = n0[3], l1 = std::sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
             if (l0 > 0 && l1 > 0) {
                 const double cosine = std::max(-1.0, std::min(1.0, (n0[0] * n1[0] + n0[1] * n1[1] + n0[2] * n1[2]) / (l0 * l1)));
                 const double angle = std::acos(cosine) * degrees;
@@ -382,8 +405,8 @@ struct AttributeProbe {
             // then the nearest point within one triangle's reach (the nearest triangle's
             // longest edge) with a displacement under that bound counts, if there is one
             constexpr double jump = 0.25;
-            double t0[2], t1[2];
-            interpolate(original, oa.texcoords, 2, fs.face, wo, t0);
+            double t1[2];
+            const double* t0 = &at_picks.uv[2 * size_t(k)];
             interpolate(simplified, sa.texcoords, 2, t, ws, t1);
             double d = std::hypot(t0[0] - t1[0], t0[1] - t1[1]);
             if (d > jump) {
@@ -448,7 +471,7 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
             r.sum_squares += d2;
             if (probe) {
                 const uint32_t k = probe->picks.of_point[i];
-                if (k != PickedFaceSamples::kNotPicked) probe->add(attribute_partial[c], probe->picks.picked[k], samples.points[i], d2, slot);
+                if (k != PickedFaceSamples::kNotPicked) probe->add(attribute_partial[c], k, samples.points[i], d2, slot);
             }
         };
         search.runs(samples.keys.data(), begin, end, shift, emit);
@@ -550,6 +573,7 @@ struct MetroReference::Impl {
         bool separate = false;
         Samples attribute_samples;
         PickedFaceSamples attribute_picks;
+        PickedAttributes at_picks;  // of the picks in use (attribute_picks where separate)
     };
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
@@ -571,6 +595,7 @@ struct MetroReference::Impl {
             sample_surface(original, picks, faces_only, f.attribute_samples, scratch, &f.attribute_picks, picks);
             f.separate = true;
         }
+        if (pick) f.at_picks.make(original, attributes, f.separate ? f.attribute_picks : f.picks, params.threads);
         return f;
     }
     std::unique_ptr<Workspace> borrow() const {
@@ -594,7 +619,7 @@ struct MetroReference::Impl {
         const Forward& f = forward_for(target);
         const bool normals = deviation && simplified_attributes.normals && attributes.normals,
                    texcoords = deviation && simplified_attributes.texcoords && attributes.texcoords;
-        const AttributeProbe probe{original, attributes, f.separate ? f.attribute_picks : f.picks, simplified, simplified_attributes, other, normals, texcoords};
+        const AttributeProbe probe{f.separate ? f.attribute_picks : f.picks, f.at_picks, simplified, simplified_attributes, other, normals, texcoords};
         if (deviation) *deviation = AttributeDeviation{};
         const bool probing = normals || texcoords;
         Distance d;
