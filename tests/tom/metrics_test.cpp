@@ -355,7 +355,7 @@ TEST_CASE("nearest distances stay exact far from the origin and at huge scale (t
 // far from them: every bound is at most the exact distance (a candidate it drops cannot be the
 // nearest) and within a fifth of a percent and the slack of the exact box-or-plane bound (it
 // still prunes); below() keeps exactly the bounds under the best; distances2() equals
-// distance2() bit for bit.
+// distance2() bit for bit, and distance2_below() does under the best.
 TEST_CASE("the search's float bounds never exceed the exact distance, and its batched distances equal distance2", "[metrics][nearest]") {
     using tom::detail::V3;
     std::vector<tom::Mesh> meshes;
@@ -367,7 +367,7 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
     meshes.push_back(far);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
-    size_t compared = 0;
+    size_t compared = 0, pruned = 0;
     for (const tom::Mesh& m : meshes) {
         std::vector<tom::detail::Flat> flat;
         auto at = [&](uint32_t v) { return V3{m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]}; };
@@ -404,6 +404,13 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
                     const double above = tom::detail::dot(f.normal, p) + f.offset;
                     const double exact = std::max(tom::detail::point_box_d2(p, f.lo, f.hi), above * above);
                     CHECK(double(low[k]) <= tom::detail::distance2(f, p));
+                    // distance2_below(): distance2() itself under the best, at least the best otherwise
+                    const double d2 = tom::detail::distance2(f, p), below = tom::detail::distance2_below(f, p, best);
+                    if (d2 < best)
+                        CHECK(std::memcmp(&d2, &below, sizeof d2) == 0);
+                    else
+                        CHECK(below >= best);
+                    pruned += below != d2;
                     CHECK(double(low[k]) >= exact * 0.997 - double(bounds.slack) * 1.001);  // kKeep and the absolute slack
                     expected += low[k] < float(best);
                     ++compared;
@@ -450,6 +457,7 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
         }
     }
     CHECK(compared > 100000);
+    CHECK(pruned > compared / 10);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {

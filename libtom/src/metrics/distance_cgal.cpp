@@ -310,7 +310,7 @@ struct RunSearch {
             for (size_t h = 0; h < count; ++h) {
                 const uint32_t k = bounds.hits[h];
                 if (double(low[k]) >= best || k == from) continue;
-                const double d2 = distance2(target.flat[list[k]], p);
+                const double d2 = distance2_below(target.flat[list[k]], p, best);
                 if (d2 < best) best = d2, now = k, record = list[k];
             }
             emit(i, best, record);

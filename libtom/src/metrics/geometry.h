@@ -77,6 +77,29 @@ inline double distance2(const Flat& f, V3 p) {
     return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
 }
 
+// distance2(f, p) where it is under `best`, and otherwise perhaps only a lower bound of it (at
+// least `best`): where p projects outside the triangle, the plane's distance and the in-plane
+// distance to the line of each edge p's projection lies beyond (weight w of the opposite corner
+// below 0: |w| times that corner's height over the edge, squared w^2 |e|^-2 (2 area)^2, with
+// 1 / inverse = (2 area)^2) bound it from below; the three edges' distances are computed only
+// when that bound is under the best, widened against rounding (relatively, and by 2^-30 of the
+// triangle's size, so that points on the surface get distance2()'s very figure). The search's
+// candidates that are not nearer (two of three) mostly stop there.
+inline double distance2_below(const Flat& f, V3 p, double best) {
+    const V3 w = p - f.a;
+    const double w0 = dot(f.e0, w), w1 = dot(f.e1, w);
+    double u, v;
+    project(f, w0, w1, u, v);
+    const double above = dot(f.normal, p) + f.offset;
+    if (u >= 0 && v >= 0 && u + v <= 1) return above * above;
+    const double t = 1 - u - v;
+    const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) / f.inverse;
+    const double low = above * above + beyond;  // (NaN for a degenerate triangle: never skipped)
+    if (low * (1.0 - 1e-9) - (f.d00 + f.d11) * 0x1p-60 >= best) return low;
+    const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
+    return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
+}
+
 // The point of the triangle nearest to p (distance2()'s argument), and its barycentric weights.
 inline V3 nearest_point(const Flat& f, V3 p, double weights[3] = nullptr) {
     const V3 w = p - f.a;
