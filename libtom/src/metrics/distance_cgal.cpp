@@ -184,7 +184,7 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t 
             // the distance to the triangle's plane bounds the distance to the triangle from below
             const double above = dot(f.normal, p) + f.offset;
             if (above * above >= best_d2) return;
-            const double d = distance2(f, p);
+            const double d = distance2_below(f, p, best_d2);
             if (d < best_d2) best_d2 = d, best = t;
         };
         target.wide.nearest(q, leaf, [&] { return best_d2; });
@@ -272,10 +272,11 @@ struct RunSearch {
         // that lies beyond a point's best distance. Keys: that distance as float bits (ordered as
         // the floats: non-negative), the record below
         keyed.clear();
-        target.wide.within(target.wide.query(lo, hi), reach2, [&](uint32_t t) {
-            const Flat& f = target.flat[t];
-            const double g = boxes_d2(lo, hi, f.lo, f.hi);
-            if (g <= reach2) keyed.push_back(uint64_t(float_bits(g)) << 32 | t);
+        const WideTree::Query around = target.wide.query(lo, hi);
+        target.wide.within(around, reach2, [&](uint32_t t, float d2) {
+            // (the tree's own single-precision box distance, made a floor: the triangle's record
+            // is not read here)
+            keyed.push_back(uint64_t(float_bits(WideTree::floor(around, d2))) << 32 | t);
         });
         // c is within the reach, but where the reach is a few ulps (points on c) rounding may
         // leave it out: the starts below are distances to c, so it must be a candidate
@@ -423,7 +424,7 @@ struct AttributeProbe {
                     if (du <= jump && dot(off, off) < best_d2) best_d2 = dot(off, off), d = du;
                 };
                 const double radius2 = radius * radius;
-                target.wide.within(target.wide.query(p, p), radius2, [&](uint32_t record) {
+                target.wide.within(target.wide.query(p, p), radius2, [&](uint32_t record, float) {
                     if (distance2(target.flat[record], p) <= radius2) consider(record);
                 });
             }

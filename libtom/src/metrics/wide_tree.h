@@ -94,8 +94,9 @@ public:
 #endif
     }
 
-    // Calls leaf(record) for every leaf in a node whose box lies within the query's squared
-    // distance r2 (a filter: the caller tests the leaf exactly), left to right.
+    // Calls leaf(record, d2) for every leaf in a node whose box lies within the query's squared
+    // distance r2 (a filter: the caller tests the leaf exactly), left to right; d2, the leaf box's
+    // squared distance to the query in single precision (floor(d2) is at most the exact one).
     template <class Leaf>
     void within(const Query& q, double r2, Leaf&& leaf, int32_t n = 0) const {
         float d2[4];
@@ -107,9 +108,13 @@ public:
             if (w.child[k] >= 0)
                 within(q, r2, leaf, w.child[k]);
             else
-                leaf(uint32_t(~w.child[k]));
+                leaf(uint32_t(~w.child[k]), d2[k]);
         }
     }
+
+    // A lower bound of the exact squared distance whose single-precision figure a search
+    // computed as d2 (the inverse of Query::limit: the rounding it allows for taken off).
+    static double floor(const Query& q, float d2) { return std::max(0.0, (double(d2) - q.slack) / 1.001); }
 
     // Nearest-first search: leaf(record) for the leaves of the nodes whose box may be nearer
     // than the current best, bound() (a squared distance, read again after each leaf), nearer
