@@ -11,9 +11,10 @@
 // kCellTriangles target triangles wide). Per cell, one descent of CGAL's tree finds the triangle
 // c nearest to the cell's centre; every sample's distance to c bounds its distance to the
 // surface, so a second descent collects every triangle that can be the nearest of one of the
-// cell's samples; per sample, lower bounds (box, plane) of the distance to all of those are
-// computed eight at a time (AVX2, in floats made conservative), and the exact distance only
-// for the few under the best found. Exact: the figures are those of a full nearest search per
+// cell's samples; per sample, lower bounds (box, plane) of the distance to those are computed
+// eight at a time (AVX2, in floats made conservative; the candidates nearest box first, up to
+// the first eight whose boxes lie beyond the best), and the exact distance only for the few
+// under the best found. Exact: the figures are those of a full nearest search per
 // sample (to 2^-40 of the target's size, where a search stops: wide_tree.h). Samples are
 // processed in fixed chunks combined in order, so the figures do not depend on the number of
 // threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
