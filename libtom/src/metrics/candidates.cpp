@@ -1,4 +1,4 @@
-// Lower bounds of point-to-candidate distances, eight candidates per AVX2 instruction; the
+// Lower bounds of point-to-candidate distances, eight points per AVX2 instruction; the
 // distances of a run's points to one triangle, four per AVX instruction.
 
 #include "candidates.h"
@@ -44,30 +44,31 @@ struct Lanes {
 };
 constexpr Lanes kLanes;
 
-__attribute__((target("avx2"))) size_t below_avx(float* column, size_t padded, const float* floor, float beyond, const float q[3], float limit, float slack,
-                                                      uint32_t* hits) {
-    const float *lx = column, *ly = lx + padded, *lz = ly + padded, *hx = lz + padded, *hy = hx + padded, *hz = hy + padded, *nx = hz + padded,
-                *ny = nx + padded, *nz = ny + padded, *off = nz + padded;
-    float* low = column + 10 * padded;
-    const __m256 x = _mm256_set1_ps(q[0]), y = _mm256_set1_ps(q[1]), z = _mm256_set1_ps(q[2]), zero = _mm256_setzero_ps(), below = _mm256_set1_ps(limit),
-                 keep = _mm256_set1_ps(kKeep), lower = _mm256_set1_ps(slack);
+// CandidateBounds::bound() of one candidate (its columns c) at eight points at a time, the same
+// operations in the same order; the lanes under their limit compacted into hits
+__attribute__((target("avx2"))) size_t points_below_avx(const float c[10], const float* px, const float* py, const float* pz, const float* limits,
+                                                          size_t n, float slack, uint32_t* hits) {
+    const __m256 lx = _mm256_set1_ps(c[0]), ly = _mm256_set1_ps(c[1]), lz = _mm256_set1_ps(c[2]), hx = _mm256_set1_ps(c[3]), hy = _mm256_set1_ps(c[4]),
+                 hz = _mm256_set1_ps(c[5]), nx = _mm256_set1_ps(c[6]), ny = _mm256_set1_ps(c[7]), nz = _mm256_set1_ps(c[8]), off = _mm256_set1_ps(c[9]);
+    const __m256 zero = _mm256_setzero_ps(), keep = _mm256_set1_ps(kKeep), lower = _mm256_set1_ps(slack);
     size_t count = 0;
-    for (size_t k = 0; k < padded && floor[k / 8] < beyond; k += 8) {
-        const __m256 dx = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(lx + k), x), _mm256_sub_ps(x, _mm256_loadu_ps(hx + k))), zero);
-        const __m256 dy = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(ly + k), y), _mm256_sub_ps(y, _mm256_loadu_ps(hy + k))), zero);
-        const __m256 dz = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(_mm256_loadu_ps(lz + k), z), _mm256_sub_ps(z, _mm256_loadu_ps(hz + k))), zero);
-        const __m256 above = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(nx + k), x), _mm256_mul_ps(_mm256_loadu_ps(ny + k), y)),
-                                           _mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(nz + k), z), _mm256_loadu_ps(off + k)));
+    for (size_t i = 0; i < n; i += 8) {
+        const __m256 x = _mm256_loadu_ps(px + i), y = _mm256_loadu_ps(py + i), z = _mm256_loadu_ps(pz + i);
+        const __m256 dx = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lx, x), _mm256_sub_ps(x, hx)), zero);
+        const __m256 dy = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(ly, y), _mm256_sub_ps(y, hy)), zero);
+        const __m256 dz = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lz, z), _mm256_sub_ps(z, hz)), zero);
+        const __m256 above = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, x), _mm256_mul_ps(ny, y)), _mm256_add_ps(_mm256_mul_ps(nz, z), off));
         const __m256 box = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
         const __m256 bound = _mm256_sub_ps(_mm256_mul_ps(_mm256_max_ps(box, _mm256_mul_ps(above, above)), keep), lower);
-        _mm256_storeu_ps(low + k, bound);
-        const unsigned mask = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(bound, below, _CMP_LT_OQ)));
+        const unsigned mask = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(bound, _mm256_loadu_ps(limits + i), _CMP_LT_OQ)));
+        if (!mask) continue;
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(hits + count),
-                            _mm256_add_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(kLanes.of[mask])), _mm256_set1_epi32(int(k))));
+                            _mm256_add_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(kLanes.of[mask])), _mm256_set1_epi32(int(i))));
         count += unsigned(__builtin_popcount(mask));
     }
     return count;
 }
+
 // distance2() of four points (x, y, z: their coordinates) to f, operation for operation
 __attribute__((target("avx"))) inline __m256d dot_avx(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by, __m256d bz) {
     return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ax, bx), _mm256_mul_pd(ay, by)), _mm256_mul_pd(az, bz));
@@ -118,20 +119,12 @@ bool cpu_has_avx2() {
 
 } // namespace
 
-void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread, const uint64_t* sorted) {
+void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread) {
     const size_t m = list.size();
-    padded = (m + 7) & ~size_t(7);
-    data.resize(11 * padded);
-    hits.resize(padded + 8);  // (the compaction stores eight at a time)
-    origin = o;
-    const float inf = std::numeric_limits<float>::infinity();
+    data.resize(10 * m);
+    stride = m;
     double scale = spread;
-    for (size_t k = 0; k < padded; ++k) {
-        if (k >= m) {
-            column(0)[k] = column(1)[k] = column(2)[k] = inf, column(3)[k] = column(4)[k] = column(5)[k] = -inf;
-            column(6)[k] = column(7)[k] = column(8)[k] = column(9)[k] = 0;
-            continue;
-        }
+    for (size_t k = 0; k < m; ++k) {
         const Flat& f = flat[list[k]];
         const V3 lo = f.lo - o, hi = f.hi - o;
         column(0)[k] = float(lo.x), column(1)[k] = float(lo.y), column(2)[k] = float(lo.z);
@@ -140,17 +133,34 @@ void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint
         column(9)[k] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
         scale = std::max({scale, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
     }
-    floor.assign(padded / 8, -std::numeric_limits<float>::infinity());  // (unsorted: every block scanned)
-    if (sorted)
-        for (size_t j = 0; j < floor.size(); ++j) {
-            const uint32_t bits = uint32_t(sorted[8 * j] >> 32);
-            std::memcpy(&floor[j], &bits, sizeof bits);
-        }
     everything = !(scale >= kSmallestScale && scale <= kLargestScale);
     const double e = std::ldexp(scale, -18);
     slack = everything ? 0.0f : float(3.0 * 2049.0 * e * e);
-    if (everything) std::fill(column(10), column(10) + padded, 0.0f);
-    listed = m;
+}
+
+float CandidateBounds::bound(size_t k, float x, float y, float z) const {
+    if (everything) return -std::numeric_limits<float>::infinity();
+    const float* c = data.data();
+    auto at = [&](int column) { return c[size_t(column) * stride + k]; };
+    const float dx = std::max(std::max(at(0) - x, x - at(3)), 0.0f), dy = std::max(std::max(at(1) - y, y - at(4)), 0.0f),
+                dz = std::max(std::max(at(2) - z, z - at(5)), 0.0f);
+    const float above = (at(6) * x + at(7) * y) + (at(8) * z + at(9));
+    const float box = (dx * dx + dy * dy) + dz * dz;
+    return std::max(box, above * above) * kKeep - slack;
+}
+
+size_t CandidateBounds::points_below(size_t k, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) const {
+#if defined(__x86_64__) || defined(__i386__)
+    if (!everything && cpu_has_avx2()) {
+        float c[10];
+        for (int column = 0; column < 10; ++column) c[column] = data[size_t(column) * stride + k];
+        return points_below_avx(c, x, y, z, limit, n, slack, hits);
+    }
+#endif
+    size_t count = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (bound(k, x[i], y[i], z[i]) < limit[i]) hits[count++] = uint32_t(i);
+    return count;
 }
 
 void distances2(const Flat& f, const V3* p, size_t n, double* d2) {
@@ -158,34 +168,6 @@ void distances2(const Flat& f, const V3* p, size_t n, double* d2) {
     if (cpu_has_avx()) return distances2_avx(f, p, n, d2);
 #endif
     for (size_t i = 0; i < n; ++i) d2[i] = distance2(f, p[i]);
-}
-
-size_t CandidateBounds::below(V3 p, double best) {
-    const V3 r = p - origin;
-    const float q[3] = {float(r.x), float(r.y), float(r.z)};
-    const float limit = float(best);
-    // the blocks that may hold a candidate under `best`: the floors are non-decreasing, and a
-    // block whose floor is at best or above (the floats' rounding allowed for) holds none
-    const float beyond = float(best * (1.0 + 1e-6));
-    if (everything) {
-        for (size_t k = 0; k < listed; ++k) hits[k] = uint32_t(k);
-        return listed;
-    }
-#if defined(__x86_64__) || defined(__i386__)
-    if (cpu_has_avx2()) return below_avx(data.data(), padded, floor.data(), beyond, q, limit, slack, hits.data());
-#endif
-    const float *lx = column(0), *ly = column(1), *lz = column(2), *hx = column(3), *hy = column(4), *hz = column(5), *nx = column(6),
-                *ny = column(7), *nz = column(8), *off = column(9);
-    float* low = column(10);
-    size_t count = 0;
-    for (size_t k = 0; k < padded && floor[k / 8] < beyond; ++k) {
-        const float dx = std::max(std::max(lx[k] - q[0], q[0] - hx[k]), 0.0f), dy = std::max(std::max(ly[k] - q[1], q[1] - hy[k]), 0.0f),
-                    dz = std::max(std::max(lz[k] - q[2], q[2] - hz[k]), 0.0f);
-        const float above = (nx[k] * q[0] + ny[k] * q[1]) + (nz[k] * q[2] + off[k]);
-        low[k] = std::max(dx * dx + dy * dy + dz * dz, above * above) * kKeep - slack;
-        if (low[k] < limit) hits[count++] = uint32_t(k);
-    }
-    return count;
 }
 
 } // namespace tom::detail

@@ -207,6 +207,8 @@ struct RunSearch {
     uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
     std::vector<uint32_t> list;
     std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, sorted into `list`
+    std::vector<float> qx, qy, qz, limit;  // the run's points relative to its centre, their bests
+    std::vector<uint32_t> record, which;
     std::vector<double> upper;  // each point's distance to the run centre's nearest triangle, or to its own start if nearer
     std::vector<uint8_t> own;   // whether that is its own start's
     CandidateBounds bounds;
@@ -269,9 +271,9 @@ struct RunSearch {
         }
         const double reach2 = widest * (1.0 + 1e-9);  // widened against rounding
         // the candidates in order of their boxes' distance to the run's box, which no point of the
-        // run is nearer to them than: CandidateBounds::below() stops at the first block of eight
-        // that lies beyond a point's best distance. Keys: that distance as float bits (ordered as
-        // the floats: non-negative), the record below
+        // run is nearer to them than: the scan below stops at the first that lies beyond every
+        // point's best. Keys: that distance as float bits (ordered as the floats: non-negative),
+        // the record below
         keyed.clear();
         const WideTree::Query around = target.wide.query(lo, hi);
         target.wide.within(around, reach2, [&](uint32_t t, float d2) {
@@ -292,33 +294,48 @@ struct RunSearch {
         size_t of_c = 0;
         for (size_t k = 0; k < m; ++k)
             if ((list[k] = uint32_t(keyed[k])) == c) of_c = k;
-        bounds.fill(target.flat, list, centre, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}), keyed.data());
-        constexpr size_t kUnlisted = ~size_t(0);
-        size_t last = of_c;  // the candidate nearest to the previous point
-        for (size_t i = b; i < e; ++i) {
-            const V3 p = points[i];
-            // the best start of c, the point's own (its record, perhaps not a candidate) and the
-            // previous point's nearest
-            size_t from = own[i - b] ? kUnlisted : of_c;
-            uint32_t record = own[i - b] ? starts[i] : c;
-            double best = upper[i - b];
-            if (last != of_c) {
-                const double d2 = distance2(target.flat[list[last]], p);
-                if (d2 < best) best = d2, from = last, record = list[last];
+        bounds.fill(target.flat, list, centre, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+        // candidate by candidate, nearest box first, each against every point of the run (eight
+        // at a time) while its box is nearer than the farthest point's best; a point's limit is a
+        // float of its best, which a candidate nearer than the best is always under (its bound is
+        // lowered by 2^-9 of it, the float's rounding is 2^-24). Against the point-major scan
+        // before (each point against the candidates, starting from its predecessor's nearest):
+        // 5.5% fewer instructions in bunny00's 7 levels, 7.7% less time
+        const size_t n = e - b, padded = (n + 7) & ~size_t(7);
+        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), record.resize(n), which.resize(padded + 8);
+        double farthest = 0;
+        for (size_t i = 0; i < padded; ++i) {
+            if (i >= n) {
+                qx[i] = qy[i] = qz[i] = 0.0f, limit[i] = -std::numeric_limits<float>::infinity();
+                continue;
             }
-            size_t now = from;
-            const size_t count = bounds.below(p, best);
-            const float* low = bounds.low();
-            for (size_t h = 0; h < count; ++h) {
-                const uint32_t k = bounds.hits[h];
-                if (double(low[k]) >= best || k == from) continue;
-                const double d2 = distance2_below(target.flat[list[k]], p, best);
-                if (d2 < best) best = d2, now = k, record = list[k];
-            }
-            emit(i, best, record);
-            if (now != kUnlisted) last = now;
-            hint = record;
+            const V3 r = points[b + i] - centre;
+            qx[i] = float(r.x), qy[i] = float(r.y), qz[i] = float(r.z);
+            limit[i] = float(upper[i]);
+            record[i] = own[i] ? starts[b + i] : c;
+            farthest = std::max(farthest, upper[i]);
         }
+        for (size_t k = 0; k < m; ++k) {
+            if (k % 8 == 0 && k) {  // (the bests only fall: a stale farthest is still an upper bound)
+                farthest = 0;
+                for (size_t i = 0; i < n; ++i) farthest = std::max(farthest, upper[i]);
+            }
+            float floor;
+            const uint32_t bits = uint32_t(keyed[k] >> 32);
+            std::memcpy(&floor, &bits, sizeof bits);
+            if (floor >= float(farthest * (1.0 + 1e-6))) break;  // sorted: every later box is as far
+            if (k == of_c) continue;  // (every best is at most its distance already)
+            const uint32_t t = list[k];
+            const Flat& f = target.flat[t];
+            const size_t count = bounds.points_below(k, qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
+            for (size_t h = 0; h < count; ++h) {
+                const size_t i = which[h];
+                const double d2 = distance2_below(f, points[b + i], upper[i]);
+                if (d2 < upper[i]) upper[i] = d2, record[i] = t, limit[i] = float(d2);
+            }
+        }
+        for (size_t i = 0; i < n; ++i) emit(b + i, upper[i], record[i]);
+        hint = record[n - 1];
     }
 };
 
