@@ -44,7 +44,7 @@ struct Lanes {
 };
 constexpr Lanes kLanes;
 
-// CandidateBounds::bound() of one candidate (its columns c) at eight points at a time, the same
+// CandidateBounds::bound() of one candidate (its fields c) at eight points at a time, the same
 // operations in the same order; the lanes under their limit compacted into hits
 __attribute__((target("avx2"))) size_t points_below_avx(const float c[10], const float* px, const float* py, const float* pz, const float* limits,
                                                           size_t n, float slack, uint32_t* hits) {
@@ -121,16 +121,16 @@ bool cpu_has_avx2() {
 
 void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread) {
     const size_t m = list.size();
-    data.resize(10 * m);
-    stride = m;
+    data.resize(kFields * m);
     double scale = spread;
     for (size_t k = 0; k < m; ++k) {
         const Flat& f = flat[list[k]];
         const V3 lo = f.lo - o, hi = f.hi - o;
-        column(0)[k] = float(lo.x), column(1)[k] = float(lo.y), column(2)[k] = float(lo.z);
-        column(3)[k] = float(hi.x), column(4)[k] = float(hi.y), column(5)[k] = float(hi.z);
-        column(6)[k] = float(f.normal.x), column(7)[k] = float(f.normal.y), column(8)[k] = float(f.normal.z);
-        column(9)[k] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
+        float* c = &data[kFields * k];
+        c[0] = float(lo.x), c[1] = float(lo.y), c[2] = float(lo.z);
+        c[3] = float(hi.x), c[4] = float(hi.y), c[5] = float(hi.z);
+        c[6] = float(f.normal.x), c[7] = float(f.normal.y), c[8] = float(f.normal.z);
+        c[9] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
         scale = std::max({scale, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
     }
     everything = !(scale >= kSmallestScale && scale <= kLargestScale);
@@ -140,8 +140,8 @@ void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint
 
 float CandidateBounds::bound(size_t k, float x, float y, float z) const {
     if (everything) return -std::numeric_limits<float>::infinity();
-    const float* c = data.data();
-    auto at = [&](int column) { return c[size_t(column) * stride + k]; };
+    const float* c = &data[kFields * k];
+    auto at = [&](int field) { return c[field]; };
     const float dx = std::max(std::max(at(0) - x, x - at(3)), 0.0f), dy = std::max(std::max(at(1) - y, y - at(4)), 0.0f),
                 dz = std::max(std::max(at(2) - z, z - at(5)), 0.0f);
     const float above = (at(6) * x + at(7) * y) + (at(8) * z + at(9));
@@ -151,11 +151,7 @@ float CandidateBounds::bound(size_t k, float x, float y, float z) const {
 
 size_t CandidateBounds::points_below(size_t k, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) const {
 #if defined(__x86_64__) || defined(__i386__)
-    if (!everything && cpu_has_avx2()) {
-        float c[10];
-        for (int column = 0; column < 10; ++column) c[column] = data[size_t(column) * stride + k];
-        return points_below_avx(c, x, y, z, limit, n, slack, hits);
-    }
+    if (!everything && cpu_has_avx2()) return points_below_avx(&data[kFields * k], x, y, z, limit, n, slack, hits);
 #endif
     size_t count = 0;
     for (size_t i = 0; i < n; ++i)

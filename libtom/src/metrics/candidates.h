@@ -26,11 +26,10 @@
 namespace tom::detail {
 
 struct CandidateBounds {
-    size_t stride = 0;        // the candidates
-    std::vector<float> data;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off: `stride` each
+    static constexpr size_t kFields = 10;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off
+    std::vector<float> data;  // kFields a candidate, side by side (one candidate is read at a time)
     float slack = 0;          // the absolute part of the lowering (squared distance)
     bool everything = false;  // coordinates out of float's comfortable range: every point kept
-    float* column(int c) { return data.data() + size_t(c) * stride; }
     // the candidates `list` of `flat`, relative to `origin`; `spread`: how far the points to
     // bound lie from it at most (along any axis)
     void fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 origin, double spread);
