@@ -374,7 +374,6 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
         auto at = [&](uint32_t v) { return V3{m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]}; };
         for (size_t t = 0; t < m.triangle_count(); ++t) flat.push_back(tom::detail::make_flat(at(m.indices[3 * t]), at(m.indices[3 * t + 1]), at(m.indices[3 * t + 2])));
         flat.push_back(tom::detail::make_flat(at(0), at(0), at(1)));  // degenerate: two corners at one place
-        tom::detail::CandidateBounds bounds;
         for (int run = 0; run < 40; ++run) {
             // a run: 37 points around a random face, spread by up to `reach` (face sizes to
             // object sizes), and 64 candidates drawn from everywhere, the degenerate one among them
@@ -395,7 +394,7 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
             for (int k = 0; k < 63; ++k) list.push_back(uint32_t(unit(rng) * double(flat.size())) % uint32_t(flat.size()));
             list.push_back(uint32_t(flat.size() - 1));
             const V3 origin = 0.5 * (lo + hi);
-            bounds.fill(flat, list, origin, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+            const double spread = 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
             // the points relative to the origin in floats, each with the best of a random
             // candidate, padded to 40 with lanes no bound is under
             const size_t padded = (points.size() + 7) & ~size_t(7);
@@ -410,16 +409,17 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
             std::vector<uint32_t> hits(padded + 8);
             for (size_t k = 0; k < list.size(); ++k) {
                 const tom::detail::Flat& f = flat[list[k]];
-                const size_t count = bounds.points_below(k, qx.data(), qy.data(), qz.data(), limit.data(), padded, hits.data());
+                const tom::detail::CandidateBound candidate = tom::detail::candidate_bound(f, origin, spread);
+                const size_t count = tom::detail::points_below(candidate, qx.data(), qy.data(), qz.data(), limit.data(), padded, hits.data());
                 std::vector<uint32_t> expected;
                 for (size_t i = 0; i < points.size(); ++i) {
                     const V3 p = points[i];
-                    const float low = bounds.bound(k, qx[i], qy[i], qz[i]);
+                    const float low = tom::detail::bound(candidate, qx[i], qy[i], qz[i]);
                     const double above = tom::detail::dot(f.normal, p) + f.offset;
                     const double exact = std::max(tom::detail::point_box_d2(p, f.lo, f.hi), above * above);
                     const double d2 = tom::detail::distance2(f, p);
                     CHECK(double(low) <= d2);
-                    CHECK(double(low) >= exact * 0.997 - double(bounds.slack) * 1.001);  // kKeep and the absolute slack
+                    CHECK(double(low) >= exact * 0.997 - double(candidate.slack) * 1.001);  // kKeep and the absolute slack
                     if (d2 < best[i]) CHECK(low < limit[i]);  // a candidate nearer than the best is always kept
                     if (low < limit[i]) expected.push_back(uint32_t(i));
                     // distance2_below(): distance2() itself under the best, at least the best otherwise

@@ -44,7 +44,7 @@ struct Lanes {
 };
 constexpr Lanes kLanes;
 
-// CandidateBounds::bound() of one candidate (its fields c) at eight points at a time, the same
+// bound() of one candidate (its fields c) at eight points at a time, the same
 // operations in the same order; the lanes under their limit compacted into hits
 __attribute__((target("avx2"))) size_t points_below_avx(const float c[10], const float* px, const float* py, const float* pz, const float* limits,
                                                           size_t n, float slack, uint32_t* hits) {
@@ -119,43 +119,38 @@ bool cpu_has_avx2() {
 
 } // namespace
 
-void CandidateBounds::fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 o, double spread) {
-    const size_t m = list.size();
-    data.resize(kFields * m);
-    double scale = spread;
-    for (size_t k = 0; k < m; ++k) {
-        const Flat& f = flat[list[k]];
-        const V3 lo = f.lo - o, hi = f.hi - o;
-        float* c = &data[kFields * k];
-        c[0] = float(lo.x), c[1] = float(lo.y), c[2] = float(lo.z);
-        c[3] = float(hi.x), c[4] = float(hi.y), c[5] = float(hi.z);
-        c[6] = float(f.normal.x), c[7] = float(f.normal.y), c[8] = float(f.normal.z);
-        c[9] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
-        scale = std::max({scale, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
-    }
-    everything = !(scale >= kSmallestScale && scale <= kLargestScale);
+CandidateBound candidate_bound(const Flat& f, V3 o, double spread) {
+    CandidateBound b;
+    const V3 lo = f.lo - o, hi = f.hi - o;
+    float* c = b.c;
+    c[0] = float(lo.x), c[1] = float(lo.y), c[2] = float(lo.z);
+    c[3] = float(hi.x), c[4] = float(hi.y), c[5] = float(hi.z);
+    c[6] = float(f.normal.x), c[7] = float(f.normal.y), c[8] = float(f.normal.z);
+    c[9] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
+    const double scale = std::max({spread, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
+    b.everything = !(scale >= kSmallestScale && scale <= kLargestScale);
     const double e = std::ldexp(scale, -18);
-    slack = everything ? 0.0f : float(3.0 * 2049.0 * e * e);
+    b.slack = b.everything ? 0.0f : float(3.0 * 2049.0 * e * e);
+    return b;
 }
 
-float CandidateBounds::bound(size_t k, float x, float y, float z) const {
-    if (everything) return -std::numeric_limits<float>::infinity();
-    const float* c = &data[kFields * k];
-    auto at = [&](int field) { return c[field]; };
-    const float dx = std::max(std::max(at(0) - x, x - at(3)), 0.0f), dy = std::max(std::max(at(1) - y, y - at(4)), 0.0f),
-                dz = std::max(std::max(at(2) - z, z - at(5)), 0.0f);
-    const float above = (at(6) * x + at(7) * y) + (at(8) * z + at(9));
+float bound(const CandidateBound& b, float x, float y, float z) {
+    if (b.everything) return -std::numeric_limits<float>::infinity();
+    const float* c = b.c;
+    const float dx = std::max(std::max(c[0] - x, x - c[3]), 0.0f), dy = std::max(std::max(c[1] - y, y - c[4]), 0.0f),
+                dz = std::max(std::max(c[2] - z, z - c[5]), 0.0f);
+    const float above = (c[6] * x + c[7] * y) + (c[8] * z + c[9]);
     const float box = (dx * dx + dy * dy) + dz * dz;
-    return std::max(box, above * above) * kKeep - slack;
+    return std::max(box, above * above) * kKeep - b.slack;
 }
 
-size_t CandidateBounds::points_below(size_t k, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) const {
+size_t points_below(const CandidateBound& b, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) {
 #if defined(__x86_64__) || defined(__i386__)
-    if (!everything && cpu_has_avx2()) return points_below_avx(&data[kFields * k], x, y, z, limit, n, slack, hits);
+    if (!b.everything && cpu_has_avx2()) return points_below_avx(b.c, x, y, z, limit, n, b.slack, hits);
 #endif
     size_t count = 0;
     for (size_t i = 0; i < n; ++i)
-        if (bound(k, x[i], y[i], z[i]) < limit[i]) hits[count++] = uint32_t(i);
+        if (bound(b, x[i], y[i], z[i]) < limit[i]) hits[count++] = uint32_t(i);
     return count;
 }
 

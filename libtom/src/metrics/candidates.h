@@ -15,31 +15,34 @@
 // candidates nearest box first with a scan stopped at the first eight too far (7% fewer
 // instructions in all), now one candidate against eight points at a time, candidates nearest
 // box first until the farthest point's best (5.5% fewer again, the levels 7.7% faster: 0.82 ->
-// 0.76 s, medians of 6 interleaved runs). The same figures throughout. Internal to tom::metrics.
+// 0.76 s, medians of 6 interleaved runs), each candidate's fields made when it is reached, with
+// a lowering of its own (the run's candidates beyond the stop are never converted). The same
+// figures throughout. Internal to tom::metrics.
 
 #include <cstddef>
 #include <cstdint>
-#include <vector>
 
 #include "geometry.h"
 
 namespace tom::detail {
 
-struct CandidateBounds {
-    static constexpr size_t kFields = 10;  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off
-    std::vector<float> data;  // kFields a candidate, side by side (one candidate is read at a time)
-    float slack = 0;          // the absolute part of the lowering (squared distance)
-    bool everything = false;  // coordinates out of float's comfortable range: every point kept
-    // the candidates `list` of `flat`, relative to `origin`; `spread`: how far the points to
-    // bound lie from it at most (along any axis)
-    void fill(const std::vector<Flat>& flat, const std::vector<uint32_t>& list, V3 origin, double spread);
-    // the bound of candidate k at the point (x, y, z) relative to the origin (-inf: everything)
-    float bound(size_t k, float x, float y, float z) const;
-    // of `n` points (coordinates relative to the origin, in floats; n a multiple of eight, a
-    // padding lane's limit -inf), those whose bound to candidate k is under their limit (a float
-    // of their best), in hits[0, returned count) (room for n + 8), in order
-    size_t points_below(size_t k, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) const;
+// One candidate's bound, relative to the run's origin: its box and plane in floats, and the
+// lowering that covers their rounding and the points' (`everything`: coordinates out of float's
+// comfortable range, every point kept).
+struct CandidateBound {
+    float c[10];  // lx, ly, lz, hx, hy, hz, nx, ny, nz, off
+    float slack;  // the absolute part of the lowering (squared distance)
+    bool everything;
 };
+
+// Triangle f as a candidate of points within `spread` of `origin` along every axis.
+CandidateBound candidate_bound(const Flat& f, V3 origin, double spread);
+// The bound at the point (x, y, z) relative to the origin (-inf: everything).
+float bound(const CandidateBound& b, float x, float y, float z);
+// Of `n` points (coordinates relative to the origin, in floats; n a multiple of eight, a padding
+// lane's limit -inf), those whose bound is under their limit (a float of their best), in
+// hits[0, returned count) (room for n + 8), in order.
+size_t points_below(const CandidateBound& b, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits);
 
 // d2[i] = distance2(f, p[i]) for i < n, bit for bit: four points at a time with AVX (the same
 // operations in the same order, both branches computed and the right one kept), one by one

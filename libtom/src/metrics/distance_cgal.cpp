@@ -205,13 +205,11 @@ struct RunSearch {
     const V3* points;
     const uint32_t* starts = nullptr;  // per point: a record near it (FaceHints), or kNoRecord; or none
     uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
-    std::vector<uint32_t> list;
-    std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, sorted into `list`
+    std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, in that order
     std::vector<float> qx, qy, qz, limit;  // the run's points relative to its centre, their bests
     std::vector<uint32_t> record, which;
     std::vector<double> upper;  // each point's distance to the run centre's nearest triangle, or to its own start if nearer
     std::vector<uint8_t> own;   // whether that is its own start's
-    CandidateBounds bounds;
     RunSearch(const Mesh3& t, const V3* p) : target(t), points(p) {}
 
     // one descent of the tree for each point of [b, e)
@@ -290,11 +288,7 @@ struct RunSearch {
         // cheaper than the scan
         if (m > 1024) return each(b, e, emit);
         std::sort(keyed.begin(), keyed.end());
-        list.resize(m);
-        size_t of_c = 0;
-        for (size_t k = 0; k < m; ++k)
-            if ((list[k] = uint32_t(keyed[k])) == c) of_c = k;
-        bounds.fill(target.flat, list, centre, 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+        const double spread = 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
         // candidate by candidate, nearest box first, each against every point of the run (eight
         // at a time) while its box is nearer than the farthest point's best; a point's limit is a
         // float of its best, which a candidate nearer than the best is always under (its bound is
@@ -324,10 +318,10 @@ struct RunSearch {
             const uint32_t bits = uint32_t(keyed[k] >> 32);
             std::memcpy(&floor, &bits, sizeof bits);
             if (floor >= float(farthest * (1.0 + 1e-6))) break;  // sorted: every later box is as far
-            if (k == of_c) continue;  // (every best is at most its distance already)
-            const uint32_t t = list[k];
+            const uint32_t t = uint32_t(keyed[k]);
+            if (t == c) continue;  // (every best is at most its distance already)
             const Flat& f = target.flat[t];
-            const size_t count = bounds.points_below(k, qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
+            const size_t count = points_below(candidate_bound(f, centre, spread), qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
             for (size_t h = 0; h < count; ++h) {
                 const size_t i = which[h];
                 const double d2 = distance2_below(f, points[b + i], upper[i]);
