@@ -81,7 +81,7 @@ inline double distance2(const Flat& f, V3 p) {
 // least `best`): where p projects outside the triangle, the plane's distance and the in-plane
 // distance to the line of each edge p's projection lies beyond (weight w of the opposite corner
 // below 0: |w| times that corner's height over the edge, squared w^2 |e|^-2 (2 area)^2, with
-// 1 / inverse = (2 area)^2) bound it from below; the three edges' distances are computed only
+// (2 area)^2 = d00 d11 - d01^2) bound it from below; the three edges' distances are computed only
 // when that bound is under the best, widened against rounding (relatively, and by 2^-30 of the
 // triangle's size, so that points on the surface get distance2()'s very figure). The search's
 // candidates that are not nearer (two of three) mostly stop there.
@@ -93,7 +93,7 @@ inline double distance2_below(const Flat& f, V3 p, double best) {
     const double above = dot(f.normal, p) + f.offset;
     if (u >= 0 && v >= 0 && u + v <= 1) return above * above;
     const double t = 1 - u - v;
-    const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) / f.inverse;
+    const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) * (f.d00 * f.d11 - f.d01 * f.d01);
     const double low = above * above + beyond;  // (NaN for a degenerate triangle: never skipped)
     if (low * (1.0 - 1e-9) - (f.d00 + f.d11) * 0x1p-60 >= best) return low;
     const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
