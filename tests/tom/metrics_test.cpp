@@ -576,6 +576,41 @@ TEST_CASE("a report on a real mesh: levels, error growth, memory like Table 4, f
     CHECK(s.fit.mean.k == r.fit.mean.k);
 }
 
+TEST_CASE("attribute deviation: among triangles at the same distance, the one first in the mesh is the nearest", "[metrics][attributes]") {
+    // a grid with normals +z, against a surface made of the grid twice over, one copy with
+    // normals tilted by 10 degrees: every sample lies at the same distance from both copies
+    // (the same corners, the same operations), and the copy listed first decides, whichever the
+    // searches meet first
+    tom::Mesh a = tom::make_grid(20, 20);
+    a.normals.clear();
+    for (uint32_t v = 0; v < a.vertex_count(); ++v) a.normals.insert(a.normals.end(), {0.0f, 0.0f, 1.0f});
+    const double angle = 10.0 * 3.14159265358979 / 180.0;
+    std::vector<float> tilted;
+    for (uint32_t v = 0; v < a.vertex_count(); ++v) tilted.insert(tilted.end(), {0.0f, float(std::sin(angle)), float(std::cos(angle))});
+    auto twice = [&](const std::vector<float>& first, const std::vector<float>& second) {
+        tom::Mesh d = a;
+        d.positions.insert(d.positions.end(), a.positions.begin(), a.positions.end());
+        d.normals = first;
+        d.normals.insert(d.normals.end(), second.begin(), second.end());
+        for (uint32_t i : a.indices) d.indices.push_back(i + a.vertex_count());
+        return d;
+    };
+    for (int tilted_first = 0; tilted_first < 2; ++tilted_first) {
+        const tom::Mesh d = tilted_first ? twice(tilted, a.normals) : twice(a.normals, tilted);
+        for (unsigned threads : {1u, 2u}) {
+            tom::DistanceParams p;
+            p.threads = threads;
+            const tom::MetroReference by(surface(a), p, {a.normals.data(), nullptr});
+            tom::AttributeDeviation dev;
+            const tom::Distance dist = by.compare(surface(d), {d.normals.data(), nullptr}, dev);
+            INFO("tilted copy first: " << tilted_first << ", threads " << threads);
+            CHECK(dist.hausdorff < 1e-12);
+            CHECK(dev.normal_mean_degrees == Approx(tilted_first ? 10.0 : 0.0).margin(1e-4));
+            CHECK(dev.normal_max_degrees == Approx(tilted_first ? 10.0 : 0.0).margin(1e-4));
+        }
+    }
+}
+
 TEST_CASE("attribute deviation: 0 against itself, the known angle and shift against altered copies", "[metrics][attributes]") {
     // a grid with one UV chart (uv = xy) and normals +z, against copies whose normals are tilted
     // by 10 degrees about x and whose UVs are shifted by (0.1, 0)

@@ -159,6 +159,13 @@ struct Mesh3 {
     }
     double scale = 0;  // the side of a square of a triangle's mean area
     WideTree wide;
+    // whether record r at squared distance d is nearer than record `best` at `best_d2`: among
+    // triangles at the same distance (a point nearest to an edge or a corner they share), the
+    // one first in the mesh, so that which one a search meets first does not matter (the
+    // attribute deviation interpolates the nearest triangle's normals: split at a crease)
+    bool nearer(double d, uint32_t r, double best_d2, uint32_t best) const {
+        return d < best_d2 || (d == best_d2 && triangle_of[r] < triangle_of[best]);
+    }
 };
 
 
@@ -177,7 +184,7 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t 
     uint32_t best = hint;
     if (other != kNoRecord && other != hint) {
         const double d = distance2(target.flat[other], p);
-        if (d < best_d2) best_d2 = d, best = other;
+        if (target.nearer(d, other, best_d2, best)) best_d2 = d, best = other;
     }
     const WideTree::Query q = target.wide.query(p, p);
     if (target.flat.size() >= 2 && best_d2 > q.enough) {
@@ -185,9 +192,9 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t 
             const Flat& f = target.flat[t];
             // the distance to the triangle's plane bounds the distance to the triangle from below
             const double above = dot(f.normal, p) + f.offset;
-            if (above * above >= best_d2) return;
+            if (above * above > best_d2) return;
             const double d = distance2_below(f, p, best_d2);
-            if (d < best_d2) best_d2 = d, best = t;
+            if (target.nearer(d, t, best_d2, best)) best_d2 = d, best = t;
         };
         target.wide.nearest(q, leaf, [&] { return best_d2; });
     }
@@ -197,10 +204,10 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t 
 
 // Nearest triangles for runs of Morton-sorted points that share a grid cell, exactly. Two
 // descents per run (the centre's nearest triangle c, then every triangle whose box is within
-// reach) find every triangle that can be the nearest of one of its points; then each point
-// computes a lower bound of its distance to every candidate (box or plane, eight at a time:
-// candidates.h) and the exact distance only where the bound is below the best found, starting
-// from c or the previous point's nearest.
+// reach) find every triangle that can be the nearest of one of its points; then candidate by
+// candidate, each point's lower bound of its distance to it (box or plane, eight points at a
+// time: candidates.h), and the exact distance only where the bound is below the point's best
+// so far (from c at first).
 struct RunSearch {
     const Mesh3& target;
     const V3* points;
@@ -318,7 +325,7 @@ struct RunSearch {
             float floor;
             const uint32_t bits = uint32_t(keyed[k] >> 32);
             std::memcpy(&floor, &bits, sizeof bits);
-            if (floor >= float(farthest * (1.0 + 1e-6))) break;  // sorted: every later box is as far
+            if (floor > float(farthest * (1.0 + 1e-6))) break;  // sorted: every later box is as far
             const uint32_t t = uint32_t(keyed[k]);
             if (t == c) continue;  // (every best is at most its distance already)
             const Flat& f = target.flat[t];
@@ -326,7 +333,7 @@ struct RunSearch {
             for (size_t h = 0; h < count; ++h) {
                 const size_t i = which[h];
                 const double d2 = distance2_below(f, points[b + i], upper[i]);
-                if (d2 < upper[i]) upper[i] = d2, record[i] = t, limit[i] = float(d2);
+                if (target.nearer(d2, t, upper[i], record[i])) upper[i] = d2, record[i] = t, limit[i] = float(d2);
             }
         }
         for (size_t i = 0; i < n; ++i) emit(b + i, upper[i], record[i]);
