@@ -162,7 +162,8 @@ struct Mesh3 {
     // whether record r at squared distance d is nearer than record `best` at `best_d2`: among
     // triangles at the same distance (a point nearest to an edge or a corner they share), the
     // one first in the mesh, so that which one a search meets first does not matter (the
-    // attribute deviation interpolates the nearest triangle's normals: split at a crease)
+    // attribute deviation interpolates the nearest triangle's normals: split at a crease); save
+    // on the surface itself, where a descent stops at the first within WideTree's `enough`
     bool nearer(double d, uint32_t r, double best_d2, uint32_t best) const {
         return d < best_d2 || (d == best_d2 && triangle_of[r] < triangle_of[best]);
     }
