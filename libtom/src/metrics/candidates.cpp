@@ -4,7 +4,6 @@
 #include "candidates.h"
 
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "../simd.h"
@@ -24,8 +23,8 @@ namespace {
 // scale bounds both. An error e in a distance d moves d^2 by 2 d e + e^2 <= 2^-10 d^2 + (2^10 + 1)
 // e^2, so kKeep = 1 - 2^-9 (with the squares' and sums' own rounding) and slack = 3 (axes) 2049
 // e^2 cover it twice over; the bound loses a fifth of a percent, which prunes as well. Outside
-// [kSmallestScale, kLargestScale] float squares could overflow or vanish: then every candidate
-// is kept (bound 0).
+// [kSmallestScale, kLargestScale] float squares could overflow or vanish: then every point is
+// kept (bound -inf).
 constexpr float kKeep = 1.0f - 1.0f / 512.0f;
 constexpr double kSmallestScale = 1e-12, kLargestScale = 1e12;
 

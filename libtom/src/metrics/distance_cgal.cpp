@@ -16,9 +16,8 @@
 // conservative: candidates.h), and the exact distance only for the samples whose bound is under
 // their best so far, until the boxes lie beyond every sample's best. Exact: the figures are
 // those of a full nearest search per sample (to 2^-40 of the target's size, where a search
-// stops: wide_tree.h). Samples are
-// processed in fixed chunks combined in order, so the figures do not depend on the number of
-// threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
+// stops: wide_tree.h). Samples are processed in fixed chunks combined in order, so the figures
+// do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
 // from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
 // four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
 // them by distance, as the nearest search must, cost two box distances a node for nothing):
@@ -216,9 +215,8 @@ struct RunSearch {
     uint32_t hint = 0;  // the record of the last nearest triangle: a first bound for the next run
     std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, in that order
     std::vector<float> qx, qy, qz, limit;  // the run's points relative to its centre, their bests
-    std::vector<uint32_t> record, which;
-    std::vector<double> upper;  // each point's distance to the run centre's nearest triangle, or to its own start if nearer
-    std::vector<uint8_t> own;   // whether that is its own start's
+    std::vector<uint32_t> record, which;  // each point's nearest so far; the points a candidate may be nearer to
+    std::vector<double> upper;  // each point's squared distance to it
     RunSearch(const Mesh3& t, const V3* p) : target(t), points(p) {}
 
     // one descent of the tree for each point of [b, e)
@@ -264,17 +262,18 @@ struct RunSearch {
         // point-triangle distance per point) 6% fewer
         double centre_d2;
         const uint32_t c = nearest(target, centre, hint, centre_d2, starts ? starts[b + (e - b) / 2] : kNoRecord);
-        upper.resize(e - b);
-        own.assign(e - b, 0);
-        distances2(target.flat[c], points + b, e - b, upper.data());
+        const size_t n = e - b;
+        upper.resize(n);
+        record.assign(n, c);
+        distances2(target.flat[c], points + b, n, upper.data());
         double widest = 0;  // (a local: reach2 is captured below, which kept it in memory through this loop)
-        for (size_t i = b; i < e; ++i) {
-            double u = upper[i - b];
-            if (starts && starts[i] != kNoRecord && starts[i] != c) {  // a point's own start, when nearer, shrinks the reach
-                const double d2 = distance2(target.flat[starts[i]], points[i]);
-                if (d2 < u) u = d2, own[i - b] = 1;
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t start = starts ? starts[b + i] : kNoRecord;
+            if (start != kNoRecord && start != c) {  // a point's own start, when nearer, shrinks the reach
+                const double d2 = distance2(target.flat[start], points[b + i]);
+                if (d2 < upper[i]) upper[i] = d2, record[i] = start;
             }
-            widest = std::max(widest, upper[i - b] = u);
+            widest = std::max(widest, upper[i]);
         }
         const double reach2 = widest * (1.0 + 1e-9);  // widened against rounding
         // the candidates in order of their boxes' distance to the run's box, which no point of the
@@ -288,10 +287,6 @@ struct RunSearch {
             // is not read here)
             keyed.push_back(uint64_t(float_bits(WideTree::floor(around, d2))) << 32 | t);
         });
-        // c is within the reach, but where the reach is a few ulps (points on c) rounding may
-        // leave it out: the starts below are distances to c, so it must be a candidate
-        if (std::none_of(keyed.begin(), keyed.end(), [c](uint64_t k) { return uint32_t(k) == c; }))
-            keyed.push_back(uint64_t(float_bits(boxes_d2(lo, hi, target.flat[c].lo, target.flat[c].hi))) << 32 | c);
         const size_t m = keyed.size();
         // with many candidates, every point is far from a fine surface and its own descent is
         // cheaper than the scan
@@ -299,14 +294,12 @@ struct RunSearch {
         std::sort(keyed.begin(), keyed.end());
         const double spread = 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
         // candidate by candidate, nearest box first, each against every point of the run (eight
-        // at a time) while its box is nearer than the farthest point's best; a point's limit is a
-        // float of its best, which a candidate nearer than the best is always under (its bound is
-        // lowered by 2^-9 of it, the float's rounding is 2^-24). Against the point-major scan
-        // before (each point against the candidates, starting from its predecessor's nearest):
-        // 5.5% fewer instructions in bunny00's 7 levels, 7.7% less time
-        const size_t n = e - b, padded = (n + 7) & ~size_t(7);
-        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), record.resize(n), which.resize(padded + 8);
-        double farthest = 0;
+        // at a time) while its box is nearer than the farthest point's best (c, every point's
+        // first, is not one again); a point's limit is a float of its best, which a candidate
+        // nearer than the best is always under (its bound is lowered by 2^-9 of it, the float's
+        // rounding is 2^-24)
+        const size_t padded = (n + 7) & ~size_t(7);
+        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), which.resize(padded + 8);
         for (size_t i = 0; i < padded; ++i) {
             if (i >= n) {
                 qx[i] = qy[i] = qz[i] = 0.0f, limit[i] = -std::numeric_limits<float>::infinity();
@@ -315,9 +308,8 @@ struct RunSearch {
             const V3 r = points[b + i] - centre;
             qx[i] = float(r.x), qy[i] = float(r.y), qz[i] = float(r.z);
             limit[i] = float(upper[i]);
-            record[i] = own[i] ? starts[b + i] : c;
-            farthest = std::max(farthest, upper[i]);
         }
+        double farthest = widest;
         for (size_t k = 0; k < m; ++k) {
             if (k % 8 == 0 && k) {  // (the bests only fall: a stale farthest is still an upper bound)
                 farthest = 0;

@@ -62,6 +62,13 @@ inline void project(const Flat& f, double w0, double w1, double& u, double& v) {
     u = (f.d11 * w0 - f.d01 * w1) * f.inverse, v = (f.d00 * w1 - f.d01 * w0) * f.inverse;
 }
 
+// Squared distance from p (w = p - a, w0 = e0.w, w1 = e1.w) to the nearest of the triangle's
+// three edges.
+inline double edges_d2(const Flat& f, V3 w, double w0, double w1) {
+    const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
+    return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
+}
+
 // Squared distance from p to the triangle: when p projects inside it, its plane distance;
 // otherwise the nearest of its three edges. Few branches, no division.
 inline double distance2(const Flat& f, V3 p) {
@@ -73,8 +80,7 @@ inline double distance2(const Flat& f, V3 p) {
         const double above = dot(f.normal, p) + f.offset;
         return above * above;
     }
-    const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
-    return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
+    return edges_d2(f, w, w0, w1);
 }
 
 // distance2(f, p) where it is under `best`, and otherwise perhaps only a lower bound of it (at
@@ -83,8 +89,8 @@ inline double distance2(const Flat& f, V3 p) {
 // below 0: |w| times that corner's height over the edge, squared w^2 |e|^-2 (2 area)^2, with
 // (2 area)^2 = d00 d11 - d01^2) bound it from below; the three edges' distances are computed only
 // when that bound is under the best, widened against rounding (relatively, and by 2^-30 of the
-// triangle's size, so that points on the surface get distance2()'s very figure). The search's
-// candidates that are not nearer (two of three) mostly stop there.
+// triangle's size, so that points on the surface get distance2()'s very figure): a candidate
+// the search tests that is not nearer can stop there.
 inline double distance2_below(const Flat& f, V3 p, double best) {
     const V3 w = p - f.a;
     const double w0 = dot(f.e0, w), w1 = dot(f.e1, w);
@@ -96,8 +102,7 @@ inline double distance2_below(const Flat& f, V3 p, double best) {
     const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) * (f.d00 * f.d11 - f.d01 * f.d01);
     const double low = above * above + beyond;  // (NaN for a degenerate triangle: never skipped)
     if (low * (1.0 - 1e-9) - (f.d00 + f.d11) * 0x1p-60 >= best) return low;
-    const V3 wb = w - f.e0, e2 = f.e1 - f.e0;
-    return std::min({segment_d2(w, f.e0, w0, f.i00), segment_d2(w, f.e1, w1, f.i11), segment_d2(wb, e2, dot(e2, wb), f.i22)});
+    return edges_d2(f, w, w0, w1);
 }
 
 // The point of the triangle nearest to p (distance2()'s argument), and its barycentric weights.

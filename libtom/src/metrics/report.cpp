@@ -91,16 +91,6 @@ double overhead_distinct(const MeshView& v, uint32_t n) {
     return n ? double(extra) / double(n) : 0.0;
 }
 
-// A level among the first `before` of `levels` at n vertices (the same mesh: its figures are
-// those of this one), or null.
-// Meshes that stop simplifying above a level's count (locked seams, a floor of
-// min_vertex_count) repeat their last level: 152 of the 238 levels of 2CylinderEngine's 34 parts.
-const LevelReport* earlier_level(const std::vector<LevelReport>& levels, size_t before, uint32_t n) {
-    for (size_t i = 0; i < before; ++i)
-        if (levels[i].vertices == n) return &levels[i];
-    return nullptr;
-}
-
 uint64_t face_vertex(uint64_t v, uint64_t t) { return v * 24 + t * 12; }
 
 MemoryReport memory_of(const TomMesh& built) {
@@ -227,6 +217,11 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     r.triangles = built.triangle_count();
     r.memory = memory_of(built);
     const MeshView v = built.view();
+    // a level at the vertex count of an earlier one is the same mesh, and repeats its figures:
+    // the first level at its count (itself, for a new one). Meshes that stop simplifying above a
+    // level's count (locked seams, a floor of min_vertex_count) repeat their last level: 152 of
+    // the 238 levels of 2CylinderEngine's 34 parts
+    std::vector<size_t> first_of;
     // extraction is timed on the form an engine maps: the file (16-bit indices where they fit,
     // coarse corners), extracted into 32-bit buffers, as tombench does; first, on a quiet machine
     {
@@ -237,8 +232,11 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
             LevelReport lr;
             lr.fraction = f;
             lr.vertices = vertex_count_for_fraction(v, f);
-            if (const LevelReport* same = earlier_level(r.levels, r.levels.size(), lr.vertices)) {
-                lr = *same;
+            size_t first = 0;
+            while (first < r.levels.size() && r.levels[first].vertices != lr.vertices) ++first;
+            first_of.push_back(first);
+            if (first < r.levels.size()) {
+                lr = r.levels[first];
                 lr.fraction = f;
             } else {
                 lr.extract_seconds = median_extract_seconds(file.mesh(0), lr.vertices, buffer);
@@ -264,7 +262,7 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     constexpr uint32_t kPairedTriangles = 1u << 20;
     std::vector<size_t> measured;  // the levels not repeating an earlier one
     for (size_t i = 0; i < r.levels.size(); ++i)
-        if (!earlier_level(r.levels, i, r.levels[i].vertices)) measured.push_back(i);
+        if (first_of[i] == i) measured.push_back(i);
     const unsigned streams = r.triangles <= kPairedTriangles ? 2 : 1;
     detail::parallel_blocks(measured.size(), 1, streams, [&](unsigned, size_t k, size_t) {
         LevelReport& lr = r.levels[measured[k]];
@@ -276,8 +274,10 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     std::vector<double> tris, means, maxes;
     for (size_t i = 0; i < r.levels.size(); ++i) {
         LevelReport& lr = r.levels[i];
-        if (const LevelReport* same = earlier_level(r.levels, i, lr.vertices))
-            lr.triangles = same->triangles, lr.error = same->error, lr.attributes = same->attributes;
+        if (first_of[i] != i) {
+            const LevelReport& same = r.levels[first_of[i]];
+            lr.triangles = same.triangles, lr.error = same.error, lr.attributes = same.attributes;
+        }
         if (lr.triangles > 0) {
             r.bbox_diagonal = std::max(r.bbox_diagonal, lr.error.diagonal);
             tris.push_back(lr.triangles);
