@@ -368,16 +368,18 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
     meshes.push_back(far);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
-    size_t compared = 0, pruned = 0, kept = 0;
+    size_t compared = 0, pruned = 0, kept = 0, lines_checked = 0;
     for (const tom::Mesh& m : meshes) {
         std::vector<tom::detail::Flat> flat;
         auto at = [&](uint32_t v) { return V3{m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]}; };
         for (size_t t = 0; t < m.triangle_count(); ++t) flat.push_back(tom::detail::make_flat(at(m.indices[3 * t]), at(m.indices[3 * t + 1]), at(m.indices[3 * t + 2])));
+        flat.push_back(tom::detail::make_flat(at(0), at(1), at(0) + 1e-7 * (at(1) - at(0)) + 1e-9 * (at(2) - at(0))));  // a sliver
         flat.push_back(tom::detail::make_flat(at(0), at(0), at(1)));  // degenerate: two corners at one place
         for (int run = 0; run < 40; ++run) {
             // a run: 37 points around a random face, spread by up to `reach` (face sizes to
             // object sizes), and 64 candidates drawn from everywhere, the degenerate one among them
-            const tom::detail::Flat& home = flat[size_t(unit(rng) * double(m.triangle_count())) % m.triangle_count()];
+            const uint32_t home_index = uint32_t(size_t(unit(rng) * double(m.triangle_count())) % m.triangle_count());
+            const tom::detail::Flat& home = flat[home_index];
             const double reach = std::sqrt(home.d00) * std::pow(10.0, 3.0 * unit(rng));
             std::vector<V3> points;
             for (int i = 0; i < 37; ++i) {
@@ -391,7 +393,9 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
             for (const V3& p : points)
                 lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)}, hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
             std::vector<uint32_t> list;
-            for (int k = 0; k < 63; ++k) list.push_back(uint32_t(unit(rng) * double(flat.size())) % uint32_t(flat.size()));
+            for (int k = 0; k < 61; ++k) list.push_back(uint32_t(unit(rng) * double(flat.size())) % uint32_t(flat.size()));
+            list.push_back(home_index);  // (its points lie over it and beyond its edges: the edge lines' term)
+            list.push_back(uint32_t(flat.size() - 2));
             list.push_back(uint32_t(flat.size() - 1));
             const V3 origin = 0.5 * (lo + hi);
             const double spread = 0.5 * std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
@@ -409,17 +413,22 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
             std::vector<uint32_t> hits(padded + 8);
             for (size_t k = 0; k < list.size(); ++k) {
                 const tom::detail::Flat& f = flat[list[k]];
-                const tom::detail::CandidateBound candidate = tom::detail::candidate_bound(f, origin, spread);
+                const tom::detail::EdgeLines lines = tom::detail::edge_lines(f);
+                const tom::detail::CandidateBound candidate = tom::detail::candidate_bound(f, lines, origin, spread);
                 const size_t count = tom::detail::points_below(candidate, qx.data(), qy.data(), qz.data(), limit.data(), padded, hits.data());
                 std::vector<uint32_t> expected;
                 for (size_t i = 0; i < points.size(); ++i) {
                     const V3 p = points[i];
                     const float low = tom::detail::bound(candidate, qx[i], qy[i], qz[i]);
                     const double above = tom::detail::dot(f.normal, p) + f.offset;
-                    const double exact = std::max(tom::detail::point_box_d2(p, f.lo, f.hi), above * above);
+                    // the exact bound: the box, or the plane's distance with the in-plane distance
+                    // beyond the farthest edge line p's projection lies outside of
+                    double beyond = 0;
+                    for (int e = 0; e < 3; ++e) beyond = std::max(beyond, tom::detail::dot(lines.normal[e], p) + lines.offset[e]);
+                    const double exact = std::max(tom::detail::point_box_d2(p, f.lo, f.hi), above * above + beyond * beyond);
                     const double d2 = tom::detail::distance2(f, p);
                     CHECK(double(low) <= d2);
-                    CHECK(double(low) >= exact * 0.997 - double(candidate.slack) * 1.001);  // kKeep and the absolute slack
+                    if (!candidate.everything) CHECK(double(low) >= exact * 0.997 - double(candidate.slack) * 1.001);  // kKeep and the absolute slack
                     if (d2 < best[i]) CHECK(low < limit[i]);  // a candidate nearer than the best is always kept
                     if (low < limit[i]) expected.push_back(uint32_t(i));
                     // distance2_below(): distance2() itself under the best, at least the best otherwise
@@ -447,6 +456,36 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
     CHECK(compared > 100000);
     CHECK(pruned > compared / 10);
     CHECK(kept < compared * 3 / 4);  // the bounds prune (against bests of random candidates: half are kept)
+    // the edge lines of the real triangles: unit normals in the plane, each edge on its line, the
+    // opposite corner inside; and the bound they make is tight where the box and the plane are
+    // not: beyond an edge's midpoint by s in the plane and h above it, the distance is exactly
+    // (s^2 + h^2), and so is the bound, up to its lowering
+    for (const tom::Mesh& m : meshes)
+        for (size_t t = 0; t < m.triangle_count(); t += 7) {
+            auto at = [&](size_t c) { const float* q = &m.positions[3 * size_t(m.indices[3 * t + c])]; return V3{q[0], q[1], q[2]}; };
+            const tom::detail::Flat f = tom::detail::make_flat(at(0), at(1), at(2));
+            const tom::detail::EdgeLines lines = tom::detail::edge_lines(f);
+            const double size = std::sqrt(std::max({f.d00, f.d11, tom::detail::dot(f.e1 - f.e0, f.e1 - f.e0)}));
+            for (int e = 0; e < 3; ++e) {
+                const V3 n = lines.normal[e];
+                if (tom::detail::dot(n, n) == 0) continue;  // (a sliver's: no term)
+                CHECK(std::fabs(tom::detail::dot(n, n) - 1) < 1e-12);
+                CHECK(std::fabs(tom::detail::dot(n, f.normal)) < 1e-9);
+                CHECK(std::fabs(tom::detail::dot(n, at(size_t(e))) + lines.offset[e]) <= 1e-9 * (size + 1e-3 * std::sqrt(tom::detail::dot(at(0), at(0)))));
+                CHECK(std::fabs(tom::detail::dot(n, at(size_t(e + 1) % 3)) + lines.offset[e]) <= 1e-9 * (size + 1e-3 * std::sqrt(tom::detail::dot(at(0), at(0)))));
+                CHECK(tom::detail::dot(n, at(size_t(e + 2) % 3)) + lines.offset[e] <= 1e-9 * size);
+                const double out = 0.5 * size, up = 0.25 * size;
+                const V3 q = 0.5 * (at(size_t(e)) + at(size_t(e + 1) % 3)) + out * n + up * f.normal;
+                const double d2 = tom::detail::distance2(f, q);
+                CHECK(std::fabs(d2 - (out * out + up * up)) <= 1e-6 * d2);
+                const tom::detail::CandidateBound b = tom::detail::candidate_bound(f, lines, q, 0.0);
+                const float low = tom::detail::bound(b, 0.0f, 0.0f, 0.0f);
+                CHECK(double(low) <= d2);
+                CHECK(double(low) >= 0.99 * d2);
+                ++lines_checked;
+            }
+        }
+    CHECK(lines_checked > 1000);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {

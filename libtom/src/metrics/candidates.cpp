@@ -19,10 +19,11 @@ namespace {
 // The lowering: bound * kKeep - slack. Rounding to float moves a coordinate by 2^-24 of the
 // largest one at most (`scale`: of the boxes relative to the origin, and of the points), and an
 // operation its result by 2^-24 of it: a distance along an axis errs by under 2^-22 scale, one
-// from the plane (three products, the offset, three sums) by under 2^-19.4 scale; e = 2^-18
-// scale bounds both. An error e in a distance d moves d^2 by 2 d e + e^2 <= 2^-10 d^2 + (2^10 + 1)
-// e^2, so kKeep = 1 - 2^-9 (with the squares' and sums' own rounding) and slack = 3 (axes) 2049
-// e^2 cover it twice over; the bound loses a fifth of a percent, which prunes as well. Outside
+// from the plane or an edge line (three products, the offset, three sums) by under 2^-19.4
+// scale; e = 2^-18 scale bounds both. An error e in a distance d moves d^2 by 2 d e + e^2 <=
+// 2^-10 d^2 + (2^10 + 1) e^2, so for the box's sum of three squares and the prism's of two,
+// kKeep = 1 - 2^-9 (with the squares' and sums' own rounding) and slack = 3 2049 e^2 cover it
+// twice over; the bound loses a fifth of a percent, which prunes as well. Outside
 // [kSmallestScale, kLargestScale] float squares could overflow or vanish: then every point is
 // kept (bound -inf).
 constexpr float kKeep = 1.0f - 1.0f / 512.0f;
@@ -45,10 +46,18 @@ constexpr Lanes kLanes;
 
 // bound() of one candidate (its fields c) at eight points at a time, the same
 // operations in the same order; the lanes under their limit compacted into hits
-__attribute__((target("avx2"))) size_t points_below_avx(const float c[10], const float* px, const float* py, const float* pz, const float* limits,
-                                                          size_t n, float slack, uint32_t* hits) {
+// (a x + b y) + (c z + d): a signed distance to a plane or a line
+__attribute__((target("avx2"))) inline __m256 plane(__m256 a, __m256 b, __m256 c, __m256 d, __m256 x, __m256 y, __m256 z) {
+    return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x), _mm256_mul_ps(b, y)), _mm256_add_ps(_mm256_mul_ps(c, z), d));
+}
+
+__attribute__((target("avx2"))) size_t points_below_avx(const float c[kBoundFields], const float* px, const float* py, const float* pz,
+                                                          const float* limits, size_t n, float slack, uint32_t* hits) {
     const __m256 lx = _mm256_set1_ps(c[0]), ly = _mm256_set1_ps(c[1]), lz = _mm256_set1_ps(c[2]), hx = _mm256_set1_ps(c[3]), hy = _mm256_set1_ps(c[4]),
                  hz = _mm256_set1_ps(c[5]), nx = _mm256_set1_ps(c[6]), ny = _mm256_set1_ps(c[7]), nz = _mm256_set1_ps(c[8]), off = _mm256_set1_ps(c[9]);
+    __m256 m[3][4];
+    for (int e = 0; e < 3; ++e)
+        for (int k = 0; k < 4; ++k) m[e][k] = _mm256_set1_ps(c[10 + 4 * e + k]);
     const __m256 zero = _mm256_setzero_ps(), keep = _mm256_set1_ps(kKeep), lower = _mm256_set1_ps(slack);
     size_t count = 0;
     for (size_t i = 0; i < n; i += 8) {
@@ -56,10 +65,16 @@ __attribute__((target("avx2"))) size_t points_below_avx(const float c[10], const
         const __m256 dx = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lx, x), _mm256_sub_ps(x, hx)), zero);
         const __m256 dy = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(ly, y), _mm256_sub_ps(y, hy)), zero);
         const __m256 dz = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lz, z), _mm256_sub_ps(z, hz)), zero);
-        const __m256 above = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(nx, x), _mm256_mul_ps(ny, y)), _mm256_add_ps(_mm256_mul_ps(nz, z), off));
+        const __m256 above = plane(nx, ny, nz, off, x, y, z);
         const __m256 box = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
-        const __m256 bound = _mm256_sub_ps(_mm256_mul_ps(_mm256_max_ps(box, _mm256_mul_ps(above, above)), keep), lower);
-        const unsigned mask = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(bound, _mm256_loadu_ps(limits + i), _CMP_LT_OQ)));
+        const __m256 limit = _mm256_loadu_ps(limits + i);
+        const __m256 coarse = _mm256_sub_ps(_mm256_mul_ps(_mm256_max_ps(box, _mm256_mul_ps(above, above)), keep), lower);
+        if (!_mm256_movemask_ps(_mm256_cmp_ps(coarse, limit, _CMP_LT_OQ))) continue;  // (the finer bound is at least this one)
+        const __m256 beyond = _mm256_max_ps(_mm256_max_ps(plane(m[0][0], m[0][1], m[0][2], m[0][3], x, y, z), plane(m[1][0], m[1][1], m[1][2], m[1][3], x, y, z)),
+                                            _mm256_max_ps(plane(m[2][0], m[2][1], m[2][2], m[2][3], x, y, z), zero));
+        const __m256 prism = _mm256_add_ps(_mm256_mul_ps(above, above), _mm256_mul_ps(beyond, beyond));
+        const __m256 bound = _mm256_sub_ps(_mm256_mul_ps(_mm256_max_ps(box, prism), keep), lower);
+        const unsigned mask = unsigned(_mm256_movemask_ps(_mm256_cmp_ps(bound, limit, _CMP_LT_OQ)));
         if (!mask) continue;
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(hits + count),
                             _mm256_add_epi32(_mm256_load_si256(reinterpret_cast<const __m256i*>(kLanes.of[mask])), _mm256_set1_epi32(int(i))));
@@ -118,7 +133,27 @@ bool cpu_has_avx2() {
 
 } // namespace
 
-CandidateBound candidate_bound(const Flat& f, V3 o, double spread) {
+EdgeLines edge_lines(const Flat& f) {
+    EdgeLines lines{};
+    // only where the plane's normal is reliable: a sliver's cross product loses its direction to
+    // cancellation (then no edge term: the normals stay zero)
+    const double gram = f.d00 * f.d11 - f.d01 * f.d01;
+    if (!(dot(f.normal, f.normal) > 0) || !(gram >= 1e-8 * f.d00 * f.d11)) return lines;
+    const V3 corner[3] = {f.a, f.a + f.e0, f.a + f.e1};
+    for (int k = 0; k < 3; ++k) {
+        const V3 from = corner[k], to = corner[(k + 1) % 3], opposite = corner[(k + 2) % 3];
+        V3 out = cross(to - from, f.normal);
+        const double len = length(out);
+        if (!(len > 0)) continue;
+        out = (1.0 / len) * out;
+        if (dot(out, opposite - from) > 0) out = -1.0 * out;
+        lines.normal[k] = out;
+        lines.offset[k] = -dot(out, from);
+    }
+    return lines;
+}
+
+CandidateBound candidate_bound(const Flat& f, const EdgeLines& lines, V3 o, double spread) {
     CandidateBound b;
     const V3 lo = f.lo - o, hi = f.hi - o;
     float* c = b.c;
@@ -126,6 +161,11 @@ CandidateBound candidate_bound(const Flat& f, V3 o, double spread) {
     c[3] = float(hi.x), c[4] = float(hi.y), c[5] = float(hi.z);
     c[6] = float(f.normal.x), c[7] = float(f.normal.y), c[8] = float(f.normal.z);
     c[9] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
+    for (int k = 0; k < 3; ++k) {
+        float* m = c + 10 + 4 * k;
+        const V3 out = lines.normal[k];
+        m[0] = float(out.x), m[1] = float(out.y), m[2] = float(out.z), m[3] = float(lines.offset[k] + dot(out, o));
+    }
     const double scale = std::max({spread, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
     b.everything = !(scale >= kSmallestScale && scale <= kLargestScale);
     const double e = std::ldexp(scale, -18);
@@ -138,9 +178,12 @@ float bound(const CandidateBound& b, float x, float y, float z) {
     const float* c = b.c;
     const float dx = std::max(std::max(c[0] - x, x - c[3]), 0.0f), dy = std::max(std::max(c[1] - y, y - c[4]), 0.0f),
                 dz = std::max(std::max(c[2] - z, z - c[5]), 0.0f);
-    const float above = (c[6] * x + c[7] * y) + (c[8] * z + c[9]);
+    auto plane = [&](const float* m) { return (m[0] * x + m[1] * y) + (m[2] * z + m[3]); };
+    const float above = plane(c + 6);
+    const float beyond = std::max(std::max(plane(c + 10), plane(c + 14)), std::max(plane(c + 18), 0.0f));
     const float box = (dx * dx + dy * dy) + dz * dz;
-    return std::max(box, above * above) * kKeep - b.slack;
+    const float prism = above * above + beyond * beyond;
+    return std::max(box, prism) * kKeep - b.slack;
 }
 
 size_t points_below(const CandidateBound& b, const float* x, const float* y, const float* z, const float* limit, size_t n, uint32_t* hits) {

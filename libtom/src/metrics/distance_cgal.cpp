@@ -11,7 +11,7 @@
 // kCellTriangles target triangles wide). Per cell, one descent of CGAL's tree finds the triangle
 // c nearest to the cell's centre; every sample's distance to c bounds its distance to the
 // surface, so a second descent collects every triangle that can be the nearest of one of the
-// cell's samples; candidate by candidate, nearest box first, lower bounds (box, plane) of its
+// cell's samples; candidate by candidate, nearest box first, lower bounds (box, plane and edge lines) of its
 // distance to the cell's samples are computed eight samples at a time (AVX2, in floats made
 // conservative: candidates.h), and the exact distance only for the samples whose bound is under
 // their best so far, until the boxes lie beyond every sample's best. Exact: the figures are
@@ -125,6 +125,7 @@ inline V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
 // (on a 2M-triangle mesh they held about 360 MB more).
 struct Mesh3 {
     std::vector<Flat> flat;              // in leaf order
+    std::vector<EdgeLines> lines;        // of each record, for the candidate bounds
     std::vector<uint32_t> triangle_of;   // record -> its triangle
     std::vector<uint32_t> slot;          // triangle -> its record
     explicit Mesh3(const Surface& s) {
@@ -141,11 +142,13 @@ struct Mesh3 {
         else
             each_leaf(root, [&](const Primitive& p) { triangle_of.push_back(uint32_t(p.id() - triangles.begin())); });
         flat.reserve(triangles.size());
+        lines.reserve(triangles.size());
         slot.resize(triangles.size());
         scale = std::sqrt(surface_area(s) / double(triangles.size()));
         for (uint32_t i = 0; i < triangle_of.size(); ++i) {
             const Triangle& t = triangles[triangle_of[i]];
             flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
+            lines.push_back(edge_lines(flat.back()));
             slot[triangle_of[i]] = i;
         }
         auto box = [this](const Part& part, V3& lo, V3& hi) {
@@ -322,7 +325,7 @@ struct RunSearch {
             const uint32_t t = uint32_t(keyed[k]);
             if (t == c) continue;  // (every best is at most its distance already)
             const Flat& f = target.flat[t];
-            const size_t count = points_below(candidate_bound(f, centre, spread), qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
+            const size_t count = points_below(candidate_bound(f, target.lines[t], centre, spread), qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
             for (size_t h = 0; h < count; ++h) {
                 const size_t i = which[h];
                 const double d2 = distance2_below(f, points[b + i], upper[i]);
