@@ -842,6 +842,10 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     const size_t length = std::min({size_t(kChunkMax), size_t(alive_count / 64), std::max<size_t>(32, (quota - executed) * 5 / 4)});
                     chunk_end = std::min(candidates.size(), ci + length);
                     parallel_for(team, chunk_end - chunk_begin, b.scratch, helpers, [&](size_t k, Scratch& sc) {
+                        // the reads of the candidates a little ahead started now (the chunk's
+                        // vertices lie anywhere in the mesh: its cost order, not its layout)
+                        if (chunk_begin + k + 8 < chunk_end) b.prefetch(adj, candidates[chunk_begin + k + 8].v);
+                        if (chunk_begin + k + 4 < chunk_end) adj.prefetch_fan(candidates[chunk_begin + k + 4].v);
                         const Candidate& e = candidates[chunk_begin + k];
                         Foresight& f = foresight[k];
                         f.verdict = kUnknown;

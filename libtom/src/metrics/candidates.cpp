@@ -168,7 +168,7 @@ CandidateBound candidate_bound(const Flat& f, const EdgeLines& lines, V3 o, doub
     }
     const double scale = std::max({spread, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});
     b.everything = !(scale >= kSmallestScale && scale <= kLargestScale);
-    const double e = std::ldexp(scale, -18);
+    const double e = scale * 0x1p-18;  // (exact: a power of two)
     b.slack = b.everything ? 0.0f : float(3.0 * 2049.0 * e * e);
     return b;
 }
