@@ -179,7 +179,35 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
     tom::ReportParams one, three;
     one.distance.threads = 1;
     three.distance.threads = 3;
-    CHECK(tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, one)) == tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, three)));
+    const std::vector<uint8_t> curve = tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, one));
+    CHECK(curve == tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, three)));
+    // a report's curve (its reference's search structure shared with the levels') is the one a
+    // build without a report stores
+    CHECK(tom::encode_error_curve(tom::make_report(fandisk.mesh, t).curve) == curve);
+    // a reference made from another with other parameters gives a fresh one's figures, while the
+    // first is in use on other threads
+    tom::DistanceParams sparse;
+    sparse.samples_per_face = 2.5;
+    sparse.seed = 7;
+    const tom::MetroReference fresh(surface(fandisk.mesh), sparse);
+    std::vector<tom::Distance> shared(levels.size());
+    pool.clear();
+    for (size_t k = 0; k < levels.size(); ++k) pool.emplace_back([&, k] { together[k] = reference.compare(levels[k]); });
+    {
+        const tom::MetroReference derived = reference.with_params(sparse);
+        for (size_t k = 0; k < levels.size(); ++k) shared[k] = derived.compare(levels[k]);
+    }
+    for (std::thread& th : pool) th.join();
+    for (size_t k = 0; k < levels.size(); ++k) {
+        INFO("level " << k);
+        const tom::Distance own = fresh.compare(levels[k]);
+        CHECK(shared[k].forward.samples == own.forward.samples);
+        CHECK(shared[k].forward.samples < alone[k].forward.samples);  // (the other parameters are in use)
+        CHECK(shared[k].forward.mean == own.forward.mean);
+        CHECK(shared[k].backward.mean == own.backward.mean);
+        CHECK(shared[k].hausdorff == own.hausdorff);
+        CHECK(together[k].hausdorff == alone[k].hausdorff);
+    }
 }
 
 TEST_CASE("face hints change only the speed: the same figures with good but partial, poor or no hints (and a hint out of range is an error)", "[metrics][hints]") {

@@ -120,7 +120,12 @@ public:
     /// \throw std::invalid_argument as compare(), or when a hint is not a face of its surface.
     Distance compare(const Surface& simplified, const FaceHints& hints) const;
 
+    /// A reference to the same original with other parameters and attributes, sharing this
+    /// one's search structure of the original (a report's levels and its error curve: made once).
+    MetroReference with_params(const DistanceParams& params, const SurfaceAttributes& attributes = {}) const;
+
 private:
+    MetroReference() = default;
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

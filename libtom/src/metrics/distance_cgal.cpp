@@ -35,6 +35,7 @@
 #include <cmath>
 #include <cstring>
 #include <deque>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -577,7 +578,10 @@ struct MetroReference::Impl {
     Surface original;
     DistanceParams params;
     SurfaceAttributes attributes;
-    Mesh3 mesh;
+    // the original's search structure, made on a thread of its own from the start (a first
+    // compare() samples the original and searches its level meanwhile), shared by the references
+    // made with with_params()
+    std::shared_future<std::shared_ptr<const Mesh3>> mesh;
     Box box;  // of the original's corners
     mutable std::mutex lock;
     struct Forward {  // the original's samples for one target count, and the attribute samples picked from them
@@ -594,7 +598,16 @@ struct MetroReference::Impl {
     };
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
-    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(s), box(box_of(s)) {}
+    // (a small original's is made when first needed: a thread would cost more)
+    static constexpr size_t kOwnThreadTriangles = 4096;
+    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a)
+        : original(s), params(p), attributes(a),
+          mesh(std::async(s.triangle_count >= kOwnThreadTriangles ? std::launch::async : std::launch::deferred,
+                          [s] { return std::shared_ptr<const Mesh3>(std::make_shared<Mesh3>(s)); })
+                   .share()),
+          box(box_of(s)) {}
+    Impl(const Impl& shared, const DistanceParams& p, const SurfaceAttributes& a)
+        : original(shared.original), params(p), attributes(a), mesh(shared.mesh), box(shared.box) {}
     const Forward& forward_for(uint64_t target) const {
         std::lock_guard<std::mutex> hold(lock);
         for (const Forward& f : forward)
@@ -645,7 +658,8 @@ struct MetroReference::Impl {
         if (probing && f.separate) measure(f.attribute_samples, other, params.threads, &probe, deviation);  // (only its deviation)
         std::unique_ptr<Workspace> work = borrow();
         sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
-        d.backward = measure(work->backward, mesh, params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
+        const std::shared_future<std::shared_ptr<const Mesh3>> original_mesh = mesh;  // (each caller its own copy)
+        d.backward = measure(work->backward, *original_mesh.get(), params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
                              "simplified_to_original");
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
@@ -657,6 +671,11 @@ struct MetroReference::Impl {
 MetroReference::MetroReference(const Surface& original, const DistanceParams& params, const SurfaceAttributes& attributes) {
     validate(original, "original");
     impl_ = std::make_unique<Impl>(original, params, attributes);
+}
+MetroReference MetroReference::with_params(const DistanceParams& params, const SurfaceAttributes& attributes) const {
+    MetroReference r;
+    r.impl_ = std::make_unique<Impl>(*impl_, params, attributes);
+    return r;
 }
 MetroReference::~MetroReference() = default;
 MetroReference::MetroReference(MetroReference&&) noexcept = default;

@@ -247,14 +247,16 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
             r.levels.push_back(lr);
         }
     }
-    // the stored curve does not depend on the levels (its own reference, samples and seed): it is
-    // measured alongside them, on the cores their serial parts leave idle
-    std::future<ErrorCurve> curve = std::async(std::launch::async, [&] { return measure_error_curve(original, built, params); });
     const SurfaceAttributes original_attributes{original.normals.empty() ? nullptr : original.normals.data(),
                                                 original.texcoords.empty() ? nullptr : original.texcoords.data()};
     const SurfaceAttributes level_attributes{built.normals.empty() ? nullptr : built.normals.data(),
                                              built.texcoords.empty() ? nullptr : built.texcoords.data()};
     const MetroReference reference(surface_of(original), params.distance, original_attributes);
+    // the stored curve does not depend on the levels (its own samples and seed; the same search
+    // structure of the original): it is measured alongside them, on the cores their serial parts
+    // leave idle
+    const MetroReference curve_reference = reference.with_params(curve_distance_params(params, original.triangle_count()));
+    std::future<ErrorCurve> curve = std::async(std::launch::async, [&] { return curve_with(built, params, curve_reference, params.distance.threads); });
     // the levels two at a time, each on every core: one's sequential parts (its tree, its
     // samples' sort) overlap the other's searches (bunny00's report 1.28 -> 1.14 s, medians of 5
     // interleaved runs); each level in flight holds its samples (about 80 bytes a sample, 10 a
