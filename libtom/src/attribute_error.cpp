@@ -107,7 +107,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     }
     if (!accumulate) return;
     stride_ = 11 + 4 * size_t(channels_);
-    quadric_.assign(size_t(n) * stride_, 0.0);
+    zero_on_team(team, quadric_, size_t(n) * stride_);
     detail::scatter_by_vertex_range(team, n, mesh.indices.data(), m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
         const uint32_t* c = &mesh.indices[3 * size_t(t)];
         const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));

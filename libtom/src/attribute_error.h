@@ -73,7 +73,7 @@ private:
 
     int channels_ = 0;
     std::vector<float> values_;    // channels_ per vertex, scaled
-    std::vector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
+    TeamVector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
     size_t stride_ = 0;
     static constexpr size_t kMaxStride = 11 + 4 * 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
 };

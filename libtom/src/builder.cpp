@@ -115,7 +115,7 @@ struct Builder {
     std::vector<uint32_t> wedge;       // the position class of a vertex: its first coincident copy
     std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
     std::vector<uint32_t> pair_steps;  // substitution j and j + 1 are one seam collapse
-    std::vector<Quadric> quadric;
+    detail::TeamVector<Quadric> quadric;
     // non-edge pairs closer than the threshold, symmetric; a substitution v -> u moves v's pairs
     // to u (Garland-Heckbert), so parts stay joinable after their first vertices are gone
     std::vector<std::vector<uint32_t>> pairs;
@@ -634,7 +634,7 @@ void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allo
 }
 
 void init_quadrics(Builder& b, detail::Team& team) {
-    b.quadric.assign(b.n, Quadric{});
+    detail::zero_on_team(team, b.quadric, b.n);
     detail::scatter_by_vertex_range(team, b.n, b.idx.data(), b.m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
         auto mine = [&](uint32_t v) { return v >= lo && v < hi; };
         const uint32_t i0 = b.idx[3 * t], i1 = b.idx[3 * t + 1], i2 = b.idx[3 * t + 2];

@@ -11,13 +11,39 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <system_error>
 #include <thread>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace tom::detail {
+
+/// An allocator that leaves trivial elements uninitialized where std::allocator value-initializes
+/// them (a vector's resize(n) writes nothing): for arrays a team fills, each thread first
+/// touching the pages of its part (zero_on_team).
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = UninitializedAllocator<U>;
+    };
+    UninitializedAllocator() noexcept = default;
+    template <class U>
+    UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
+template <class T>
+using TeamVector = std::vector<T, UninitializedAllocator<T>>;
 
 /// `threads`, or one per core for 0.
 inline unsigned thread_count(unsigned threads) noexcept { return threads ? threads : std::max(1u, std::thread::hardware_concurrency()); }
@@ -139,6 +165,17 @@ private:
     std::atomic<uint64_t> generation_{0};
     std::atomic<bool> quit_{false};
 };
+
+/// v as `count` value-initialized elements (zeros), written by the team (large arrays: the
+/// pages are faulted in and cleared on every thread instead of one).
+template <class T>
+void zero_on_team(Team& team, TeamVector<T>& v, size_t count) {
+    static_assert(std::is_trivially_copyable<T>::value, "zeroed as plain values");
+    v.clear();
+    v.resize(count);
+    T* p = v.data();
+    team.blocks(count, std::max<size_t>(1, (size_t(1) << 20) / sizeof(T)), [p](unsigned, size_t begin, size_t end) { std::fill(p + begin, p + end, T{}); });
+}
 
 /// Runs work(worker, begin, end) over [0, count) in blocks of `block`, on up to thread_count(threads)
 /// threads (never more than there are blocks); `worker` is 0 for the caller's thread and 1, 2, ...
