@@ -39,6 +39,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <system_error>
 #include <vector>
 
 #include "candidates.h"
@@ -600,12 +601,17 @@ struct MetroReference::Impl {
     mutable std::vector<std::unique_ptr<Workspace>> idle;
     // (a small original's is made when first needed: a thread would cost more)
     static constexpr size_t kOwnThreadTriangles = 4096;
-    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a)
-        : original(s), params(p), attributes(a),
-          mesh(std::async(s.triangle_count >= kOwnThreadTriangles ? std::launch::async : std::launch::deferred,
-                          [s] { return std::shared_ptr<const Mesh3>(std::make_shared<Mesh3>(s)); })
-                   .share()),
-          box(box_of(s)) {}
+    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(make_mesh(s)), box(box_of(s)) {}
+    static std::shared_future<std::shared_ptr<const Mesh3>> make_mesh(const Surface& s) {
+        auto make = [s] { return std::shared_ptr<const Mesh3>(std::make_shared<Mesh3>(s)); };
+        if (s.triangle_count >= kOwnThreadTriangles) {
+            try {
+                return std::async(std::launch::async, make).share();
+            } catch (const std::system_error&) {  // no thread to be had: made when first needed
+            }
+        }
+        return std::async(std::launch::deferred, make).share();
+    }
     Impl(const Impl& shared, const DistanceParams& p, const SurfaceAttributes& a)
         : original(shared.original), params(p), attributes(a), mesh(shared.mesh), box(shared.box) {}
     const Forward& forward_for(uint64_t target) const {
