@@ -44,13 +44,14 @@ struct Lanes {
 };
 constexpr Lanes kLanes;
 
-// bound() of one candidate (its fields c) at eight points at a time, the same
-// operations in the same order; the lanes under their limit compacted into hits
 // (a x + b y) + (c z + d): a signed distance to a plane or a line
 __attribute__((target("avx2"))) inline __m256 plane(__m256 a, __m256 b, __m256 c, __m256 d, __m256 x, __m256 y, __m256 z) {
     return _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x), _mm256_mul_ps(b, y)), _mm256_add_ps(_mm256_mul_ps(c, z), d));
 }
 
+// bound() of one candidate (its fields c) at eight points at a time, the same operations in the
+// same order; the lanes under their limit compacted into hits. Eight points whose box-and-plane
+// bound keeps none skip the edge lines (the full bound is at least that one: same hits).
 __attribute__((target("avx2"))) size_t points_below_avx(const float c[kBoundFields], const float* px, const float* py, const float* pz,
                                                           const float* limits, size_t n, float slack, uint32_t* hits) {
     const __m256 lx = _mm256_set1_ps(c[0]), ly = _mm256_set1_ps(c[1]), lz = _mm256_set1_ps(c[2]), hx = _mm256_set1_ps(c[3]), hy = _mm256_set1_ps(c[4]),
@@ -69,7 +70,7 @@ __attribute__((target("avx2"))) size_t points_below_avx(const float c[kBoundFiel
         const __m256 box = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
         const __m256 limit = _mm256_loadu_ps(limits + i);
         const __m256 coarse = _mm256_sub_ps(_mm256_mul_ps(_mm256_max_ps(box, _mm256_mul_ps(above, above)), keep), lower);
-        if (!_mm256_movemask_ps(_mm256_cmp_ps(coarse, limit, _CMP_LT_OQ))) continue;  // (the finer bound is at least this one)
+        if (!_mm256_movemask_ps(_mm256_cmp_ps(coarse, limit, _CMP_LT_OQ))) continue;
         const __m256 beyond = _mm256_max_ps(_mm256_max_ps(plane(m[0][0], m[0][1], m[0][2], m[0][3], x, y, z), plane(m[1][0], m[1][1], m[1][2], m[1][3], x, y, z)),
                                             _mm256_max_ps(plane(m[2][0], m[2][1], m[2][2], m[2][3], x, y, z), zero));
         const __m256 prism = _mm256_add_ps(_mm256_mul_ps(above, above), _mm256_mul_ps(beyond, beyond));

@@ -20,8 +20,8 @@
 // 0.76 s, medians of 6 interleaved runs), each candidate's fields made when it is reached, with
 // a lowering of its own (the run's candidates beyond the stop are never converted); then the
 // edge lines (exact tests a sample 2.4 -> 2.0 in the backward direction; in the forward one
-// 2.1 -> 1.5 at 50%, 0.9 -> 0.2 at 0.5%; 3% fewer instructions, the report 6% faster: 1.048 -> 0.981 s,
-// medians of 7 interleaved runs). The same figures throughout. Internal to tom::metrics.
+// 2.1 -> 1.5 at 50%, 0.9 -> 0.2 at 0.5%; 3% fewer instructions, the report 6% faster: 1.048 ->
+// 0.981 s, medians of 7 interleaved runs). The same figures throughout. Internal to tom::metrics.
 
 #include <cstddef>
 #include <cstdint>
@@ -30,9 +30,9 @@
 
 namespace tom::detail {
 
-// One candidate's bound, relative to the run's origin: its box and plane in floats, and the
-// lowering that covers their rounding and the points' (`everything`: coordinates out of float's
-// comfortable range, every point kept).
+// One candidate's bound, relative to the run's origin: its box, plane and edge lines in floats,
+// and the lowering that covers their rounding and the points' (`everything`: coordinates out of
+// float's comfortable range, every point kept).
 constexpr int kBoundFields = 22;
 struct CandidateBound {
     float c[kBoundFields];  // lx, ly, lz, hx, hy, hz; nx, ny, nz, off (plane); per edge mx, my, mz, off (its line)

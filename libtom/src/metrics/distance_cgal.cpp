@@ -11,14 +11,14 @@
 // kCellTriangles target triangles wide). Per cell, one descent of CGAL's tree finds the triangle
 // c nearest to the cell's centre; every sample's distance to c bounds its distance to the
 // surface, so a second descent collects every triangle that can be the nearest of one of the
-// cell's samples; candidate by candidate, nearest box first, lower bounds (box, plane and edge lines) of its
-// distance to the cell's samples are computed eight samples at a time (AVX2, in floats made
-// conservative: candidates.h), and the exact distance only for the samples whose bound is under
-// their best so far, until the boxes lie beyond every sample's best. Exact: the figures are
-// those of a full nearest search per sample (to 2^-40 of the target's size, where a search
-// stops: wide_tree.h). Samples are processed in fixed chunks combined in order, so the figures
-// do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x faster than one tree descent per sample
-// from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
+// cell's samples; candidate by candidate, nearest box first, lower bounds (box, plane and edge
+// lines) of its distance to the cell's samples are computed eight samples at a time (AVX2, in
+// floats made conservative: candidates.h), and the exact distance only for the samples whose
+// bound is under their best so far, until the boxes lie beyond every sample's best. Exact: the
+// figures are those of a full nearest search per sample (to 2^-40 of the target's size, where a
+// search stops: wide_tree.h). Samples are processed in fixed chunks combined in order, so the
+// figures do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x
+// faster than one tree descent per sample from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
 // four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
 // them by distance, as the nearest search must, cost two box distances a node for nothing):
 // together, bunny00's report in 1.78 s instead of 2.09 s (medians of 5 interleaved runs).
