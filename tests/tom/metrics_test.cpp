@@ -208,6 +208,27 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
         CHECK(shared[k].hausdorff == own.hausdorff);
         CHECK(together[k].hausdorff == alone[k].hausdorff);
     }
+    // a small original (its search structure made by the first compare that needs it, not on a
+    // thread of its own), first used by several threads at once
+    const test::NamedMesh spider = test::real_meshes()[5];
+    REQUIRE(spider.mesh.triangle_count() < 4096);
+    const tom::TomMesh st = tom::build(spider.mesh);
+    std::vector<std::vector<uint32_t>> small_idx(4);
+    std::vector<tom::Surface> small_levels;
+    for (size_t k = 0; k < small_idx.size(); ++k) small_levels.push_back(level_surface(st, 0.4 / double(1 << (2 * k)), small_idx[k]));
+    const tom::MetroReference small_reference(surface(spider.mesh));
+    std::vector<tom::Distance> first(small_levels.size());
+    pool.clear();
+    for (size_t k = 0; k < small_levels.size(); ++k) pool.emplace_back([&, k] { first[k] = small_reference.compare(small_levels[k]); });
+    for (std::thread& th : pool) th.join();
+    const tom::MetroReference small_fresh(surface(spider.mesh));
+    for (size_t k = 0; k < small_levels.size(); ++k) {
+        INFO("spider level " << k);
+        const tom::Distance again = small_fresh.compare(small_levels[k]);
+        CHECK(first[k].backward.mean == again.backward.mean);
+        CHECK(first[k].hausdorff == again.hausdorff);
+        CHECK(first[k].hausdorff > 0);
+    }
 }
 
 TEST_CASE("face hints change only the speed: the same figures with good but partial, poor or no hints (and a hint out of range is an error)", "[metrics][hints]") {
