@@ -30,6 +30,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace tom {
 
@@ -862,7 +863,14 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                             sc.stamp[w] = seen;
                             if (ring < kRingMax) {
                                 f.w[ring] = w;
-                                f.cost[ring] = w != e.u && b.kind[w] == kInterior ? b.quadric_cost(w, e.u) : 0.0f;
+                                f.cost[ring] = 0.0f;  // (the loop uses it only for an interior w other than u that has a best and is clean)
+                                // what the loop compares with w's best; where even the geometric
+                                // term cannot beat that best, +inf (the loop's test fails as with
+                                // the full cost: a best only falls within a pass, dirty stays
+                                // dirty), and w's attribute quadric is not read
+                                if (w != e.u && b.kind[w] == kInterior && has[w] && !dirty[w] &&
+                                    !b.quadric_cost_within(w, e.u, best[w].cost, best[w].u, f.cost[ring]))
+                                    f.cost[ring] = std::numeric_limits<float>::infinity();
                             }
                             ++ring;
                         });
