@@ -245,6 +245,16 @@ struct Builder {
             for (int k = 0; k < 3; ++k) f(idx[3 * t + k]);
         });
     }
+    // the same, each distinct corner once (in the order first met; sc's stamps mark them)
+    template <class Adj, class F>
+    void each_distinct_corner(const Adj& adj, uint32_t x, Scratch& sc, F&& f) const {
+        const uint32_t seen = sc.next_visit();
+        each_corner(adj, x, [&](uint32_t w) {
+            if (sc.stamp[w] == seen) return;
+            sc.stamp[w] = seen;
+            f(w);
+        });
+    }
 
     // starts loading what evaluating v's substitutions reads first
     template <class Adj>
@@ -855,12 +865,9 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         f.verdict = b.illegal(adj, e.v, e.u, sc) ? kIllegal : kLegal;
                         if (f.verdict == kIllegal || b.predicate != Predicate::quadric) return;
                         // v's neighbours (its triangles' corners but v) and, for the interior ones, Q_w(p_u)
-                        const uint32_t seen = sc.next_visit();
-                        sc.stamp[e.v] = seen;
                         uint32_t ring = 0;
-                        b.each_corner(adj, e.v, [&](uint32_t w) {
-                            if (sc.stamp[w] == seen) return;
-                            sc.stamp[w] = seen;
+                        b.each_distinct_corner(adj, e.v, sc, [&](uint32_t w) {
+                            if (w == e.v) return;
                             if (ring < kRingMax) {
                                 f.w[ring] = w;
                                 f.cost[ring] = 0.0f;  // (the loop uses it only for an interior w other than u that has a best and is clean)
@@ -937,12 +944,8 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                             neighbour(f->w[i], &f->cost[i]);
                         }
                     } else {
-                        const uint32_t seen = b.scratch.next_visit();
-                        std::vector<uint32_t>& stamp = b.scratch.stamp;
-                        b.each_corner(adj, c.v, [&](uint32_t w) {
+                        b.each_distinct_corner(adj, c.v, b.scratch, [&](uint32_t w) {
                             touched[b.wedge[w]] = chunk;
-                            if (stamp[w] == seen) return;
-                            stamp[w] = seen;
                             neighbour(w, nullptr);
                         });
                     }

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <random>
 
 #include <thread>
@@ -158,17 +159,29 @@ TEST_CASE("a per-face cap on one direction's samples: a coarse level gets fewer,
 }
 
 TEST_CASE("one reference compared from several threads at once, and the curve on any thread count, give identical figures", "[metrics][curve]") {
+    // four levels of a built mesh (40, 10, 2.5 and 0.6% of its triangles; idx holds their indices)
+    auto four_levels = [](const tom::TomMesh& built, std::vector<std::vector<uint32_t>>& idx) {
+        idx.assign(4, {});
+        std::vector<tom::Surface> levels;
+        for (size_t k = 0; k < idx.size(); ++k) levels.push_back(level_surface(built, 0.4 / double(1 << (2 * k)), idx[k]));
+        return levels;
+    };
+    // each level compared on a thread of its own, all at once
+    auto at_once = [](const tom::MetroReference& reference, const std::vector<tom::Surface>& levels) {
+        std::vector<tom::Distance> out(levels.size());
+        std::vector<std::thread> pool;
+        for (size_t k = 0; k < levels.size(); ++k) pool.emplace_back([&, k] { out[k] = reference.compare(levels[k]); });
+        for (std::thread& th : pool) th.join();
+        return out;
+    };
     const test::NamedMesh fandisk = test::real_meshes()[1];
     const tom::TomMesh t = tom::build(fandisk.mesh);
-    std::vector<std::vector<uint32_t>> idx(4);
-    std::vector<tom::Surface> levels;
-    for (size_t k = 0; k < idx.size(); ++k) levels.push_back(level_surface(t, 0.4 / double(1 << (2 * k)), idx[k]));
+    std::vector<std::vector<uint32_t>> idx;
+    const std::vector<tom::Surface> levels = four_levels(t, idx);
     const tom::MetroReference reference(surface(fandisk.mesh));
-    std::vector<tom::Distance> alone, together(levels.size());
+    std::vector<tom::Distance> alone;
     for (const tom::Surface& l : levels) alone.push_back(reference.compare(l));
-    std::vector<std::thread> pool;
-    for (size_t k = 0; k < levels.size(); ++k) pool.emplace_back([&, k] { together[k] = reference.compare(levels[k]); });
-    for (std::thread& th : pool) th.join();
+    std::vector<tom::Distance> together = at_once(reference, levels);
     for (size_t k = 0; k < levels.size(); ++k) {
         INFO("level " << k);
         CHECK(together[k].forward.mean == alone[k].forward.mean);
@@ -191,13 +204,12 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
     sparse.seed = 7;
     const tom::MetroReference fresh(surface(fandisk.mesh), sparse);
     std::vector<tom::Distance> shared(levels.size());
-    pool.clear();
-    for (size_t k = 0; k < levels.size(); ++k) pool.emplace_back([&, k] { together[k] = reference.compare(levels[k]); });
+    std::future<std::vector<tom::Distance>> in_use = std::async(std::launch::async, [&] { return at_once(reference, levels); });
     {
         const tom::MetroReference derived = reference.with_params(sparse);
         for (size_t k = 0; k < levels.size(); ++k) shared[k] = derived.compare(levels[k]);
     }
-    for (std::thread& th : pool) th.join();
+    together = in_use.get();
     for (size_t k = 0; k < levels.size(); ++k) {
         INFO("level " << k);
         const tom::Distance own = fresh.compare(levels[k]);
@@ -213,14 +225,10 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
     const test::NamedMesh spider = test::real_meshes()[5];
     REQUIRE(spider.mesh.triangle_count() < 4096);
     const tom::TomMesh st = tom::build(spider.mesh);
-    std::vector<std::vector<uint32_t>> small_idx(4);
-    std::vector<tom::Surface> small_levels;
-    for (size_t k = 0; k < small_idx.size(); ++k) small_levels.push_back(level_surface(st, 0.4 / double(1 << (2 * k)), small_idx[k]));
+    std::vector<std::vector<uint32_t>> small_idx;
+    const std::vector<tom::Surface> small_levels = four_levels(st, small_idx);
     const tom::MetroReference small_reference(surface(spider.mesh));
-    std::vector<tom::Distance> first(small_levels.size());
-    pool.clear();
-    for (size_t k = 0; k < small_levels.size(); ++k) pool.emplace_back([&, k] { first[k] = small_reference.compare(small_levels[k]); });
-    for (std::thread& th : pool) th.join();
+    const std::vector<tom::Distance> first = at_once(small_reference, small_levels);
     const tom::MetroReference small_fresh(surface(spider.mesh));
     for (size_t k = 0; k < small_levels.size(); ++k) {
         INFO("spider level " << k);

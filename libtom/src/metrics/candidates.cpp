@@ -138,8 +138,7 @@ EdgeLines edge_lines(const Flat& f) {
     EdgeLines lines{};
     // only where the plane's normal is reliable: a sliver's cross product loses its direction to
     // cancellation (then no edge term: the normals stay zero)
-    const double gram = f.d00 * f.d11 - f.d01 * f.d01;
-    if (!(dot(f.normal, f.normal) > 0) || !(gram >= 1e-8 * f.d00 * f.d11)) return lines;
+    if (!(dot(f.normal, f.normal) > 0) || !(gram(f) >= 1e-8 * f.d00 * f.d11)) return lines;
     const V3 corner[3] = {f.a, f.a + f.e0, f.a + f.e1};
     for (int k = 0; k < 3; ++k) {
         const V3 from = corner[k], to = corner[(k + 1) % 3], opposite = corner[(k + 2) % 3];

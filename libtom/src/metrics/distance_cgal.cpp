@@ -18,10 +18,11 @@
 // figures are those of a full nearest search per sample (to 2^-40 of the target's size, where a
 // search stops: wide_tree.h). Samples are processed in fixed chunks combined in order, so the
 // figures do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x
-// faster than one tree descent per sample from the previous sample's triangle.) The descents read CGAL's hierarchy from a compact
-// four-way copy (wide_tree.h), and the collecting one takes children left to right (ordering
-// them by distance, as the nearest search must, cost two box distances a node for nothing):
-// together, bunny00's report in 1.78 s instead of 2.09 s (medians of 5 interleaved runs).
+// faster than one tree descent per sample from the previous sample's triangle.) The descents
+// read CGAL's hierarchy from a compact four-way copy (wide_tree.h), and the collecting one takes
+// children left to right (ordering them by distance, as the nearest search must, cost two box
+// distances a node for nothing): together, bunny00's report in 1.78 s instead of 2.09 s
+// (medians of 5 interleaved runs).
 // With FaceHints (the error curve's: a level's faces over the original's), each point also
 // starts from its face's hint: a descent of its own starts near its answer, and in a cell the
 // nearer of the centre's triangle and the hint bounds the reach.
@@ -61,12 +62,17 @@ using TriangleIterator = std::vector<Triangle>::const_iterator;
 using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 
-// The bits of float(x) (x >= 0): ordered as the values.
+// The bits of float(x) (x >= 0): ordered as the values; and back.
 inline uint32_t float_bits(double x) {
     const float f = float(x);
     uint32_t bits;
     std::memcpy(&bits, &f, sizeof bits);
     return bits;
+}
+inline float bits_float(uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
 }
 
 inline V3 v3(const Point& p) { return {p.x(), p.y(), p.z()}; }
@@ -210,9 +216,9 @@ uint32_t nearest(const Mesh3& target, V3 p, uint32_t hint, double& d2, uint32_t 
 // Nearest triangles for runs of Morton-sorted points that share a grid cell, exactly. Two
 // descents per run (the centre's nearest triangle c, then every triangle whose box is within
 // reach) find every triangle that can be the nearest of one of its points; then candidate by
-// candidate, each point's lower bound of its distance to it (box or plane, eight points at a
-// time: candidates.h), and the exact distance only where the bound is below the point's best
-// so far (from c at first).
+// candidate, each point's lower bound of its distance to it (box, plane and edge lines, eight
+// points at a time: candidates.h), and the exact distance only where the bound is below the
+// point's best so far (from c at first).
 struct RunSearch {
     const Mesh3& target;
     const V3* points;
@@ -221,7 +227,7 @@ struct RunSearch {
     std::vector<uint64_t> keyed;  // (box distance, record) of each candidate, in that order
     std::vector<float> qx, qy, qz, limit;  // the run's points relative to its centre, their bests
     std::vector<uint32_t> record, which;  // each point's nearest so far; the points a candidate may be nearer to
-    std::vector<double> upper;  // each point's squared distance to it
+    std::vector<double> upper;  // each point's squared distance to its nearest so far
     RunSearch(const Mesh3& t, const V3* p) : target(t), points(p) {}
 
     // one descent of the tree for each point of [b, e)
@@ -320,9 +326,7 @@ struct RunSearch {
                 farthest = 0;
                 for (size_t i = 0; i < n; ++i) farthest = std::max(farthest, upper[i]);
             }
-            float floor;
-            const uint32_t bits = uint32_t(keyed[k] >> 32);
-            std::memcpy(&floor, &bits, sizeof bits);
+            const float floor = bits_float(uint32_t(keyed[k] >> 32));
             if (floor > float(farthest * (1.0 + 1e-6))) break;  // sorted: every later box is as far
             const uint32_t t = uint32_t(keyed[k]);
             if (t == c) continue;  // (every best is at most its distance already)

@@ -30,6 +30,9 @@ struct Flat {
     V3 lo, hi;
 };
 
+// The Gram determinant of the edges from a: (2 area)^2.
+inline double gram(const Flat& f) { return f.d00 * f.d11 - f.d01 * f.d01; }
+
 inline Flat make_flat(V3 a, V3 b, V3 c) {
     Flat f;
     f.a = a;
@@ -41,7 +44,7 @@ inline Flat make_flat(V3 a, V3 b, V3 c) {
     f.lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
     f.hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
     f.d00 = dot(f.e0, f.e0), f.d01 = dot(f.e0, f.e1), f.d11 = dot(f.e1, f.e1);
-    const double det = f.d00 * f.d11 - f.d01 * f.d01;
+    const double det = gram(f);
     f.inverse = len > 0 && det > 0 ? 1.0 / det : std::numeric_limits<double>::quiet_NaN();
     const double l22 = dot(c - b, c - b);
     f.i00 = f.d00 > 0 ? 1.0 / f.d00 : 0.0, f.i11 = f.d11 > 0 ? 1.0 / f.d11 : 0.0, f.i22 = l22 > 0 ? 1.0 / l22 : 0.0;
@@ -99,7 +102,7 @@ inline double distance2_below(const Flat& f, V3 p, double best) {
     const double above = dot(f.normal, p) + f.offset;
     if (u >= 0 && v >= 0 && u + v <= 1) return above * above;
     const double t = 1 - u - v;
-    const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) * (f.d00 * f.d11 - f.d01 * f.d01);
+    const double beyond = std::max({u < 0 ? u * u * f.i11 : 0.0, v < 0 ? v * v * f.i00 : 0.0, t < 0 ? t * t * f.i22 : 0.0}) * gram(f);
     const double low = above * above + beyond;  // (NaN for a degenerate triangle: never skipped)
     if (low * (1.0 - 1e-9) - (f.d00 + f.d11) * 0x1p-60 >= best) return low;
     return edges_d2(f, w, w0, w1);
