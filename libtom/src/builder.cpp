@@ -1005,7 +1005,6 @@ void run_heap(Builder& b, ListAdjacency& adj) {
         }
     std::make_heap(heap.begin(), heap.end());
     std::vector<uint32_t> ring;
-    std::vector<uint32_t> ring_mark(b.n, kNone);
     while (!heap.empty()) {
         std::pop_heap(heap.begin(), heap.end());
         const Entry e = heap.back();
@@ -1020,12 +1019,8 @@ void run_heap(Builder& b, ListAdjacency& adj) {
         adj.compact(e.u);
         ring.clear();
         ring.push_back(e.u);
-        ring_mark[e.u] = e.v;
-        b.each_corner(adj, e.u, [&](uint32_t w) {
-            if (ring_mark[w] != e.v) {
-                ring_mark[w] = e.v;
-                ring.push_back(w);
-            }
+        b.each_distinct_corner(adj, e.u, b.scratch, [&](uint32_t w) {
+            if (w != e.u) ring.push_back(w);
         });
         for (uint32_t w : ring) {
             if (b.kind[w] == kLocked) continue;
