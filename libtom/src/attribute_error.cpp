@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "vec3.h"
 
@@ -52,7 +53,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     // each triangle's terms on the team, a tile at a time, then summed in triangle order (the
     // same sums whatever the thread count)
     const float* p = mesh.positions.data();
-    constexpr size_t kTile = 65536;
+    constexpr size_t kTile = 8192;  // a buffer that stays in cache
     std::vector<double> terms(std::min<size_t>(m, kTile) * 5);  // a triangle's three edge lengths, area, UV area
     double edges = 0, area = 0, uv_area = 0;
     for (size_t first = 0; first < m; first += kTile) {
@@ -108,33 +109,48 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     if (!accumulate) return;
     stride_ = 11 + 4 * size_t(channels_);
     zero_on_team(team, quadric_, size_t(n) * stride_);
-    detail::scatter_by_vertex_range(team, n, mesh.indices.data(), m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
-        const uint32_t* c = &mesh.indices[3 * size_t(t)];
-        const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
-        if (!f.valid) return;
-        double q[kMaxStride];
-        std::fill(q, q + stride_, 0.0);
-        const double w = f.area;
-        q[0] = w;
-        for (int j = 0; j < channels_; ++j) {
-            const double a0 = values_[size_t(c[0]) * size_t(channels_) + size_t(j)];
-            const double d1 = values_[size_t(c[1]) * size_t(channels_) + size_t(j)] - a0;
-            const double d2 = values_[size_t(c[2]) * size_t(channels_) + size_t(j)] - a0;
-            const D3 g = {d1 * f.r1.x + d2 * f.r2.x, d1 * f.r1.y + d2 * f.r2.y, d1 * f.r1.z + d2 * f.r2.z};
-            const double d = a0 - dot(g, f.p0);
-            // sum over channels of w (g.p + d)^2 = p^T (w g g^T) p + 2 (w d g).p + w d^2
-            q[1] += w * g.x * g.x, q[2] += w * g.x * g.y, q[3] += w * g.x * g.z, q[4] += w * g.y * g.y, q[5] += w * g.y * g.z, q[6] += w * g.z * g.z;
-            q[7] += w * d * g.x, q[8] += w * d * g.y, q[9] += w * d * g.z;
-            q[10] += w * d * d;
-            double* ch = &q[11 + 4 * size_t(j)];
-            ch[0] = w * g.x, ch[1] = w * g.y, ch[2] = w * g.z, ch[3] = w * d;
-        }
-        for (int k = 0; k < 3; ++k) {
-            if (c[k] < lo || c[k] >= hi) continue;
-            double* dst = &quadric_[size_t(c[k]) * stride_];
-            for (size_t i = 0; i < stride_; ++i) dst[i] += q[i];
-        }
-    });
+    const float* values = values_.data();
+    double* quadric = quadric_.data();
+    auto scatter = [&](auto channel_count) {  // the channel count a constant where it is common: unrolled sums, the same in the same order
+        constexpr int kC = decltype(channel_count)::value;
+        const int channels = kC ? kC : channels_;
+        const size_t stride = stride_;
+        detail::scatter_by_vertex_range(team, n, mesh.indices.data(), m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
+            const uint32_t* c = &mesh.indices[3 * size_t(t)];
+            const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
+            if (!f.valid) return;
+            double q[kMaxStride] = {};
+            const double w = f.area;
+            q[0] = w;
+            for (int j = 0; j < channels; ++j) {
+                const double a0 = values[size_t(c[0]) * size_t(channels) + size_t(j)];
+                const double d1 = values[size_t(c[1]) * size_t(channels) + size_t(j)] - a0;
+                const double d2 = values[size_t(c[2]) * size_t(channels) + size_t(j)] - a0;
+                const D3 g = {d1 * f.r1.x + d2 * f.r2.x, d1 * f.r1.y + d2 * f.r2.y, d1 * f.r1.z + d2 * f.r2.z};
+                const double d = a0 - dot(g, f.p0);
+                // sum over channels of w (g.p + d)^2 = p^T (w g g^T) p + 2 (w d g).p + w d^2
+                q[1] += w * g.x * g.x, q[2] += w * g.x * g.y, q[3] += w * g.x * g.z, q[4] += w * g.y * g.y, q[5] += w * g.y * g.z, q[6] += w * g.z * g.z;
+                q[7] += w * d * g.x, q[8] += w * d * g.y, q[9] += w * d * g.z;
+                q[10] += w * d * d;
+                double* ch = &q[11 + 4 * size_t(j)];
+                ch[0] = w * g.x, ch[1] = w * g.y, ch[2] = w * g.z, ch[3] = w * d;
+            }
+            for (int k = 0; k < 3; ++k) {
+                if (c[k] < lo || c[k] >= hi) continue;
+                double* dst = quadric + size_t(c[k]) * stride;
+                if (kC) {
+                    for (size_t i = 0; i < size_t(11 + 4 * kC); ++i) dst[i] += q[i];
+                } else {
+                    for (size_t i = 0; i < stride; ++i) dst[i] += q[i];
+                }
+            }
+        });
+    };
+    switch (channels_) {
+    case 3: scatter(std::integral_constant<int, 3>()); break;  // normals
+    case 5: scatter(std::integral_constant<int, 5>()); break;  // normals, TEXCOORD_0
+    default: scatter(std::integral_constant<int, 0>()); break;
+    }
 }
 
 void AttributeError::merge(uint32_t u, uint32_t v) noexcept {

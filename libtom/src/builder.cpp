@@ -513,11 +513,16 @@ void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allo
     // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
     // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
     // inconsistently oriented) locks both ends; an edge without its reverse is open.
-    // each vertex writes only its own class and border links: blocks of vertices on the team
+    // each vertex writes only its own class and border links: blocks of vertices on the team.
+    // The counts sit in the worker's array, zero between vertices: tally[2x] = x's count in outs,
+    // tally[2x + 1] in ins, held at 2 (only 0, 1 and more than 1 matter)
     std::vector<std::vector<uint32_t>> lists(2 * size_t(team.size()));
+    std::vector<std::vector<uint8_t>> tallies(team.size());
     team.blocks(n, 4096, [&](unsigned worker, size_t begin, size_t end) {
-        std::vector<uint32_t>& outs = lists[2 * worker];  // of v, in corner order; sorted copies for a high valence
+        std::vector<uint32_t>& outs = lists[2 * worker];  // of v, in corner order
         std::vector<uint32_t>& ins = lists[2 * worker + 1];
+        std::vector<uint8_t>& tally = tallies[worker];
+        if (tally.empty()) tally.assign(2 * size_t(n), 0);
         for (uint32_t v = uint32_t(begin); v < uint32_t(end); ++v) {
             outs.clear();
             ins.clear();
@@ -526,34 +531,20 @@ void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allo
                 b.others(t, v, e, w);
                 outs.push_back(e);
                 ins.push_back(w);
+                uint8_t& out_count = tally[2 * size_t(e)];
+                uint8_t& in_count = tally[2 * size_t(w) + 1];
+                out_count += out_count < 2;
+                in_count += in_count < 2;
             });
             const uint32_t valence = uint32_t(outs.size());
-            outs.resize(2 * size_t(valence));
-            ins.resize(2 * size_t(valence));
             const uint32_t* out = outs.data();
             const uint32_t* in = ins.data();
-            const bool wide = valence > 32;  // count by binary search in sorted copies
-            if (wide) {
-                std::copy(outs.begin(), outs.begin() + valence, outs.begin() + valence);
-                std::copy(ins.begin(), ins.begin() + valence, ins.begin() + valence);
-                std::sort(outs.begin() + valence, outs.end());
-                std::sort(ins.begin() + valence, ins.end());
-            }
-            auto count = [&](const uint32_t* list, uint32_t x) {
-                if (wide) {
-                    const auto range = std::equal_range(list + valence, list + 2 * valence, x);
-                    return uint32_t(range.second - range.first);
-                }
-                uint32_t k = 0;
-                for (uint32_t i = 0; i < valence; ++i) k += list[i] == x;
-                return k;
-            };
             uint32_t open_out = 0, open_in = 0;
             bool locked = false;
-            // the edge between v and x, x taken from `mine` (out or in): its multiplicity in that
-            // direction is x's count in mine, the reverse's x's count in `theirs`
-            auto edge = [&](uint32_t x, const uint32_t* mine, const uint32_t* theirs, uint32_t& link, uint32_t& open) {
-                const uint32_t fwd = count(mine, x), rev = count(theirs, x);
+            // the edge between v and x, x taken from outs (mine = 0) or ins (1): its multiplicity
+            // in that direction is x's count there, the reverse's x's count in the other list
+            auto edge = [&](uint32_t x, size_t mine, uint32_t& link, uint32_t& open) {
+                const uint32_t fwd = tally[2 * size_t(x) + mine], rev = tally[2 * size_t(x) + (1 - mine)];
                 if (fwd > 1 || rev > 1) {
                     locked = true;
                 } else if (rev == 0) {
@@ -562,13 +553,14 @@ void classify(Builder& b, const ListAdjacency& adj, BuildStats& stats, bool allo
                 }
             };
             for (uint32_t i = 0; i < valence; ++i) {
-                edge(out[i], out, in, b.border_next[v], open_out);
-                edge(in[i], in, out, b.border_prev[v], open_in);
+                edge(out[i], 0, b.border_next[v], open_out);
+                edge(in[i], 1, b.border_prev[v], open_in);
             }
             if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
                 b.kind[v] = kLocked;
             else if (open_out == 1)
                 b.kind[v] = kBorder;
+            for (uint32_t i = 0; i < valence; ++i) tally[2 * size_t(out[i])] = tally[2 * size_t(in[i]) + 1] = 0;
         }
     });
     // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
