@@ -1022,18 +1022,23 @@ void run_heap(Builder& b, ListAdjacency& adj) {
     }
 }
 
+// the blocks in which the team shares the set-up's and the output's per-vertex and per-triangle loops
+constexpr size_t kRowBlock = 16384;
+
 // dst = src's vertex rows in the given order (row i = src row order[i]) for every stream of
 // `from` into the same stream of `to`; positions included. Streams not one row per vertex are
 // copied as they are (clean_mesh leaves none).
 template <class From, class To>
-void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>& order) {
+void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>& order, detail::Team& team) {
     auto gather = [&](const std::vector<float>& src, std::vector<float>& dst, size_t width) {
         if (src.size() != order.size() * width) {
             dst = src;
             return;
         }
         dst.resize(src.size());
-        for (size_t i = 0; i < order.size(); ++i) std::memcpy(&dst[i * width], &src[size_t(order[i]) * width], width * sizeof(float));
+        team.blocks(order.size(), kRowBlock, [&](unsigned, size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) std::memcpy(&dst[i * width], &src[size_t(order[i]) * width], width * sizeof(float));
+        });
     };
     gather(from.positions, to.positions, 3);
     std::vector<const std::vector<float>*> sources;
@@ -1048,7 +1053,8 @@ void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>
 // median), and the passes then miss the cache on almost every neighbour's quadric and corner
 // list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
 // the positions' bounding box (zero for no vertex), which the codes are taken in.
-Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3]) {
+Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3],
+                          detail::Team& team) {
     const uint32_t n = in.vertex_count(), m = in.triangle_count();
     std::fill(lo, lo + 3, 0.0f);
     std::fill(hi, hi + 3, 0.0f);
@@ -1059,42 +1065,50 @@ Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std
             hi[k] = v ? std::max(hi[k], x) : x;
         }
     std::vector<uint32_t> code(n);
-    for (uint32_t v = 0; v < n; ++v) {
-        uint32_t c = 0;
-        for (int k = 0; k < 3; ++k) {
-            const float extent = hi[k] - lo[k];
-            const float t = extent > 0 ? (in.positions[3 * size_t(v) + size_t(k)] - lo[k]) / extent : 0.0f;
-            c |= uint32_t(detail::spread_bits(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f))))) << k;  // 10 bits: 30 in all
-        }
-        code[v] = c;
-    }
-    // by the 30-bit codes, stable: equal codes keep input order
     vertex_old.resize(n);
-    for (uint32_t v = 0; v < n; ++v) vertex_old[v] = v;
+    team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (uint32_t v = uint32_t(begin); v < uint32_t(end); ++v) {
+            uint32_t c = 0;
+            for (int k = 0; k < 3; ++k) {
+                const float extent = hi[k] - lo[k];
+                const float t = extent > 0 ? (in.positions[3 * size_t(v) + size_t(k)] - lo[k]) / extent : 0.0f;
+                c |= uint32_t(detail::spread_bits(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f))))) << k;  // 10 bits: 30 in all
+            }
+            code[v] = c;
+            vertex_old[v] = v;
+        }
+    });
+    // by the 30-bit codes, stable: equal codes keep input order
     {
         std::vector<uint32_t> tmp;
-        detail::radix_sort(vertex_old, tmp, 30, [&](uint32_t v) { return code[v]; });
+        detail::radix_sort(vertex_old, tmp, 30, [&](uint32_t v) { return code[v]; }, &team);
     }
     std::vector<uint32_t> vertex_new(n);
-    for (uint32_t i = 0; i < n; ++i) vertex_new[vertex_old[i]] = i;
+    team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (uint32_t i = uint32_t(begin); i < uint32_t(end); ++i) vertex_new[vertex_old[i]] = i;
+    });
 
     Mesh out;
     out.name = in.name;
     out.material = in.material;
-    gather_vertex_streams(in, out, vertex_old);
+    gather_vertex_streams(in, out, vertex_old, team);
     // triangles by their lowest new vertex (counting sort, stable)
-    std::vector<uint32_t> start(size_t(n) + 1, 0);
-    auto first_vertex = [&](uint32_t t) {
-        const uint32_t* c = &in.indices[3 * size_t(t)];
-        return std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
-    };
-    for (uint32_t t = 0; t < m; ++t) ++start[first_vertex(t) + 1];
+    std::vector<uint32_t> first_vertex(m), start(size_t(n) + 1, 0);
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+            const uint32_t* c = &in.indices[3 * t];
+            first_vertex[t] = std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
+        }
+    });
+    for (uint32_t t = 0; t < m; ++t) ++start[first_vertex[t] + 1];
     for (uint32_t i = 0; i < n; ++i) start[i + 1] += start[i];
     triangle_old.resize(m);
-    for (uint32_t t = 0; t < m; ++t) triangle_old[start[first_vertex(t)]++] = t;
+    for (uint32_t t = 0; t < m; ++t) triangle_old[start[first_vertex[t]]++] = t;
     out.indices.resize(in.indices.size());
-    for (uint32_t t = 0; t < m; ++t)
-        for (int k = 0; k < 3; ++k) out.indices[3 * size_t(t) + size_t(k)] = vertex_new[in.indices[3 * size_t(triangle_old[t]) + size_t(k)]];
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t)
+            for (size_t k = 0; k < 3; ++k) out.indices[3 * t + k] = vertex_new[in.indices[3 * size_t(triangle_old[t]) + k]];
+    });
     return out;
 }
 
@@ -1125,9 +1139,10 @@ const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "pas
 
 TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
     BuildStats stats;
+    detail::Team team(thread_count(params.threads));
     std::vector<uint32_t> vertex_old, triangle_old;
     float bounds_min[3], bounds_max[3];
-    const Mesh mesh = reorder_for_locality(input, vertex_old, triangle_old, bounds_min, bounds_max);
+    const Mesh mesh = reorder_for_locality(input, vertex_old, triangle_old, bounds_min, bounds_max, team);
     Builder b;
     b.n = mesh.vertex_count();
     b.m = mesh.triangle_count();
@@ -1158,7 +1173,6 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     b.removed_target.reserve(b.n);
     // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
     // keep coincident copies locked
-    detail::Team team(thread_count(params.threads));
     ListAdjacency adj;  // the triangles around each vertex, from classification to the last substitution
     adj.build(b);
     classify(b, adj, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), team);
@@ -1176,12 +1190,16 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     const uint32_t n = b.n, m = b.m;
     {
         std::vector<uint8_t> removed(n);
-        for (uint32_t i = 0; i < n; ++i) removed[vertex_old[i]] = b.removed[i];
+        team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) removed[vertex_old[i]] = b.removed[i];
+        });
         b.removed.swap(removed);
         for (uint32_t& v : b.removed_order) v = vertex_old[v];
         for (uint32_t& v : b.removed_target) v = vertex_old[v];
         std::vector<uint32_t> death(m);
-        for (uint32_t t = 0; t < m; ++t) death[triangle_old[t]] = b.death_step[t];
+        team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+            for (size_t t = begin; t < end; ++t) death[triangle_old[t]] = b.death_step[t];
+        });
         b.death_step.swap(death);
     }
 
@@ -1204,7 +1222,7 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     for (uint32_t i = 0; i < s; ++i) out.substitute[i] = i;
     for (uint32_t j = 0; j < removed_count; ++j) out.substitute[n - 1 - j] = new_index[b.removed_target[j]];
 
-    gather_vertex_streams(input, out, out.original_index);
+    gather_vertex_streams(input, out, out.original_index, team);
 
     // triangle t is alive at resolution r >= key(t): key = n - step for a triangle killed by
     // substitution `step` (its removed vertex gets index n-1-step), s for the survivors.
@@ -1215,11 +1233,11 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     for (uint32_t k = 0; k <= n; ++k) bucket[k + 1] += bucket[k];
     out.triangles.resize(size_t(m) * 3);
     out.original_triangle.resize(m);
-    for (uint32_t t = 0; t < m; ++t) {
-        const uint32_t slot = bucket[key_of(t)]++;
-        out.original_triangle[slot] = t;
-        for (int k = 0; k < 3; ++k) out.triangles[3 * size_t(slot) + k] = new_index[input.indices[3 * size_t(t) + k]];
-    }
+    for (uint32_t t = 0; t < m; ++t) out.original_triangle[bucket[key_of(t)]++] = t;
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t slot = begin; slot < end; ++slot)
+            for (size_t k = 0; k < 3; ++k) out.triangles[3 * slot + k] = new_index[input.indices[3 * size_t(out.original_triangle[slot]) + k]];
+    });
 
     std::copy(bounds_min, bounds_min + 3, out.bounds_min);
     std::copy(bounds_max, bounds_max + 3, out.bounds_max);
