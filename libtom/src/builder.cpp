@@ -494,12 +494,47 @@ struct ListAdjacency {
     }
 };
 
-// Candidates by cost (non-negative floats sort like their bits), stable.
-void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp) {
+// Candidates by cost (non-negative floats sort like their bits), stable; the team shares a
+// large sort (the same order).
+void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp, detail::Team& team) {
     detail::radix_sort(items, tmp, 32, [](const Candidate& c) {
         uint32_t bits;
         std::memcpy(&bits, &c.cost, 4);
         return bits;
+    }, &team);
+}
+
+// Splits [0, count) in order: make(i) goes to `first` where which(i) is 1, to `second` where it
+// is 2, nowhere where 0. The team counts and then places fixed blocks, so the order is the same
+// whatever its size.
+template <class T, class Which, class Make>
+void split_in_order(detail::Team& team, size_t count, Which&& which, Make&& make, std::vector<T>& first, std::vector<T>& second) {
+    constexpr size_t kBlock = 8192;
+    std::vector<size_t> place(2 * ((count + kBlock - 1) / kBlock));  // per block: its first places in first and second
+    team.blocks(count, kBlock, [&](unsigned, size_t begin, size_t end) {
+        size_t ones = 0, twos = 0;
+        for (size_t i = begin; i < end; ++i) {
+            const int w = which(i);
+            ones += w == 1;
+            twos += w == 2;
+        }
+        place[2 * (begin / kBlock)] = ones;
+        place[2 * (begin / kBlock) + 1] = twos;
+    });
+    size_t ones = 0, twos = 0;
+    for (size_t k = 0; k < place.size(); k += 2) {
+        ones += std::exchange(place[k], ones);
+        twos += std::exchange(place[k + 1], twos);
+    }
+    first.resize(ones);
+    second.resize(twos);
+    team.blocks(count, kBlock, [&](unsigned, size_t begin, size_t end) {
+        size_t one = place[2 * (begin / kBlock)], two = place[2 * (begin / kBlock) + 1];
+        for (size_t i = begin; i < end; ++i) {
+            const int w = which(i);
+            if (w == 1) first[one++] = make(i);
+            else if (w == 2) second[two++] = make(i);
+        }
     });
 }
 
@@ -718,28 +753,29 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
 // Sorts the cheapest `keep` (at least) candidates to the front: one histogram on the top bits
 // finds the bucket where the count reaches `keep`, and only the candidates up to it are radix
 // sorted. The rest follow in their original order. Stable, deterministic.
-void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest) {
+void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest, detail::Team& team) {
     if (keep >= items.size()) {
-        sort_candidates(items, tmp);
+        sort_candidates(items, tmp, team);
         return;
     }
-    uint32_t hist[2048] = {};
     auto bucket = [](const Candidate& c) {
         uint32_t bits;
         std::memcpy(&bits, &c.cost, 4);
         return bits >> 21;  // non-negative floats: the top 11 bits below the sign order them coarsely
     };
-    for (const Candidate& c : items) ++hist[bucket(c)];
+    std::vector<uint32_t> hists(size_t(team.size()) * 2048, 0);  // per team thread (counts: their sum is the same)
+    team.blocks(items.size(), 8192, [&](unsigned worker, size_t begin, size_t end) {
+        uint32_t* hist = &hists[size_t(worker) * 2048];
+        for (size_t i = begin; i < end; ++i) ++hist[bucket(items[i])];
+    });
     uint32_t limit = 0;
     for (size_t sum = 0; limit < 2048; ++limit) {
-        sum += hist[limit];
+        for (unsigned worker = 0; worker < team.size(); ++worker) sum += hists[size_t(worker) * 2048 + limit];
         if (sum >= keep) break;
     }
-    tmp.clear();
-    rest.clear();
-    for (const Candidate& c : items) (bucket(c) <= limit ? tmp : rest).push_back(c);
+    split_in_order(team, items.size(), [&](size_t i) { return bucket(items[i]) <= limit ? 1 : 2; }, [&](size_t i) { return items[i]; }, tmp, rest);
     items.swap(tmp);
-    sort_candidates(items, tmp);
+    sort_candidates(items, tmp, team);
     items.insert(items.end(), rest.begin(), rest.end());
 }
 
@@ -782,7 +818,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
     std::vector<uint32_t> pass_mark(b.n, 0);
     // the vertices to evaluate in a pass are independent: each reads the shared state and writes
     // only its own best[], has[] and dirty[] (results do not depend on the thread count)
-    std::vector<uint32_t> evaluate;
+    std::vector<uint32_t> evaluate, unused;  // (unused: split_in_order's second list, always empty here)
     std::vector<Scratch> helpers(team.size() - 1);
     for (Scratch& h : helpers) h.stamp.assign(b.n, 0);
     uint32_t alive_count = b.n;
@@ -805,10 +841,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
         });
     };
     for (uint32_t pass = 1;; ++pass) {
-        candidates.clear();
-        evaluate.clear();
-        for (uint32_t v : live_vertices)
-            if (dirty[v]) evaluate.push_back(v);
+        split_in_order(team, live_vertices.size(), [&](size_t i) { return int(dirty[live_vertices[i]]); }, [&](size_t i) { return live_vertices[i]; }, evaluate, unused);
         // two phases: compaction rewrites v's list, which another vertex's oracle may be walking
         // (each corner is in one list, so compactions do not meet); evaluation only reads lists
         parallel_for(team, evaluate.size(), b.scratch, helpers, [&](size_t i, Scratch&) { adj.compact(evaluate[i]); });
@@ -819,15 +852,14 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
             has[v] = b.best_target(adj, v, best[v], needs_oracle[v] != 0, sc);
             dirty[v] = 0;
         });
-        for (uint32_t v : live_vertices)
-            if (has[v]) candidates.push_back(best[v]);
+        split_in_order(team, live_vertices.size(), [&](size_t i) { return int(has[live_vertices[i]]); }, [&](size_t i) { return best[live_vertices[i]]; }, candidates, rest);
         size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
         // independence rejects many candidates: the cheapest 4 x quota are enough to fill a pass
-        sort_cheapest(candidates, quota * 4, tmp, rest);
+        sort_cheapest(candidates, quota * 4, tmp, rest, team);
         size_t executed = 0;
         for (int attempt = 0; attempt < 2 && executed == 0 && !candidates.empty(); ++attempt) {
             if (attempt == 1) {  // nothing went through: try them all, in order
-                sort_candidates(candidates, tmp);
+                sort_candidates(candidates, tmp, team);
                 quota = candidates.size();
             }
             size_t chunk_begin = 0, chunk_end = 0;
@@ -964,10 +996,8 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
         full_rescan_done = false;
         ++stats.passes;
         alive_count -= uint32_t(executed);
-        size_t keep = 0;
-        for (uint32_t v : live_vertices)
-            if (!b.removed[v]) live_vertices[keep++] = v;
-        live_vertices.resize(keep);
+        split_in_order(team, live_vertices.size(), [&](size_t i) { return int(!b.removed[live_vertices[i]]); }, [&](size_t i) { return live_vertices[i]; }, evaluate, unused);
+        live_vertices.swap(evaluate);
     }
 }
 
