@@ -123,6 +123,9 @@ struct Builder {
     std::vector<uint32_t> removed_order, removed_target;
     std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
     Scratch scratch;  // the calling thread's; workers bring their own
+    // with a list, apply() leaves the quadric merges (target, removed) there for the caller to make
+    // before the targets' quadrics are read (run_passes: on the team, with the next foresight)
+    std::vector<std::pair<uint32_t, uint32_t>>* deferred_merges = nullptr;
 
     // (both without branches: which corner holds v is a coin toss the predictor always loses)
     bool contains(uint32_t t, uint32_t v) const {
@@ -393,6 +396,21 @@ struct Builder {
         return false;
     }
 
+    // v's geometric and attribute quadrics into u's (v -> u)
+    void merge_quadrics(uint32_t u, uint32_t v) {
+        add(quadric[u], quadric[v]);
+        attributes.merge(u, v);
+    }
+    // merge i of a list (target, removed), the rows of merge i + 4 loaded meanwhile
+    void merge_quadrics(const std::vector<std::pair<uint32_t, uint32_t>>& merges, size_t i) {
+        if (i + 4 < merges.size())
+            for (const uint32_t x : {merges[i + 4].first, merges[i + 4].second}) {
+                __builtin_prefetch(&quadric[x]);
+                attributes.prefetch(x);
+            }
+        merge_quadrics(merges[i].first, merges[i].second);
+    }
+
     // Substitutes v -> u in v's live triangles.
     template <class Adj>
     void apply(const Adj& adj, uint32_t v, uint32_t u) {
@@ -421,8 +439,10 @@ struct Builder {
         removed_order.push_back(v);
         removed_target.push_back(u);
         if (predicate == Predicate::quadric) {
-            add(quadric[u], quadric[v]);
-            attributes.merge(u, v);
+            if (deferred_merges)
+                deferred_merges->push_back({u, v});
+            else
+                merge_quadrics(u, v);
         }
         if (kind[v] == kBorder || kind[v] == kSeam) {
             const uint32_t p = border_prev[v], q = border_next[v];
@@ -830,6 +850,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
     // is what the oracle would say now, and so is a cost whose quadric is unmerged. Same
     // substitutions, same files, with the oracle's and the costs' cold reads off the sequential path.
     std::vector<Foresight> foresight(kChunkMax);
+    std::vector<std::pair<uint32_t, uint32_t>> merges;  // a chunk's, made with the next foresight
     std::vector<uint32_t> touched(b.n, 0), merged(b.n, 0);
     uint32_t chunk = 0;
     // a substitution of x changes its ring: each vertex is looked at again next pass, and the
@@ -866,6 +887,12 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
             // a chunk's substitutions touch about 7 classes each: on a small mesh most of the next
             // verdicts would be stale, and their work lost (chunks of at most 1/64 of the mesh)
             const bool ahead = team.size() > 1 && alive_count >= 64 * 32;
+            // with the foresight, a chunk's quadric merges are made by the team with the next
+            // chunk's foresight (and at the end): a merge's target is dirty from then on, so until
+            // the next pass evaluates it nothing reads its quadric (the loop and the foresight
+            // read only clean vertices'), and each target takes one merge a pass (pass_mark):
+            // the same sums, off the sequential path
+            b.deferred_merges = ahead && b.predicate == Predicate::quadric ? &merges : nullptr;
             for (size_t ci = 0; ci < candidates.size(); ++ci) {
                 const Candidate& c = candidates[ci];
                 if (executed >= quota) break;
@@ -876,7 +903,13 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     chunk_begin = ci;
                     const size_t length = std::min({size_t(kChunkMax), size_t(alive_count / 64), std::max<size_t>(32, (quota - executed) * 5 / 4)});
                     chunk_end = std::min(candidates.size(), ci + length);
-                    parallel_for(team, chunk_end - chunk_begin, b.scratch, helpers, [&](size_t k, Scratch& sc) {
+                    const size_t pending = merges.size();
+                    parallel_for(team, pending + (chunk_end - chunk_begin), b.scratch, helpers, [&](size_t i, Scratch& sc) {
+                        if (i < pending) {
+                            b.merge_quadrics(merges, i);
+                            return;
+                        }
+                        const size_t k = i - pending;
                         // the reads of the candidates a little ahead started now (the chunk's
                         // vertices lie anywhere in the mesh: its cost order, not its layout)
                         if (chunk_begin + k + 8 < chunk_end) b.prefetch(adj, candidates[chunk_begin + k + 8].v);
@@ -907,6 +940,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         });
                         if (ring <= kRingMax) f.ring = uint8_t(ring);
                     });
+                    merges.clear();
                 }
                 if (ci + 4 < candidates.size()) b.prefetch(adj, candidates[ci + 4].v);
                 if (ci + 2 < candidates.size()) adj.prefetch_fan(candidates[ci + 2].v);
@@ -984,6 +1018,9 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                 pass_mark[c.v] = pass_mark[c.u] = pass;
                 ++executed;
             }
+            parallel_for(team, merges.size(), b.scratch, helpers, [&](size_t i, Scratch&) { b.merge_quadrics(merges, i); });
+            merges.clear();
+            b.deferred_merges = nullptr;
         }
         if (executed == 0) {
             // cached verdicts can be stale two rings away: one full re-evaluation before stopping
