@@ -770,33 +770,52 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
     }
 }
 
-// Sorts the cheapest `keep` (at least) candidates to the front: one histogram on the top bits
-// finds the bucket where the count reaches `keep`, and only the candidates up to it are radix
-// sorted. The rest follow in their original order. Stable, deterministic.
-void sort_cheapest(std::vector<Candidate>& items, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest, detail::Team& team) {
-    if (keep >= items.size()) {
-        sort_candidates(items, tmp, team);
-        return;
-    }
-    auto bucket = [](const Candidate& c) {
-        uint32_t bits;
-        std::memcpy(&bits, &c.cost, 4);
-        return bits >> 21;  // non-negative floats: the top 11 bits below the sign order them coarsely
-    };
+// non-negative floats: the top 11 bits below the sign order costs coarsely
+inline uint32_t cost_bucket(const Candidate& c) {
+    uint32_t bits;
+    std::memcpy(&bits, &c.cost, 4);
+    return bits >> 21;
+}
+
+// The candidates of a pass in the order the loop takes them: the cheapest `keep` (at least: whole
+// buckets) sorted, then the others in their original order. Sorted in two steps, as the loop
+// reaches them: sort_cheapest() sorts the cheapest `first` (at least) to the front of `items` and
+// moves the others, in order, to `rest`, returning the last bucket of the cheapest `keep`;
+// sort_next(), once the loop has passed the front, appends the rest up to that bucket, sorted,
+// and then the others. The same order as one sort (buckets follow costs; equal costs share a
+// bucket and keep their order) for the part the loop reaches: bunny00's passes stop after 1.3
+// times their quota, while the cheapest 4 x quota are 4.7 times it. Stable, deterministic.
+uint32_t sort_cheapest(std::vector<Candidate>& items, size_t first, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest,
+                       detail::Team& team) {
     std::vector<uint32_t> hists(size_t(team.size()) * 2048, 0);  // per team thread (counts: their sum is the same)
     team.blocks(items.size(), 8192, [&](unsigned worker, size_t begin, size_t end) {
         uint32_t* hist = &hists[size_t(worker) * 2048];
-        for (size_t i = begin; i < end; ++i) ++hist[bucket(items[i])];
+        for (size_t i = begin; i < end; ++i) ++hist[cost_bucket(items[i])];
     });
-    uint32_t limit = 0;
-    for (size_t sum = 0; limit < 2048; ++limit) {
-        for (unsigned worker = 0; worker < team.size(); ++worker) sum += hists[size_t(worker) * 2048 + limit];
-        if (sum >= keep) break;
+    uint32_t limit_first = 2047, limit_keep = 2047;
+    size_t sum = 0;
+    for (uint32_t bucket = 0; bucket < 2048; ++bucket) {
+        const size_t before = sum;
+        for (unsigned worker = 0; worker < team.size(); ++worker) sum += hists[size_t(worker) * 2048 + bucket];
+        if (before < first && sum >= first) limit_first = bucket;
+        if (sum >= keep) {
+            limit_keep = bucket;
+            break;
+        }
     }
-    split_in_order(team, items.size(), [&](size_t i) { return bucket(items[i]) <= limit ? 1 : 2; }, [&](size_t i) { return items[i]; }, tmp, rest);
+    limit_first = std::min(limit_first, limit_keep);
+    split_in_order(team, items.size(), [&](size_t i) { return cost_bucket(items[i]) <= limit_first ? 1 : 2; }, [&](size_t i) { return items[i]; }, tmp, rest);
     items.swap(tmp);
     sort_candidates(items, tmp, team);
-    items.insert(items.end(), rest.begin(), rest.end());
+    return limit_keep;
+}
+void sort_next(std::vector<Candidate>& items, std::vector<Candidate>& rest, uint32_t limit_keep, std::vector<Candidate>& tmp, detail::Team& team) {
+    std::vector<Candidate> next, others;
+    split_in_order(team, rest.size(), [&](size_t i) { return cost_bucket(rest[i]) <= limit_keep ? 1 : 2; }, [&](size_t i) { return rest[i]; }, next, others);
+    sort_candidates(next, tmp, team);
+    items.insert(items.end(), next.begin(), next.end());
+    items.insert(items.end(), others.begin(), others.end());
+    rest.clear();
 }
 
 // What the team found out ahead of the sequential loop about one candidate v -> u of a pass.
@@ -876,10 +895,13 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
         split_in_order(team, live_vertices.size(), [&](size_t i) { return int(has[live_vertices[i]]); }, [&](size_t i) { return best[live_vertices[i]]; }, candidates, rest);
         size_t quota = std::max<size_t>(1, size_t(std::ceil(double(fraction) * alive_count)));
         // independence rejects many candidates: the cheapest 4 x quota are enough to fill a pass
-        sort_cheapest(candidates, quota * 4, tmp, rest, team);
+        // (sorted as far as the loop goes: the cheapest 2 x quota first)
+        const uint32_t limit_keep = sort_cheapest(candidates, quota * 2, quota * 4, tmp, rest, team);
         size_t executed = 0;
         for (int attempt = 0; attempt < 2 && executed == 0 && !candidates.empty(); ++attempt) {
             if (attempt == 1) {  // nothing went through: try them all, in order
+                candidates.insert(candidates.end(), rest.begin(), rest.end());
+                rest.clear();
                 sort_candidates(candidates, tmp, team);
                 quota = candidates.size();
             }
@@ -893,9 +915,12 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
             // read only clean vertices'), and each target takes one merge a pass (pass_mark):
             // the same sums, off the sequential path
             b.deferred_merges = ahead && b.predicate == Predicate::quadric ? &merges : nullptr;
-            for (size_t ci = 0; ci < candidates.size(); ++ci) {
+            for (size_t ci = 0; executed < quota; ++ci) {
+                if (ci == candidates.size()) {  // past the sorted front
+                    if (rest.empty()) break;
+                    sort_next(candidates, rest, limit_keep, tmp, team);
+                }
                 const Candidate& c = candidates[ci];
-                if (executed >= quota) break;
                 if (ci == chunk_end && ahead) {
                     // the oracle's verdicts for the next candidates, on the team, from the state
                     // as it is now (a chunk of about what the quota still needs)
