@@ -248,14 +248,19 @@ struct Builder {
             for (int k = 0; k < 3; ++k) f(idx[3 * t + k]);
         });
     }
-    // the same, each distinct corner once (in the order first met; sc's stamps mark them)
-    template <class Adj, class F>
-    void each_distinct_corner(const Adj& adj, uint32_t x, Scratch& sc, F&& f) const {
+    // the same, each distinct corner once (in the order first met; sc's stamps mark them);
+    // with g, g(t) for each of x's live triangles t before its corners
+    template <class Adj, class F, class G = void (*)(uint32_t)>
+    void each_distinct_corner(const Adj& adj, uint32_t x, Scratch& sc, F&& f, G&& g = [](uint32_t) {}) const {
         const uint32_t seen = sc.next_visit();
-        each_corner(adj, x, [&](uint32_t w) {
-            if (sc.stamp[w] == seen) return;
-            sc.stamp[w] = seen;
-            f(w);
+        adj.each(x, [&](uint32_t t) {
+            g(t);
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t w = idx[3 * t + k];
+                if (sc.stamp[w] == seen) continue;
+                sc.stamp[w] = seen;
+                f(w);
+            }
         });
     }
 
@@ -414,8 +419,19 @@ struct Builder {
     // Substitutes v -> u in v's live triangles.
     template <class Adj>
     void apply(const Adj& adj, uint32_t v, uint32_t u) {
+        substitute(v, u, [&](auto&& on) { adj.each(v, on); });
+    }
+    // the same, v's live triangles given (in adjacency order: the foresight's list, while v's fan
+    // is as it saw it), so that their reads need not wait for each other along v's corner list
+    void apply(uint32_t v, uint32_t u, const uint32_t* triangles, uint32_t count) {
+        substitute(v, u, [&](auto&& on) {
+            for (uint32_t i = 0; i < count; ++i) on(triangles[i]);
+        });
+    }
+    template <class Fan>
+    void substitute(uint32_t v, uint32_t u, Fan&& fan) {
         const uint32_t step = uint32_t(removed_order.size());
-        adj.each(v, [&](uint32_t t) {
+        fan([&](uint32_t t) {
             if (contains(t, u)) {
                 dead[t] = 1;
                 death_step[t] = step;
@@ -483,6 +499,12 @@ struct ListAdjacency {
             if (!b->dead[c / 3]) f(c / 3);
     }
     void prefetch(uint32_t v) const { __builtin_prefetch(&first[v]); }
+    // what splice(v, u) reads
+    void prefetch_splice(uint32_t v, uint32_t u) const {
+        __builtin_prefetch(&last[v]);
+        __builtin_prefetch(&first[u], 1);
+        __builtin_prefetch(&last[u], 1);
+    }
     // the second step, once first[v] is in: v's first corner's triangle and link
     void prefetch_fan(uint32_t v) const {
         const uint32_t c = first[v];
@@ -825,8 +847,10 @@ constexpr uint8_t kRingUnknown = 255;
 struct Foresight {
     uint8_t verdict;  // the oracle's: kLegal, kIllegal, or kUnknown (not asked)
     uint8_t ring;     // v's neighbours below (when legal, quadric predicate), or kRingUnknown
+    uint8_t fan;      // v's live triangles below (the same), or kRingUnknown
     uint32_t w[kRingMax];
     float cost[kRingMax];  // quadric_cost(w[i], u) for an interior w[i] other than u
+    uint32_t triangle[kRingMax];
 };
 
 // Runs f(i, scratch) for i in [0, count) on the team's threads (the caller's with `own`, each
@@ -942,12 +966,12 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         const Candidate& e = candidates[chunk_begin + k];
                         Foresight& f = foresight[k];
                         f.verdict = kUnknown;
-                        f.ring = kRingUnknown;
+                        f.ring = f.fan = kRingUnknown;
                         if (pass_mark[e.v] == pass || pass_mark[e.u] == pass || b.kind[e.v] == kSeam || b.removed[e.u]) return;
                         f.verdict = b.illegal(adj, e.v, e.u, sc) ? kIllegal : kLegal;
                         if (f.verdict == kIllegal || b.predicate != Predicate::quadric) return;
-                        // v's neighbours (its triangles' corners but v) and, for the interior ones, Q_w(p_u)
-                        uint32_t ring = 0;
+                        // v's triangles, its neighbours (their corners but v) and, for the interior ones, Q_w(p_u)
+                        uint32_t ring = 0, fan = 0;
                         b.each_distinct_corner(adj, e.v, sc, [&](uint32_t w) {
                             if (w == e.v) return;
                             if (ring < kRingMax) {
@@ -962,13 +986,32 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                                     f.cost[ring] = std::numeric_limits<float>::infinity();
                             }
                             ++ring;
+                        }, [&](uint32_t t) {
+                            if (fan < kRingMax) f.triangle[fan] = t;
+                            ++fan;
                         });
                         if (ring <= kRingMax) f.ring = uint8_t(ring);
+                        if (fan <= kRingMax) f.fan = uint8_t(fan);
                     });
                     merges.clear();
                 }
-                if (ci + 4 < candidates.size()) b.prefetch(adj, candidates[ci + 4].v);
-                if (ci + 2 < candidates.size()) adj.prefetch_fan(candidates[ci + 2].v);
+                if (ci + 4 < candidates.size()) {
+                    b.prefetch(adj, candidates[ci + 4].v);
+                    adj.prefetch_splice(candidates[ci + 4].v, candidates[ci + 4].u);
+                }
+                if (ci + 2 < candidates.size()) {
+                    const Foresight* next = ahead && ci + 2 < chunk_end ? &foresight[ci + 2 - chunk_begin] : nullptr;
+                    if (next && next->fan != kRingUnknown) {  // its triangles' corners at once, not down its list
+                        for (uint32_t i = 0; i < next->fan; ++i) {
+                            const size_t t = next->triangle[i];
+                            __builtin_prefetch(&b.idx[3 * t], 1);
+                            __builtin_prefetch(&b.dead[t], 1);
+                            __builtin_prefetch(&b.death_step[t], 1);
+                        }
+                    } else {
+                        adj.prefetch_fan(candidates[ci + 2].v);
+                    }
+                }
                 if (pass_mark[c.v] == pass || pass_mark[c.u] == pass) continue;
                 if (b.kind[c.v] == kSeam) {
                     // both copies move, each to the copy of the target on its side
@@ -1000,6 +1043,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     needs_oracle[c.v] = 1;
                     continue;
                 }
+                const Foresight* listed = nullptr;  // the foresight's list of v's triangles, when it holds
                 // costs that change: u's (its quadric grows) and those of v's neighbours, whose
                 // target v becomes u; legality elsewhere is re-checked when applied
                 if (b.predicate == Predicate::quadric) {
@@ -1020,6 +1064,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         if (cw < best[w].cost || (cw == best[w].cost && c.u < best[w].u)) best[w] = {cw, w, c.u};
                     };
                     const Foresight* f = known == kLegal ? &foresight[ci - chunk_begin] : nullptr;
+                    if (f && f->fan != kRingUnknown) listed = f;
                     if (f && f->ring != kRingUnknown) {
                         touched[b.wedge[c.v]] = chunk;
                         for (uint32_t i = 0; i < f->ring; ++i) {
@@ -1038,7 +1083,10 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     ring_changed(c.v);
                 }
                 touched[b.wedge[c.u]] = chunk;  // a pair target gains v's fan
-                b.apply(adj, c.v, c.u);
+                if (listed)
+                    b.apply(c.v, c.u, listed->triangle, listed->fan);
+                else
+                    b.apply(adj, c.v, c.u);
                 adj.splice(c.v, c.u);
                 pass_mark[c.v] = pass_mark[c.u] = pass;
                 ++executed;
