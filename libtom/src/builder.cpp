@@ -889,12 +889,13 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
     // Foresight (with helpers): before the sequential loop reaches a chunk of candidates, the team
     // takes their oracle verdicts and their neighbours' costs of the target. A substitution applied
     // marks the position classes whose fans it changed (every corner of v's triangles, and u) with
-    // the chunk's number, and its target's quadric as merged: a verdict whose v and u are unmarked
-    // is what the oracle would say now, and so is a cost whose quadric is unmerged. Same
-    // substitutions, same files, with the oracle's and the costs' cold reads off the sequential path.
+    // the chunk's number: a verdict whose v and u are unmarked is what the oracle would say now. A
+    // foreseen cost Q_w(p_u) is used only for a clean w, and a clean w has taken no merge since
+    // (a target is dirty from its merge to the next pass). Same substitutions, same files, with
+    // the oracle's and the costs' cold reads off the sequential path.
     std::vector<Foresight> foresight(kChunkMax);
     std::vector<std::pair<uint32_t, uint32_t>> merges;  // a chunk's, made with the next foresight
-    std::vector<uint32_t> touched(b.n, 0), merged(b.n, 0);
+    std::vector<uint32_t> touched(b.n, 0);
     uint32_t chunk = 0;
     // a substitution of x changes its ring: each vertex is looked at again next pass, and the
     // fans of their classes are no longer what the foresight saw
@@ -1008,6 +1009,16 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                             __builtin_prefetch(&b.dead[t], 1);
                             __builtin_prefetch(&b.death_step[t], 1);
                         }
+                        if (next->ring != kRingUnknown)
+                            for (uint32_t i = 0; i < next->ring; ++i) {
+                                const uint32_t w = next->w[i];
+                                __builtin_prefetch(&best[w], 1);
+                                __builtin_prefetch(&dirty[w], 1);
+                                __builtin_prefetch(&has[w]);
+                                __builtin_prefetch(&b.kind[w]);
+                                __builtin_prefetch(&b.wedge[w]);
+                                __builtin_prefetch(&touched[w], 1);  // (its class's mark: w's own but for coincident copies)
+                            }
                     } else {
                         adj.prefetch_fan(candidates[ci + 2].v);
                     }
@@ -1028,7 +1039,6 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                     adj.splice(c.v, c.u);
                     b.apply(adj, v2, u2);
                     adj.splice(v2, u2);
-                    merged[c.u] = merged[u2] = chunk;
                     b.partner[c.u] = u2;  // the targets are the seam's copies from now on
                     b.partner[u2] = c.u;
                     pass_mark[c.v] = pass_mark[c.u] = pass_mark[v2] = pass_mark[u2] = pass;
@@ -1056,7 +1066,7 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                             return;
                         }
                         float cw;
-                        if (foreseen && merged[w] != chunk) {
+                        if (foreseen) {
                             cw = *foreseen;
                         } else if (!b.quadric_cost_within(w, c.u, best[w].cost, best[w].u, cw)) {
                             return;
@@ -1078,7 +1088,6 @@ void run_passes(Builder& b, ListAdjacency& adj, float fraction, detail::Team& te
                         });
                     }
                     dirty[c.u] = 1;
-                    merged[c.u] = chunk;
                 } else {
                     ring_changed(c.v);
                 }
