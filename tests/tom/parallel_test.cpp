@@ -56,3 +56,31 @@ TEST_CASE("Team: an exception in a block reaches the owner, and the team goes on
         REQUIRE(sum == 999u * 1000u / 2u);
     }
 }
+
+TEST_CASE("Team: short loops the owner finishes alone, helpers joining late or not at all", "[parallel]") {
+    // a helper still waking from one loop may find it closed (the owner took every block) or join
+    // the next one: every block of every loop must still run exactly once, and each loop must be
+    // over when blocks() returns
+    for (unsigned threads : {2u, 3u}) {
+        for (const bool spin : {true, false}) {
+            tom::detail::Team team(threads, spin);
+            std::vector<int> hits(2 * 8, 0);
+            std::atomic<int> running{0};
+            std::atomic<bool> overlap{false}, bad_worker{false};
+            int loops = 0;
+            for (int loop = 0; loop < 5000; ++loop) {
+                team.blocks(hits.size(), 8, [&](unsigned worker, size_t begin, size_t end) {
+                    if (worker >= team.size()) bad_worker = true;
+                    if (running.fetch_add(1) > 1) overlap = true;  // at most the two blocks of this loop
+                    for (size_t i = begin; i < end; ++i) ++hits[i];
+                    running.fetch_sub(1);
+                });
+                if (running.load() != 0) overlap = true;  // a block of this loop still in progress
+                ++loops;
+            }
+            CHECK_FALSE(overlap);
+            CHECK_FALSE(bad_worker);
+            for (int h : hits) REQUIRE(h == loops);
+        }
+    }
+}
