@@ -114,7 +114,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     auto scatter = [&](auto channel_count) {  // the channel count a constant where it is common: unrolled sums, the same in the same order
         constexpr int kC = decltype(channel_count)::value;
         const int channels = kC ? kC : channels_;
-        const size_t stride = stride_;
+        const size_t stride = kC ? 11 + 4 * size_t(kC) : stride_;
         detail::scatter_by_vertex_range(team, n, mesh.indices.data(), m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
             const uint32_t* c = &mesh.indices[3 * size_t(t)];
             const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
@@ -138,11 +138,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
             for (int k = 0; k < 3; ++k) {
                 if (c[k] < lo || c[k] >= hi) continue;
                 double* dst = quadric + size_t(c[k]) * stride;
-                if (kC) {
-                    for (size_t i = 0; i < size_t(11 + 4 * kC); ++i) dst[i] += q[i];
-                } else {
-                    for (size_t i = 0; i < stride; ++i) dst[i] += q[i];
-                }
+                for (size_t i = 0; i < stride; ++i) dst[i] += q[i];
             }
         });
     };

@@ -536,14 +536,16 @@ struct ListAdjacency {
     }
 };
 
-// Candidates by cost (non-negative floats sort like their bits), stable; the team shares a
-// large sort (the same order).
+// A candidate's cost as its bits: non-negative floats order like them.
+inline uint32_t cost_bits(const Candidate& c) {
+    uint32_t bits;
+    std::memcpy(&bits, &c.cost, 4);
+    return bits;
+}
+
+// Candidates by cost, stable; the team shares a large sort (the same order).
 void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp, detail::Team& team) {
-    detail::radix_sort(items, tmp, 32, [](const Candidate& c) {
-        uint32_t bits;
-        std::memcpy(&bits, &c.cost, 4);
-        return bits;
-    }, &team);
+    detail::radix_sort(items, tmp, 32, [](const Candidate& c) { return cost_bits(c); }, &team);  // (a lambda: inlined)
 }
 
 // Splits [0, count) in order: make(i) goes to `first` where which(i) is 1, to `second` where it
@@ -792,12 +794,8 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
     }
 }
 
-// non-negative floats: the top 11 bits below the sign order costs coarsely
-inline uint32_t cost_bucket(const Candidate& c) {
-    uint32_t bits;
-    std::memcpy(&bits, &c.cost, 4);
-    return bits >> 21;
-}
+// the top 11 bits below the sign: costs in coarse order
+inline uint32_t cost_bucket(const Candidate& c) { return cost_bits(c) >> 21; }
 
 // The candidates of a pass in the order the loop takes them: the cheapest `keep` (at least: whole
 // buckets) sorted, then the others in their original order. Sorted in two steps, as the loop
