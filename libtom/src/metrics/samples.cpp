@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <utility>
 
-#include "../morton.h"
 #include "../radix_sort.h"
 
 namespace tom::detail {
@@ -55,13 +55,125 @@ double face_areas(const Surface& s, std::vector<double>& areas) {
 
 } // namespace
 
+namespace {
+
+// One axis of a Morton code by table: bit i of a 16-bit coordinate to bit 3i (spread_bits()'s
+// figure, a third of its time on the samples)
+struct SpreadTable {
+    uint32_t of[256];
+    constexpr SpreadTable() : of{} {
+        for (unsigned x = 0; x < 256; ++x)
+            for (unsigned b = 0; b < 8; ++b)
+                if (x >> b & 1) of[x] |= 1u << (3 * b);
+    }
+};
+constexpr SpreadTable kSpread;
+inline uint64_t spread16(uint32_t x) { return uint64_t(kSpread.of[x & 255]) | uint64_t(kSpread.of[x >> 8 & 255]) << 24; }
+
+// Sorts distinct words whose key bits [low, low + key_bits) sit above an index ascending in
+// `items`' order: the same order as radix_sort() by key (equal keys by index), in fewer passes
+// over memory. One scatter by the key's top kTopBits (an octree level of 4096 cells: a surface's
+// samples fill a few hundred, a few thousand samples each), then each bucket, in cache, by the
+// rest of the key, least significant digit first (stable: the index order kept) or, for a few
+// words, by insertion. On bunny00's 754K samples 6.6 ms against 14.8 (medians of 11).
+void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int key_bits, int low, Team* team) {
+    constexpr int kTopBits = 12, kDigitBits = 10;
+    constexpr size_t kTop = size_t(1) << kTopBits, kDigit = size_t(1) << kDigitBits, kInsertion = 48;
+    const size_t n = items.size();
+    if (key_bits <= kTopBits + kDigitBits || n < kParallelSortItems) {  // (a small sort: one radix sort does)
+        radix_sort(items, other, key_bits, [low](uint64_t item) { return item >> low; }, team);
+        return;
+    }
+    other.resize(n);
+    const int top_shift = low + key_bits - kTopBits;
+    const size_t parts = team ? team->size() : 1;
+    std::vector<size_t> place(parts * kTop, 0);  // part-major counts, then each part's first place per bucket
+    auto each_part = [&](auto&& f) {
+        if (parts == 1) return f(size_t(0), size_t(0), n);
+        team->blocks(parts, 1, [&](unsigned, size_t part, size_t) { f(part, n * part / parts, n * (part + 1) / parts); });
+    };
+    each_part([&](size_t part, size_t begin, size_t end) {
+        size_t* count = &place[part * kTop];
+        for (size_t i = begin; i < end; ++i) ++count[items[i] >> top_shift & (kTop - 1)];
+    });
+    std::vector<size_t> first(kTop + 1, 0);  // each bucket's first place
+    size_t sum = 0;
+    for (size_t b = 0; b < kTop; ++b) {
+        first[b] = sum;
+        for (size_t part = 0; part < parts; ++part) sum += std::exchange(place[part * kTop + b], sum);
+    }
+    first[kTop] = n;
+    each_part([&](size_t part, size_t begin, size_t end) {
+        size_t* at = &place[part * kTop];
+        for (size_t i = begin; i < end; ++i) other[at[items[i] >> top_shift & (kTop - 1)]++] = items[i];
+    });
+    // the buckets, in blocks of about equal words, back into items
+    const int rest = key_bits - kTopBits, digits = (rest + kDigitBits - 1) / kDigitBits;
+    auto sort_buckets = [&](size_t b0, size_t b1) {
+        std::vector<uint32_t> count(size_t(digits) * kDigit);
+        for (size_t b = b0; b < b1; ++b) {
+            const size_t begin = first[b], m = first[b + 1] - begin;
+            uint64_t* from = other.data() + begin;
+            uint64_t* to = items.data() + begin;
+            if (m <= kInsertion) {
+                for (size_t i = 0; i < m; ++i) {
+                    const uint64_t x = from[i];
+                    size_t j = i;
+                    for (; j > 0 && to[j - 1] > x; --j) to[j] = to[j - 1];
+                    to[j] = x;
+                }
+                continue;
+            }
+            std::fill(count.begin(), count.end(), 0u);
+            for (size_t i = 0; i < m; ++i)
+                for (int d = 0; d < digits; ++d) ++count[size_t(d) * kDigit + (from[i] >> (low + d * kDigitBits) & (kDigit - 1))];
+            for (int d = 0; d < digits; ++d) {
+                uint32_t* c = &count[size_t(d) * kDigit];
+                uint32_t at = 0;
+                for (size_t k = 0; k < kDigit; ++k) at += std::exchange(c[k], at);
+                const int shift = low + d * kDigitBits;
+                for (size_t i = 0; i < m; ++i) to[c[from[i] >> shift & (kDigit - 1)]++] = from[i];
+                std::swap(from, to);
+            }
+            if (from != items.data() + begin) std::copy(from, from + m, items.data() + begin);  // (an odd count of digits)
+        }
+    };
+    if (parts == 1) return sort_buckets(0, kTop);
+    // blocks of buckets cut at about n / 16 words each, taken in turn
+    std::vector<size_t> cut{0};
+    for (size_t b = 0; b < kTop; ++b)
+        if (first[b + 1] - first[cut.back()] >= n / 16 || b + 1 == kTop) cut.push_back(b + 1);
+    team->blocks(cut.size() - 1, 1, [&](unsigned, size_t k, size_t) { sort_buckets(cut[k], cut[k + 1]); });
+}
+
+} // namespace
+
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation) {
     const size_t n = points.size();
+    // one team for the whole ordering, where the points are many enough to share
+    std::unique_ptr<Team> team;
+    if (n >= kParallelSortItems && thread_count(threads) > 1) team = std::make_unique<Team>(thread_count(threads), false);
+    auto each = [&](auto&& f) {  // f(begin, end) over [0, n) in chunks of kChunk, on the team if any
+        if (!team) return f(size_t(0), n);
+        team->blocks(n, kChunk, [&](unsigned, size_t begin, size_t end) { f(begin, end); });
+    };
+    struct Bounds {
+        V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    };
+    std::vector<Bounds> bounds((n + kChunk - 1) / kChunk);
+    each([&](size_t begin, size_t end) {
+        Bounds& b = bounds[begin / kChunk];
+        for (size_t i = begin; i < end; ++i) {
+            const V3 p = points[i];
+            b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+            b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+        }
+    });
     V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
-    for (V3 p : points) {
-        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    for (const Bounds& b : bounds) {
+        lo = {std::min(lo.x, b.lo.x), std::min(lo.y, b.lo.y), std::min(lo.z, b.lo.z)};
+        hi = {std::max(hi.x, b.hi.x), std::max(hi.y, b.hi.y), std::max(hi.z, b.hi.z)};
     }
     extent = n ? std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) : 0.0;
     const double scale = extent > 0 ? double((1u << kMortonBits) - 1) / extent : 0.0;
@@ -75,20 +187,20 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
     const int axis_bits = std::min(kMortonBits, (64 - index_bits) / 3), drop = kMortonBits - axis_bits;
     std::vector<uint64_t>& packed = scratch.packed;
     packed.resize(n);
-    parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
+    each([&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
-            const V3 q = scale * (points[i] - lo);
-            const uint64_t x = uint64_t(q.x) >> drop, y = uint64_t(q.y) >> drop, z = uint64_t(q.z) >> drop;
-            packed[i] = (spread_bits(x) << 2 | spread_bits(y) << 1 | spread_bits(z)) << index_bits | i;
+            const V3 q = scale * (points[i] - lo);  // (in [0, 65535]: a signed conversion is exact and quicker)
+            const uint32_t x = uint32_t(int32_t(q.x)) >> drop, y = uint32_t(int32_t(q.y)) >> drop, z = uint32_t(int32_t(q.z)) >> drop;
+            packed[i] = (spread16(x) << 2 | spread16(y) << 1 | spread16(z)) << index_bits | i;
         }
     });
-    radix_sort(packed, scratch.packed_other, 3 * axis_bits, [index_bits](uint64_t item) { return item >> index_bits; }, threads);
+    sort_words(packed, scratch.packed_other, 3 * axis_bits, index_bits, team.get());
     std::vector<V3>& sorted = scratch.sorted;
     sorted.resize(n);
     keys.resize(n);
     if (permutation) permutation->resize(n);
     const uint64_t index_mask = (uint64_t(1) << index_bits) - 1;
-    parallel_chunks(n, threads, [&](size_t, size_t begin, size_t end) {
+    each([&](size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) {
             const uint32_t from = uint32_t(packed[i] & index_mask);
             sorted[i] = points[from];
