@@ -1,6 +1,7 @@
 #pragma once
 // The one least-significant-digit radix sort of libtom: the builder's vertices by Morton code
-// and its candidates by cost, the Metro-style samples by Morton code and their edges.
+// and its candidates by cost, the Metro-style samples' edges (and the samples themselves, by
+// Morton code, where they are few: metrics/samples.cpp sorts many in fewer passes).
 
 #include <algorithm>
 #include <cstddef>

@@ -1,6 +1,7 @@
 // Metro-style distance against cases with known answers, the k/N fit, the stored error curve,
 // and the report over a real mesh.
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <future>
@@ -412,8 +413,8 @@ TEST_CASE("nearest distances stay exact far from the origin and at huge scale (t
 // far from them: every bound is at most the exact distance (a candidate it drops cannot be the
 // nearest) and within a fifth of a percent and the slack of the exact box-or-plane bound (it
 // still prunes); points_below() keeps exactly the points whose bound is under their best, as
-// bound() computes it; distances2() equals distance2() bit for bit, and distance2_below() does
-// under the best.
+// bound() computes it; distances2() and distances2_at() equal distance2() bit for bit, and
+// distance2_below() does under the best.
 TEST_CASE("the search's float bounds never exceed the exact distance, and its batched distances equal distance2", "[metrics][nearest]") {
     using tom::detail::V3;
     std::vector<tom::Mesh> meshes;
@@ -500,13 +501,20 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
                 }
                 CHECK(std::vector<uint32_t>(hits.begin(), hits.begin() + std::ptrdiff_t(count)) == expected);
             }
+            // and of some of the points, in the order listed (as points_below() lists them)
+            std::vector<uint32_t> some;
+            for (uint32_t i = 0; i < points.size(); ++i)
+                if (unit(rng) < 0.6) some.push_back(i);
+            std::shuffle(some.begin(), some.end(), rng);
             for (uint32_t t : list) {
-                std::vector<double> batched(points.size());
+                std::vector<double> batched(points.size()), picked(some.size());
                 tom::detail::distances2(flat[t], points.data(), points.size(), batched.data());
+                tom::detail::distances2_at(flat[t], points.data(), some.data(), some.size(), picked.data());
                 for (size_t i = 0; i < points.size(); ++i) {
                     const double one = tom::detail::distance2(flat[t], points[i]);
                     CHECK(std::memcmp(&one, &batched[i], sizeof one) == 0);
                 }
+                for (size_t h = 0; h < some.size(); ++h) CHECK(std::memcmp(&batched[some[h]], &picked[h], sizeof(double)) == 0);
             }
         }
     }

@@ -113,14 +113,16 @@ __attribute__((target("avx"))) inline __m256d distance2_avx(const Flat& f, __m25
                   s2 = segment_avx(wbx, wby, wbz, e2x, e2y, e2z, dot_avx(e2x, e2y, e2z, wbx, wby, wbz), f.i22);
     return _mm256_blendv_pd(_mm256_min_pd(s0, _mm256_min_pd(s1, s2)), _mm256_mul_pd(above, above), inside);
 }
-__attribute__((target("avx"))) void distances2_avx(const Flat& f, const V3* p, size_t n, double* d2) {
+// d2[i] = distance2(f, point(i)) for i < n, four at a time
+template <class Point>
+__attribute__((target("avx"))) void distances2_avx(const Flat& f, size_t n, double* d2, Point&& point) {
     size_t i = 0;
     for (; i + 4 <= n; i += 4) {
-        const __m256d x = _mm256_set_pd(p[i + 3].x, p[i + 2].x, p[i + 1].x, p[i].x), y = _mm256_set_pd(p[i + 3].y, p[i + 2].y, p[i + 1].y, p[i].y),
-                      z = _mm256_set_pd(p[i + 3].z, p[i + 2].z, p[i + 1].z, p[i].z);
+        const V3 &p0 = point(i), &p1 = point(i + 1), &p2 = point(i + 2), &p3 = point(i + 3);
+        const __m256d x = _mm256_set_pd(p3.x, p2.x, p1.x, p0.x), y = _mm256_set_pd(p3.y, p2.y, p1.y, p0.y), z = _mm256_set_pd(p3.z, p2.z, p1.z, p0.z);
         _mm256_storeu_pd(d2 + i, distance2_avx(f, x, y, z));
     }
-    for (; i < n; ++i) d2[i] = distance2(f, p[i]);
+    for (; i < n; ++i) d2[i] = distance2(f, point(i));
 }
 bool cpu_has_avx() {
     static const bool has = __builtin_cpu_supports("avx") && simd_enabled();
@@ -197,10 +199,19 @@ size_t points_below(const CandidateBound& b, const float* x, const float* y, con
 }
 
 void distances2(const Flat& f, const V3* p, size_t n, double* d2) {
+    auto point = [p](size_t i) -> const V3& { return p[i]; };
 #if defined(__x86_64__) || defined(__i386__)
-    if (cpu_has_avx()) return distances2_avx(f, p, n, d2);
+    if (cpu_has_avx()) return distances2_avx(f, n, d2, point);
 #endif
-    for (size_t i = 0; i < n; ++i) d2[i] = distance2(f, p[i]);
+    for (size_t i = 0; i < n; ++i) d2[i] = distance2(f, point(i));
+}
+
+void distances2_at(const Flat& f, const V3* p, const uint32_t* which, size_t n, double* d2) {
+    auto point = [p, which](size_t h) -> const V3& { return p[which[h]]; };
+#if defined(__x86_64__) || defined(__i386__)
+    if (cpu_has_avx()) return distances2_avx(f, n, d2, point);
+#endif
+    for (size_t h = 0; h < n; ++h) d2[h] = distance2(f, point(h));
 }
 
 } // namespace tom::detail

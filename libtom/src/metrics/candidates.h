@@ -64,5 +64,9 @@ size_t points_below(const CandidateBound& b, const float* x, const float* y, con
 // operations in the same order, both branches computed and the right one kept), one by one
 // otherwise. (A run's distances to its centre's nearest triangle, once for each of its points.)
 void distances2(const Flat& f, const V3* p, size_t n, double* d2);
+// d2[h] = distance2(f, p[which[h]]) for h < n, bit for bit, as distances2(): the points a
+// candidate's bound kept (four of them at a time where distance2_below() took one, and branched
+// on where each projects)
+void distances2_at(const Flat& f, const V3* p, const uint32_t* which, size_t n, double* d2);
 
 } // namespace tom::detail

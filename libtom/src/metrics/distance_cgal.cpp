@@ -228,6 +228,7 @@ struct RunSearch {
     std::vector<float> qx, qy, qz, limit;  // the run's points relative to its centre, their bests
     std::vector<uint32_t> record, which;  // each point's nearest so far; the points a candidate may be nearer to
     std::vector<double> upper;  // each point's squared distance to its nearest so far
+    std::vector<double> kept;  // the squared distances of the points a candidate's bound keeps
     RunSearch(const Mesh3& t, const V3* p) : target(t), points(p) {}
 
     // one descent of the tree for each point of [b, e)
@@ -310,7 +311,7 @@ struct RunSearch {
         // nearer than the best is always under (its bound is lowered by 2^-9 of it, the float's
         // rounding is 2^-24)
         const size_t padded = (n + 7) & ~size_t(7);
-        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), which.resize(padded + 8);
+        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), which.resize(padded + 8), kept.resize(padded + 8);
         for (size_t i = 0; i < padded; ++i) {
             if (i >= n) {
                 qx[i] = qy[i] = qz[i] = 0.0f, limit[i] = -std::numeric_limits<float>::infinity();
@@ -332,9 +333,12 @@ struct RunSearch {
             if (t == c) continue;  // (every best is at most its distance already)
             const Flat& f = target.flat[t];
             const size_t count = points_below(candidate_bound(f, target.lines[t], centre, spread), qx.data(), qy.data(), qz.data(), limit.data(), padded, which.data());
+            // their exact distances (distance2_below() would stop at a bound for the points the
+            // candidate is not nearer to, for the same outcome: the bound is above the best)
+            distances2_at(f, points + b, which.data(), count, kept.data());
             for (size_t h = 0; h < count; ++h) {
                 const size_t i = which[h];
-                const double d2 = distance2_below(f, points[b + i], upper[i]);
+                const double d2 = kept[h];
                 if (target.nearer(d2, t, upper[i], record[i])) upper[i] = d2, record[i] = t, limit[i] = float(d2);
             }
         }
