@@ -57,8 +57,8 @@ double face_areas(const Surface& s, std::vector<double>& areas) {
 
 namespace {
 
-// One axis of a Morton code by table: bit i of a 16-bit coordinate to bit 3i (spread_bits()'s
-// figure, a third of its time on the samples)
+// One axis of a Morton code by table: bit i of a 16-bit coordinate to bit 3i, spread_bits()'s
+// figure (with the signed conversions below, bunny00's 754K codes in 2.6 ms against 4.1)
 struct SpreadTable {
     uint32_t of[256];
     constexpr SpreadTable() : of{} {
@@ -72,8 +72,8 @@ inline uint64_t spread16(uint32_t x) { return uint64_t(kSpread.of[x & 255]) | ui
 
 // Sorts distinct words whose key bits [low, low + key_bits) sit above an index ascending in
 // `items`' order: the same order as radix_sort() by key (equal keys by index), in fewer passes
-// over memory. One scatter by the key's top kTopBits (an octree level of 4096 cells: a surface's
-// samples fill a few hundred, a few thousand samples each), then each bucket, in cache, by the
+// over memory. One scatter by the key's top kTopBits (an octree level of 4096 cells: bunny00's
+// samples fill 805, 937 samples each on average, 3241 at most), then each bucket, in cache, by the
 // rest of the key, least significant digit first (stable: the index order kept) or, for a few
 // words, by insertion. On bunny00's 754K samples 6.6 ms against 14.8 (medians of 11).
 void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int key_bits, int low, Team* team) {
