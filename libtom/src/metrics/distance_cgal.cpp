@@ -311,7 +311,7 @@ struct RunSearch {
         // nearer than the best is always under (its bound is lowered by 2^-9 of it, the float's
         // rounding is 2^-24)
         const size_t padded = (n + 7) & ~size_t(7);
-        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), which.resize(padded + 8), kept.resize(padded + 8);
+        qx.resize(padded), qy.resize(padded), qz.resize(padded), limit.resize(padded), which.resize(padded + 8), kept.resize(padded);
         for (size_t i = 0; i < padded; ++i) {
             if (i >= n) {
                 qx[i] = qy[i] = qz[i] = 0.0f, limit[i] = -std::numeric_limits<float>::infinity();

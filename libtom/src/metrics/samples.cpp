@@ -80,33 +80,16 @@ void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int 
     constexpr int kTopBits = 12, kDigitBits = 10;
     constexpr size_t kTop = size_t(1) << kTopBits, kDigit = size_t(1) << kDigitBits, kInsertion = 48;
     const size_t n = items.size();
-    if (key_bits <= kTopBits + kDigitBits || n < kParallelSortItems) {  // (a small sort: one radix sort does)
-        radix_sort(items, other, key_bits, [low](uint64_t item) { return item >> low; }, team);
+    auto key = [low](uint64_t item) { return item >> low; };
+    // the top digit into other; a small sort, or one whose words all share the top digit (points
+    // all at one place), by one radix sort
+    std::vector<size_t> place;
+    if (key_bits <= kTopBits + kDigitBits || n < kParallelSortItems || !radix_pass(items, other, key_bits - kTopBits, kTopBits, key, team, place)) {
+        radix_sort(items, other, key_bits, key, team);
         return;
     }
-    other.resize(n);
-    const int top_shift = low + key_bits - kTopBits;
-    const size_t parts = team ? team->size() : 1;
-    std::vector<size_t> place(parts * kTop, 0);  // part-major counts, then each part's first place per bucket
-    auto each_part = [&](auto&& f) {
-        if (parts == 1) return f(size_t(0), size_t(0), n);
-        team->blocks(parts, 1, [&](unsigned, size_t part, size_t) { f(part, n * part / parts, n * (part + 1) / parts); });
-    };
-    each_part([&](size_t part, size_t begin, size_t end) {
-        size_t* count = &place[part * kTop];
-        for (size_t i = begin; i < end; ++i) ++count[items[i] >> top_shift & (kTop - 1)];
-    });
-    std::vector<size_t> first(kTop + 1, 0);  // each bucket's first place
-    size_t sum = 0;
-    for (size_t b = 0; b < kTop; ++b) {
-        first[b] = sum;
-        for (size_t part = 0; part < parts; ++part) sum += std::exchange(place[part * kTop + b], sum);
-    }
-    first[kTop] = n;
-    each_part([&](size_t part, size_t begin, size_t end) {
-        size_t* at = &place[part * kTop];
-        for (size_t i = begin; i < end; ++i) other[at[items[i] >> top_shift & (kTop - 1)]++] = items[i];
-    });
+    std::vector<size_t> first(kTop + 1, 0);  // each bucket's first place (where the one before ends)
+    for (size_t b = 0; b < kTop; ++b) first[b + 1] = place[place.size() - kTop + b];
     // the buckets, in blocks of about equal words, back into items
     const int rest = key_bits - kTopBits, digits = (rest + kDigitBits - 1) / kDigitBits;
     auto sort_buckets = [&](size_t b0, size_t b1) {
@@ -138,7 +121,7 @@ void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int 
             if (from != items.data() + begin) std::copy(from, from + m, items.data() + begin);  // (an odd count of digits)
         }
     };
-    if (parts == 1) return sort_buckets(0, kTop);
+    if (!team) return sort_buckets(0, kTop);
     // blocks of buckets cut at about n / 16 words each, taken in turn
     std::vector<size_t> cut{0};
     for (size_t b = 0; b < kTop; ++b)
