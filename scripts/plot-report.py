@@ -36,7 +36,7 @@ def plot_error(mesh, path):
     ax.loglog(xs, [100 * fit["k_max"] / x for x in xs], "--", color="tab:red", alpha=0.6, label="k_max/N, k_max = %.3g" % fit["k_max"])
     ax.loglog(xs, [100 * fit["k_mean"] / x for x in xs], "--", color="tab:blue", alpha=0.6, label="k_mean/N, k_mean = %.3g" % fit["k_mean"])
     # the full-resolution point has no error: leave it off a log plot
-    curve = [p for p in mesh.get("error_curve", {}).get("points", []) if p["triangles"] > 0 and p["mean"] > 0]
+    curve = [p for p in (mesh.get("error_curve") or {}).get("points", []) if p["triangles"] > 0 and p["mean"] > 0]
     if curve:
         ax.loglog([p["triangles"] for p in curve], [p["mean"] for p in curve], ":", color="gray", label="stored curve (mean)")
     ax.set_xlabel("triangles")

@@ -92,6 +92,10 @@ nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext
                                {"chain", {{"mean_steps", l.mean_steps}, {"max_steps", l.chain.max_steps}, {"overhead", l.overhead}, {"histogram", hist}}},
                                {"attributes", attributes_json(l.attributes)}});
     }
+    if (!ctx.params.error_curve) {
+        j["error_curve"] = nullptr;  // --no-error-curve: not measured
+        return j;
+    }
     j["error_curve"] = {{"diagonal", r.curve.diagonal}, {"k_mean", r.curve.k_mean}, {"k_max", r.curve.k_max}, {"points", nlohmann::json::array()}};
     for (const tom::ErrorCurvePoint& p : r.curve.points)
         j["error_curve"]["points"].push_back({{"vertices", p.vertices}, {"triangles", p.triangles}, {"mean", 100.0 * p.mean}, {"max", 100.0 * p.max}});

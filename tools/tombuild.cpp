@@ -52,6 +52,7 @@ tom::ReportParams report_params(const Options& opt, unsigned threads) {
     rp.distance.seed = opt.seed;
     rp.distance.threads = threads;
     rp.curve_points = opt.curve_points;
+    rp.error_curve = !opt.no_error_curve;
     return rp;
 }
 
@@ -177,7 +178,7 @@ int main(int argc, char** argv) {
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
-    app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds)")->group("Output");
+    app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds and reports; the JSON report's error_curve is null)")->group("Output");
     app.add_option("--curve-points", opt.curve_points, "Error-curve points per mesh, log-spaced in vertex count (default 16)")
         ->check(CLI::Range(2u, 64u))
         ->group("Output");

@@ -133,6 +133,20 @@ check "the stored error curve is shown by tominfo --curve" expect_exit 0 "$tools
 check "tominfo prints the curve and k" grep -q "error curve (% of the diagonal" "$work/stdout"
 check "--no-error-curve stores none" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/nc" --no-error-curve
 check "tominfo says so" bash -c "'$tools/tominfo' '$work/nc/fandisk.tom' --curve | grep -q 'no error curve stored'"
+check "--no-error-curve with a report" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/ncr" --report-json "$work/ncr" --levels 50,10,2 --no-error-curve
+check "reports the same levels, no curve measured, still valid against the schema" /usr/bin/python3 -c "
+import json, jsonschema
+schema = json.load(open('$src/tools/report.schema.json'))
+plain = json.load(open('$work/ncr/fandisk.json')); full = json.load(open('$work/r/reports/fandisk.json'))
+jsonschema.validate(plain, schema)
+m, f = plain['meshes'][0], full['meshes'][0]
+assert m['error_curve'] is None and f['error_curve']['points'], (m['error_curve'], f['error_curve'])
+assert [l['error'] for l in m['levels']] == [l['error'] for l in f['levels']]
+assert m['fit'] == f['fit']
+"
+check "and stores none" bash -c "'$tools/tominfo' '$work/ncr/fandisk.tom' --curve | grep -q 'no error curve stored'"
+check "plots a report without a curve" "$src/scripts/plot-report.py" "$work/ncr/fandisk.json" -o "$work/ncplots"
+check "its error plot is an SVG" grep -q "<svg" "$work/ncplots/fandisk-error.svg"
 
 # tomerr: the same yardstick for any two files
 check "tomerr of a mesh and itself" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$data/meshes/fandisk.off" --json

@@ -197,7 +197,18 @@ TEST_CASE("one reference compared from several threads at once, and the curve on
     CHECK(curve == tom::encode_error_curve(tom::measure_error_curve(fandisk.mesh, t, three)));
     // a report's curve (its reference's search structure shared with the levels') is the one a
     // build without a report stores
-    CHECK(tom::encode_error_curve(tom::make_report(fandisk.mesh, t).curve) == curve);
+    const tom::MeshReport with_curve = tom::make_report(fandisk.mesh, t);
+    CHECK(tom::encode_error_curve(with_curve.curve) == curve);
+    // without it (tombuild --no-error-curve), the same levels, and no curve
+    tom::ReportParams no_curve;
+    no_curve.error_curve = false;
+    const tom::MeshReport without = tom::make_report(fandisk.mesh, t, no_curve);
+    CHECK(without.curve.points.empty());
+    REQUIRE(without.levels.size() == with_curve.levels.size());
+    for (size_t k = 0; k < without.levels.size(); ++k) {
+        CHECK(without.levels[k].error.forward.mean == with_curve.levels[k].error.forward.mean);
+        CHECK(without.levels[k].error.backward.max == with_curve.levels[k].error.backward.max);
+    }
     // a reference made from another with other parameters gives a fresh one's figures, while the
     // first is in use on other threads
     tom::DistanceParams sparse;

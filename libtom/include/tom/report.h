@@ -18,6 +18,7 @@ namespace tom {
 struct ReportParams {
     std::vector<double> levels = {0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005};  ///< fractions of the triangles
     DistanceParams distance;                 ///< Metro's defaults: 10 samples per face, seed 1
+    bool error_curve = true;                 ///< make_report also measures the error curve (MeshReport::curve)
     uint32_t curve_points = 16;              ///< error-curve points, log-spaced in vertex count (2..64)
     /// Error-curve sampling, per direction and curve point: area-uniform face samples,
     /// curve_samples_per_triangle x the mesh's triangles within [curve_min_samples,
@@ -60,7 +61,7 @@ struct MeshReport {
     MemoryReport memory;
     FitReport fit;
     std::vector<LevelReport> levels;
-    ErrorCurve curve;
+    ErrorCurve curve;  ///< empty (no points) when ReportParams::error_curve is false
 };
 
 /// Measures `built` against `original` (the cleaned input it was built from).

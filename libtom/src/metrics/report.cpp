@@ -256,7 +256,9 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     // structure of the original): it is measured alongside them, on the cores their serial parts
     // leave idle
     const MetroReference curve_reference = reference.with_params(curve_distance_params(params, original.triangle_count()));
-    std::future<ErrorCurve> curve = std::async(std::launch::async, [&] { return curve_with(built, params, curve_reference, params.distance.threads); });
+    std::future<ErrorCurve> curve;
+    if (params.error_curve)
+        curve = std::async(std::launch::async, [&] { return curve_with(built, params, curve_reference, params.distance.threads); });
     // the levels two at a time, each on every core: one's sequential parts (its tree, its
     // samples' sort) overlap the other's searches (bunny00's report 1.28 -> 1.14 s, medians of 5
     // interleaved runs); each level in flight holds its samples (about 80 bytes a sample, 10 a
@@ -289,7 +291,7 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     }
     r.fit.mean = fit_k_over_n(tris, means);
     r.fit.max = fit_k_over_n(tris, maxes);
-    r.curve = curve.get();
+    if (curve.valid()) r.curve = curve.get();
     return r;
 }
 
