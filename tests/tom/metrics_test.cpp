@@ -20,6 +20,8 @@
 #include "tom/metrics.h"
 #include "tom/report.h"
 #include "metrics/candidates.h"  // internal: the search's bounds and batched distances
+#include "metrics/samples.h"     // internal: the samples' Morton order
+#include "morton.h"
 
 namespace {
 
@@ -562,6 +564,72 @@ TEST_CASE("the search's float bounds never exceed the exact distance, and its ba
             }
         }
     CHECK(lines_checked > 1000);
+}
+
+// The searches group samples by octree cell, which needs them in Morton order. order_morton()
+// sorts by a table of spread_bits() (spread16) and, for many samples, by one scatter on the top
+// bits and then each bucket in cache: on real samples, fed in another order, each key must be
+// the code spread_bits() gives its point's cell (on the grid the header describes: 16 bits an
+// axis, fewer where the index needs more than 16 bits), keys ascending, equal keys in the order
+// given, points moved with their keys, the same on one thread and two. bunny00's 754K samples and
+// fandisk's 129K take the bucket sort (on the team with two threads), a few thousand the plain
+// radix sort.
+TEST_CASE("samples come in Morton order: each key its point's code, ascending, ties in the order given, on any thread count", "[metrics][samples]") {
+    using tom::detail::V3;
+    const std::vector<test::NamedMesh> meshes = test::real_meshes();
+    for (size_t mi : {size_t(0), size_t(1)}) {
+        INFO(meshes[mi].name);
+        tom::detail::Samples made;
+        tom::detail::MortonScratch scratch;
+        tom::detail::sample_surface(surface(meshes[mi].mesh), 10 * meshes[mi].mesh.triangle_count(), tom::DistanceParams{}, made, scratch);
+        for (const size_t count : {made.points.size(), size_t(5000)}) {
+            // the input: the sorted samples taken backwards (equal keys then come in reverse)
+            const std::vector<V3> input(made.points.rend() - std::ptrdiff_t(count), made.points.rend());
+            std::vector<std::vector<uint64_t>> keys_of;
+            for (unsigned threads : {1u, 2u}) {
+                std::vector<V3> points = input;
+                std::vector<uint64_t> keys;
+                std::vector<uint32_t> from;
+                double extent = 0;
+                tom::detail::order_morton(points, keys, extent, scratch, threads, &from);
+                REQUIRE(points.size() == count);
+                REQUIRE(keys.size() == count);
+                REQUIRE(from.size() == count);
+                V3 lo = input[0], hi = input[0];
+                for (const V3& p : input) {
+                    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+                    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+                }
+                CHECK(extent == std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+                int index_bits = 1;
+                while ((uint64_t(1) << index_bits) < count) ++index_bits;
+                const int drop = tom::detail::kMortonBits - std::min(tom::detail::kMortonBits, (64 - index_bits) / 3);
+                const double scale = double((1u << tom::detail::kMortonBits) - 1) / extent;
+                std::vector<uint8_t> used(count, 0);
+                size_t wrong_code = 0, out_of_order = 0, moved_wrong = 0;
+                for (size_t i = 0; i < count; ++i) {
+                    REQUIRE(from[i] < count);
+                    used[from[i]] = 1;
+                    const V3 p = input[from[i]];
+                    moved_wrong += !(points[i].x == p.x && points[i].y == p.y && points[i].z == p.z);
+                    auto axis = [&](double x, double low) { return tom::detail::spread_bits(uint64_t(scale * (x - low)) >> drop); };
+                    const uint64_t code = (axis(p.x, lo.x) << 2 | axis(p.y, lo.y) << 1 | axis(p.z, lo.z)) << (3 * drop);
+                    wrong_code += keys[i] != code;
+                    if (i > 0) out_of_order += keys[i] < keys[i - 1] || (keys[i] == keys[i - 1] && from[i] < from[i - 1]);
+                }
+                CHECK(wrong_code == 0);
+                CHECK(out_of_order == 0);
+                CHECK(moved_wrong == 0);
+                CHECK(std::count(used.begin(), used.end(), 1) == std::ptrdiff_t(count));
+                keys_of.push_back(keys);
+            }
+            CHECK(keys_of[0] == keys_of[1]);
+        }
+    }
+    // the table is spread_bits() for every 16-bit coordinate
+    size_t differ = 0;
+    for (uint32_t x = 0; x < 65536; ++x) differ += tom::detail::spread16(x) != tom::detail::spread_bits(x);
+    CHECK(differ == 0);
 }
 
 TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, no points", "[metrics][nearest]") {

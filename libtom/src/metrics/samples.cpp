@@ -7,6 +7,7 @@
 #include <memory>
 #include <utility>
 
+#include "../morton.h"
 #include "../radix_sort.h"
 
 namespace tom::detail {
@@ -52,23 +53,6 @@ double face_areas(const Surface& s, std::vector<double>& areas) {
     for (size_t t = 0; t < s.triangle_count; ++t) total += areas[t] = face_area(s, t);
     return total;
 }
-
-} // namespace
-
-namespace {
-
-// One axis of a Morton code by table: bit i of a 16-bit coordinate to bit 3i, spread_bits()'s
-// figure (with the signed conversions below, bunny00's 754K codes in 2.6 ms against 4.1)
-struct SpreadTable {
-    uint32_t of[256];
-    constexpr SpreadTable() : of{} {
-        for (unsigned x = 0; x < 256; ++x)
-            for (unsigned b = 0; b < 8; ++b)
-                if (x >> b & 1) of[x] |= 1u << (3 * b);
-    }
-};
-constexpr SpreadTable kSpread;
-inline uint64_t spread16(uint32_t x) { return uint64_t(kSpread.of[x & 255]) | uint64_t(kSpread.of[x >> 8 & 255]) << 24; }
 
 // Sorts distinct words whose key bits [low, low + key_bits) sit above an index ascending in
 // `items`' order: the same order as radix_sort() by key (equal keys by index), in fewer passes
