@@ -11,8 +11,8 @@
 #include <catch2/catch.hpp>
 
 #include "tom/extract.h"
-#include "tom/generate.h"
-#include "tom/import.h"
+#include "tom/builder/generate.h"
+#include "tom/io/import.h"
 
 namespace test {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "tom/builder.h"
-#include "tom/mesh.h"
+#include "tom/builder/builder.h"
+#include "tom/builder/mesh.h"
 #include "tom/view.h"
 
 namespace test {

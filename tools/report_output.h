@@ -1,12 +1,12 @@
 #pragma once
-// Report output shared by the tools: the JSON contract (tools/REPORT.md), the readable table,
+// Report output shared by the tools: the JSON contract (docs/REPORT.md), the readable table,
 // and the rows of the batch summary CSV.
 
 #include <string>
 
 #include <nlohmann/json.hpp>
 
-#include "tom/report.h"
+#include "tom/metrics/report.h"
 
 namespace tools {
 

@@ -13,11 +13,12 @@
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
 
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/generate.h"
-#include "tom/import.h"
+#include "tom/builder/generate.h"
+#include "tom/io/import.h"
 #include "tool_common.h"
 
 namespace {

@@ -7,12 +7,13 @@
 #include <mutex>
 #include <thread>
 
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/import.h"
-#include "tom/report.h"
+#include "tom/io/import.h"
+#include "tom/metrics/report.h"
 #include "report_output.h"
 #include "tool_common.h"
 
@@ -184,7 +185,7 @@ int main(int argc, char** argv) {
         ->group("Output");
     app.add_flag("--report", opt.report, "Print a report per mesh: Metro-style error, chains and extraction time per level, memory, k/N fit")
         ->group("Reports");
-    app.add_option("--report-json", opt.report_json_dir, "Write one JSON report per input (tools/REPORT.md) and summary.csv into this folder")
+    app.add_option("--report-json", opt.report_json_dir, "Write one JSON report per input (docs/REPORT.md) and summary.csv into this folder")
         ->group("Reports");
     app.add_option("--levels", opt.levels_percent, "Report levels in % of the triangles (default 50,25,10,5,2,1,0.5)")
         ->delimiter(',')

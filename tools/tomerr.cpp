@@ -10,8 +10,8 @@
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
-#include "tom/import.h"
-#include "tom/metrics.h"
+#include "tom/io/import.h"
+#include "tom/metrics/distance.h"
 #include "tool_common.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "tom/errors.h"
-#include "tom/export.h"
+#include "tom/io/export.h"
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tool_common.h"

@@ -6,7 +6,7 @@
 
 #include <unistd.h>
 
-#include "tom/import.h"
+#include "tom/io/import.h"
 
 namespace fs = std::filesystem;
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 
 namespace tools {
 

@@ -5,6 +5,7 @@
 // C2 verts, C3 pixels), fitted from sample renderings); E. Gobbetti, E. Bouvier. Time-critical
 // multiresolution scene rendering. IEEE Visualization 1999 (t_setup, t_tri, t_pix, safety).
 
+#include "tom/errors.h"
 #include "tcr/model.h"
 
 #include <algorithm>
@@ -143,7 +144,7 @@ CalibrationResult fit_cost_model(const std::vector<CostSample>& samples) {
 
 CostModel read_cost_model(const std::string& path) {
     std::ifstream in(path);
-    if (!in) throw std::runtime_error("cannot open calibration file '" + path + "'");
+    if (!in) throw tom::IoError("cannot open calibration file '" + path + "'");
     CostModel m;
     std::string line;
     int number = 0;
@@ -157,7 +158,7 @@ CostModel read_cost_model(const std::string& path) {
         double value;
         std::string rest;
         if (!(ls >> value) || (ls >> rest) || !std::isfinite(value) || value < 0)
-            throw std::runtime_error(path + ":" + std::to_string(number) + ": expected '" + key + " <non-negative number>'");
+            throw tom::ParseError(path + ":" + std::to_string(number) + ": expected '" + key + " <non-negative number>'");
         if (key == "t_init_ms") m.t_init_ms = value;
         else if (key == "t_final_ms") m.t_final_ms = value;
         else if (key == "t_setup_ms") m.t_setup_ms = value;
@@ -166,20 +167,20 @@ CostModel read_cost_model(const std::string& path) {
         else if (key == "t_pix_ms") m.t_pix_ms = value;
         else if (key == "safety_ms") m.safety_ms = value;
         else if (key == "noise_rel") m.noise_rel = value;
-        else throw std::runtime_error(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
+        else throw tom::ParseError(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
     }
     return m;
 }
 
 void write_cost_model(const std::string& path, const CostModel& m, const std::string& comment) {
     std::ofstream out(path);
-    if (!out) throw std::runtime_error("cannot write calibration file '" + path + "'");
-    out << "# libtcr cost model (libtcr/CALIBRATION.md); times in milliseconds\n";
+    if (!out) throw tom::IoError("cannot write calibration file '" + path + "'");
+    out << "# libtcr cost model (docs/CALIBRATION.md); times in milliseconds\n";
     if (!comment.empty()) out << "# " << comment << "\n";
     out.precision(9);
     out << "t_init_ms " << m.t_init_ms << "\nt_final_ms " << m.t_final_ms << "\nt_setup_ms " << m.t_setup_ms << "\nt_tri_ms " << m.t_tri_ms
         << "\nt_vert_ms " << m.t_vert_ms << "\nt_pix_ms " << m.t_pix_ms << "\nsafety_ms " << m.safety_ms << "\nnoise_rel " << m.noise_rel << "\n";
-    if (!out) throw std::runtime_error("cannot write calibration file '" + path + "'");
+    if (!out) throw tom::IoError("cannot write calibration file '" + path + "'");
 }
 
 } // namespace tcr

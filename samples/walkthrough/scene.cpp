@@ -1,5 +1,7 @@
 #include "scene.h"
 
+#include "tom/errors.h"
+
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -14,7 +16,7 @@ constexpr float kPi = 3.14159265358979f;
 
 Scene read_scene(const std::string& path) {
     std::ifstream in(path);
-    if (!in) throw std::runtime_error("cannot open scene file '" + path + "'");
+    if (!in) throw tom::IoError("cannot open scene file '" + path + "'");
     Scene s;
     std::string line;
     int number = 0;
@@ -28,26 +30,26 @@ Scene read_scene(const std::string& path) {
         const std::string where = path + ":" + std::to_string(number) + ": ";
         if (word == "mesh") {
             std::string p;
-            if (!(ls >> p)) throw std::runtime_error(where + "expected 'mesh PATH'");
+            if (!(ls >> p)) throw tom::ParseError(where + "expected 'mesh PATH'");
             s.meshes.push_back(p);
         } else if (word == "instance") {
             Instance i;
             if (!(ls >> i.mesh >> i.x >> i.y >> i.z >> i.size >> i.yaw_deg >> i.weight))
-                throw std::runtime_error(where + "expected 'instance MESH X Y Z SIZE YAW WEIGHT'");
-            if (i.mesh >= s.meshes.size()) throw std::runtime_error(where + "mesh " + std::to_string(i.mesh) + " is not declared above");
-            if (!(i.size > 0) || !(i.weight >= 0)) throw std::runtime_error(where + "size must be > 0 and weight >= 0");
+                throw tom::ParseError(where + "expected 'instance MESH X Y Z SIZE YAW WEIGHT'");
+            if (i.mesh >= s.meshes.size()) throw tom::ParseError(where + "mesh " + std::to_string(i.mesh) + " is not declared above");
+            if (!(i.size > 0) || !(i.weight >= 0)) throw tom::ParseError(where + "size must be > 0 and weight >= 0");
             s.instances.push_back(i);
         } else {
-            throw std::runtime_error(where + "unknown keyword '" + word + "'");
+            throw tom::ParseError(where + "unknown keyword '" + word + "'");
         }
     }
-    if (s.instances.empty()) throw std::runtime_error(path + ": no instances");
+    if (s.instances.empty()) throw tom::ParseError(path + ": no instances");
     return s;
 }
 
 void write_scene(const std::string& path, const Scene& s) {
     std::ofstream out(path);
-    if (!out) throw std::runtime_error("cannot write scene file '" + path + "'");
+    if (!out) throw tom::ParseError("cannot write scene file '" + path + "'");
     out << "# tcrwalk scene: mesh PATH; instance MESH X Y Z SIZE YAW WEIGHT\n";
     for (const std::string& m : s.meshes) out << "mesh " << m << "\n";
     out.precision(6);

@@ -530,7 +530,7 @@ int main(int argc, char** argv) {
     app.add_option("--make-scene", make_scene, "Write a scene file from --meshes (deterministic from --seed) and exit");
     app.add_option("--meshes", mesh_files, "For --make-scene: .tom files (paths stored relative to the scene file)");
     app.add_option("--instances", instances, "For --make-scene: number of instances (default 300)");
-    app.add_option("--calibrate", calibrate_out, "Render sample objects, fit the cost model, write this calibration file (libtcr/CALIBRATION.md)");
+    app.add_option("--calibrate", calibrate_out, "Render sample objects, fit the cost model, write this calibration file (docs/CALIBRATION.md)");
     app.add_option("--calibration", o.calibration, "Calibration file to run with (required unless --calibrate)");
     app.add_option("--selector", o.selectors, "none, static, stress, greedy, barrier, exact, or all (default all)")->delimiter(',');
     app.add_option("--budget-ms", o.budget_ms, "Frame budget in ms (default 40)")->check(CLI::PositiveNumber);

@@ -5,9 +5,13 @@ set -euo pipefail
 src="$1"; build="$2"; data="$3"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
-for f in include/tom/extract.h include/tom/format.h include/tcr/model.h bin/tombuild bin/tominfo; do
+for f in include/tom/extract.h include/tom/format.h include/tom/builder/builder.h include/tom/builder/writer.h \
+         include/tom/io/import.h include/tom/metrics/report.h include/tcr/model.h bin/tombuild bin/tominfo; do
   [ -e "$work/prefix/$f" ] || { echo "not installed: $f"; exit 1; }
 done
+# the private headers stay private, and the runtime's headers include nothing of the other libraries
+if find "$work/prefix/include" -name parallel.h -o -name format_layout.h | grep -q .; then echo "an internal header was installed"; exit 1; fi
+if grep -l '#include "tom/\(builder\|io\|metrics\)/' "$work/prefix"/include/tom/*.h; then echo "a runtime header includes another library's"; exit 1; fi
 ls "$work/prefix"/lib*/cmake/tom/tomConfig.cmake >/dev/null
 cmake -S "$src/samples/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$work/consumer" >/dev/null

@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "tom/errors.h"
 #include "tcr/model.h"
 
 TEST_CASE("calibration recovers known coefficients from synthetic noisy samples", "[tcr][calibration]") {
@@ -58,7 +59,7 @@ TEST_CASE("the calibration file round-trips and rejects bad lines with file and 
     try {
         tcr::read_cost_model(path);
         FAIL("accepted a bad line");
-    } catch (const std::runtime_error& e) {
+    } catch (const tom::ParseError& e) {
         CHECK(std::string(e.what()).find(path + ":2") != std::string::npos);
     }
     fs::remove(path);

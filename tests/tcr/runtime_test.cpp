@@ -12,9 +12,10 @@
 #include "tcr/runtime.h"
 #include "tcr/view.h"
 #include "tom/error_curve.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/generate.h"
-#include "tom/report.h"
+#include "tom/builder/generate.h"
+#include "tom/metrics/report.h"
 
 // every allocation of this test binary is counted, to check that warm frames allocate nothing
 static std::atomic<size_t> g_allocations{0};

@@ -3,10 +3,11 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/generate.h"
+#include "tom/builder/generate.h"
 
 namespace {
 
@@ -136,6 +137,28 @@ TEST_CASE("the thread count does not change the result: real meshes, 1, 2 and 3 
             }
         }
     }
+}
+
+TEST_CASE("the foresight is only a speed-up: real meshes build the same bytes with it and without it", "[builder][determinism][samples]") {
+    int foreseen_meshes = 0;
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        if (nm.mesh.vertex_count() < 4096) continue;  // the foresight starts at 2048 live vertices
+        INFO(nm.name);
+        for (tom::Predicate p : {tom::Predicate::quadric, tom::Predicate::memoryless}) {
+            tom::BuildParams bp;
+            bp.predicate = p;
+            bp.threads = 2;
+            tom::BuildStats with, without;
+            const std::vector<uint8_t> ahead = tom::serialize({tom::build(nm.mesh, bp, &with)});
+            bp.foresight = false;
+            const std::vector<uint8_t> plain = tom::serialize({tom::build(nm.mesh, bp, &without)});
+            CHECK(with.foreseen_chunks > 0);  // the layer ran
+            CHECK(without.foreseen_chunks == 0);
+            CHECK(ahead == plain);
+            foreseen_meshes += with.foreseen_chunks > 0;
+        }
+    }
+    CHECK(foreseen_meshes >= 4);
 }
 
 TEST_CASE("a single triangle and a lone quad build and extract", "[builder][edge]") {

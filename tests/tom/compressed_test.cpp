@@ -15,7 +15,7 @@
 
 #include "support.h"
 #include "tom/errors.h"
-#include "tom/import.h"
+#include "tom/io/import.h"
 #include "tom/scene.h"
 
 namespace {

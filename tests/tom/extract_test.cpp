@@ -7,10 +7,11 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/generate.h"
+#include "tom/builder/generate.h"
 
 namespace {
 

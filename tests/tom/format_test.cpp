@@ -1,4 +1,4 @@
-// The .tom format: round trips, and every validation rule of libtom/FORMAT.md rejecting a bad
+// The .tom format: round trips, and every validation rule of docs/FORMAT.md rejecting a bad
 // file with its own message. The byte offsets used to corrupt files are the ones FORMAT.md
 // documents, written out here independently of the library's own constants.
 
@@ -10,12 +10,13 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
 #include "tom/scene.h"
-#include "tom/generate.h"
+#include "tom/builder/generate.h"
 
 namespace {
 
@@ -461,7 +462,7 @@ TEST_CASE("scenes: materials with texture references and instances survive the r
     // an instance of a mesh the file does not have cannot be written
     tom::Scene bad = scene;
     bad.instances[0].mesh = 2;
-    CHECK_THROWS_AS(tom::serialize({a, b}, bad), std::invalid_argument);
+    CHECK_THROWS_AS(tom::serialize({a, b}, bad), tom::ArgumentError);
 
     const std::vector<Section> secs = sections_of(good);
     const Section &matl = find(secs, "MATL"), &inst = find(secs, "INST");

@@ -14,10 +14,11 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/errors.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/import.h"
+#include "tom/io/import.h"
 
 namespace {
 

@@ -13,14 +13,16 @@
 
 #include "support.h"
 #include "tom/error_curve.h"
+#include "tom/errors.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
 #include "tom/extract.h"
-#include "tom/generate.h"
-#include "tom/import.h"
-#include "tom/metrics.h"
-#include "tom/report.h"
-#include "metrics/candidates.h"  // internal: the search's bounds and batched distances
-#include "metrics/samples.h"     // internal: the samples' Morton order
+#include "tom/builder/generate.h"
+#include "tom/io/import.h"
+#include "tom/metrics/distance.h"
+#include "tom/metrics/report.h"
+#include "candidates.h"  // internal: the search's bounds and batched distances
+#include "samples.h"     // internal: the samples' Morton order
 #include "morton.h"
 
 namespace {
@@ -300,7 +302,7 @@ TEST_CASE("face hints change only the speed: the same figures with good but part
                 CHECK(plain.forward.mean > 0);
                 tom::FaceHints bad;  // every other face hinting past the end of the other surface
                 bad.simplified_to_original = [&](uint32_t i) { return i % 2 ? uint32_t(t.triangle_count()) : t.original_triangle[i]; };
-                CHECK_THROWS_AS(reference.compare(level, bad), std::invalid_argument);
+                CHECK_THROWS_AS(reference.compare(level, bad), tom::ArgumentError);
             }
         }
     }
@@ -650,7 +652,7 @@ TEST_CASE("nearest distances: known answers for one triangle, a degenerate one, 
     CHECK(d2[0] == Approx(1.75 * 1.75 + 0.25 * 0.25 + 4.0));
     CHECK(d2[3] == Approx(4.0));
     tom::nearest_squared_distances({positions, 6, one, 1}, points, 0, d2);  // nothing to do, nothing written
-    CHECK_THROWS_AS(tom::nearest_squared_distances({positions, 6, one, 0}, points, 4, d2), std::invalid_argument);
+    CHECK_THROWS_AS(tom::nearest_squared_distances({positions, 6, one, 0}, points, 4, d2), tom::ArgumentError);
 }
 
 TEST_CASE("the k/N fit recovers k from synthetic k/N data", "[metrics][fit]") {

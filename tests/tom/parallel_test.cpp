@@ -1,4 +1,4 @@
-// libtom's internal thread team (libtom/src/parallel.h): every block runs exactly once per loop,
+// libtom's internal thread team (libtom/internal/parallel.h): every block runs exactly once per loop,
 // on the owner and the helpers, whether the helpers were spinning or asleep when the loop began;
 // an exception thrown in a block reaches the owner, and the team keeps working afterwards.
 

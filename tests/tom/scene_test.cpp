@@ -14,12 +14,13 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
-#include "tom/builder.h"
+#include "tom/builder/builder.h"
 #include "tom/errors.h"
-#include "tom/export.h"
+#include "tom/io/export.h"
 #include "tom/extract.h"
+#include "tom/builder/writer.h"
 #include "tom/format.h"
-#include "tom/import.h"
+#include "tom/io/import.h"
 #include "tom/scene.h"
 
 namespace {

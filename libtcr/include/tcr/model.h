@@ -61,9 +61,9 @@ struct CalibrationResult {
 /// \pre at least 4 samples with varied triangle and pixel counts.
 CalibrationResult fit_cost_model(const std::vector<CostSample>& samples);
 
-/// Reads and writes the calibration file (format documented in libtcr/CALIBRATION.md):
+/// Reads and writes the calibration file (format documented in docs/CALIBRATION.md):
 /// text lines "key value" with keys t_init_ms, t_final_ms, t_setup_ms, t_tri_ms, t_vert_ms,
-/// t_pix_ms, safety_ms, noise_rel; '#' starts a comment. \throw std::runtime_error naming file and line.
+/// t_pix_ms, safety_ms, noise_rel; '#' starts a comment. \throw tom::ParseError naming file and line, tom::IoError when unreadable.
 CostModel read_cost_model(const std::string& path);
 void write_cost_model(const std::string& path, const CostModel& model, const std::string& comment = "");
 

@@ -1,0 +1,81 @@
+#pragma once
+// The attribute term of the fairness predicates: how far a vertex's attributes (normal, TEXCOORD_0,
+// COLOR_0, each scaled to a length) are from the attribute fields of the surface it leaves.
+//
+// After Hoppe, "New quadric metric for simplifying meshes with appearance attributes" (1999):
+// over each triangle an attribute a is a linear field g.p + d (g in the triangle's plane); the
+// error of giving a point p the attribute value s is sum_t w_t (g_t.p + d_t - s)^2, a quadric in
+// (p, s) accumulated per vertex like the geometric one. Restricted to existing vertices it is
+// evaluated at (p_u, a_u) for a substitution v -> u, so a collapse along a region where the
+// attributes vary linearly (a smooth normal field, an undistorted UV chart) costs nothing, and
+// one across a crease, a UV fold or a colour edge costs what it smears.
+
+#include <cstdint>
+#include <vector>
+
+#include "parallel.h"
+#include "tom/builder/mesh.h"
+
+namespace tom::detail {
+
+class AttributeError {
+public:
+    /// Prepares the scaled attributes and, when `accumulate`, the per-vertex quadrics of the
+    /// input triangles. Scales: TEXCOORD_0 by sqrt(surface area / UV area) (texture units to
+    /// surface length), normals and colours by the mean edge length, each by a measured relative
+    /// weight (see the .cpp); all by `weight`.
+    /// Inactive (every cost 0) when weight <= 0 or the mesh has none of the streams.
+    /// `team` shares the accumulation (bit-identical sums whatever its size).
+    void init(const Mesh& mesh, float weight, bool accumulate, Team& team);
+    bool active() const noexcept { return channels_ > 0; }
+    int channels() const noexcept { return channels_; }
+
+    /// Accumulated error of v's quadric at u's position and attributes, per unit area (like the
+    /// geometric quadric), in length^2.
+    double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept {
+        if (quadric_.empty()) return 0.0;
+        const double* q = &quadric_[size_t(v) * stride_];
+        const float* a = &values_[size_t(u) * size_t(channels_)];
+        switch (channels_) {  // the common layouts unrolled (the same sums in the same order)
+        case 3: return evaluate<3>(q, position_u, a);        // normals
+        case 5: return evaluate<5>(q, position_u, a);        // normals, TEXCOORD_0
+        default: return evaluate<0>(q, position_u, a);
+        }
+    }
+    /// Starts loading v's quadric (a hint; no effect on results).
+    void prefetch(uint32_t v) const noexcept {
+        if (quadric_.empty()) return;
+        const char* q = reinterpret_cast<const char*>(&quadric_[size_t(v) * stride_]);
+        for (size_t byte = 0; byte < stride_ * sizeof(double); byte += 64) __builtin_prefetch(q + byte);
+    }
+    /// v's quadric merges into u's (v -> u).
+    void merge(uint32_t u, uint32_t v) noexcept;
+
+    /// Squared attribute error of triangle (i0, i1, i2)'s fields at u's position and attributes,
+    /// summed over channels (for the memoryless predicate); 0 for a zero-area triangle.
+    double triangle_error(const float* positions, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t u) const noexcept;
+
+private:
+    // v's quadric q at position p with attributes a, per unit area; C channels (0: channels_)
+    template <int C>
+    double evaluate(const double* q, const float* p, const float* a) const noexcept {
+        if (!(q[0] > 0)) return 0.0;
+        const double x = p[0], y = p[1], z = p[2];
+        double e = q[1] * x * x + q[4] * y * y + q[6] * z * z + 2 * (q[2] * x * y + q[3] * x * z + q[5] * y * z) + 2 * (q[7] * x + q[8] * y + q[9] * z) + q[10];
+        const int channels = C ? C : channels_;
+        for (int j = 0; j < channels; ++j) {
+            const double* ch = &q[11 + 4 * j];
+            const double s = a[j];
+            e += q[0] * s * s - 2 * s * (ch[0] * x + ch[1] * y + ch[2] * z + ch[3]);
+        }
+        return e > 0 ? e / q[0] : 0.0;
+    }
+
+    int channels_ = 0;
+    std::vector<float> values_;    // channels_ per vertex, scaled
+    TeamVector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
+    size_t stride_ = 0;
+    static constexpr size_t kMaxStride = 11 + 4 * 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
+};
+
+} // namespace tom::detail

@@ -1,0 +1,563 @@
+// Greedy vertex substitution into a Totally Ordered Mesh.
+//
+// This work is based on:
+// - E. Gobbetti, E. Bouvier. Time-critical multiresolution scene rendering / The Totally Ordered
+//   Mesh. 1999: vertex substitution, binary oracle + fairness predicate, total order of vertices
+//   and triangles, memoryless penalty dV + |v1-v2| dA + inversion + normal angle.
+// - M. Garland, P. Heckbert. Surface Simplification Using Quadric Error Metrics. 1997.
+// - P. Lindstrom, G. Turk. Fast and Memory Efficient Polygonal Simplification. 1998.
+// - A. Kapoulkine. meshoptimizer, simplifier: the idea of passes of independent collapses sorted
+//   by cost, and of classifying vertices (manifold, border, locked) to restrict their targets.
+//
+// Algorithm (both strategies):
+//   classify vertices: interior (any edge neighbour), border (only along its border loop),
+//   locked (non-manifold, border corners, coincident copies: never removed, may be a target)
+//   repeat: pick the legal substitution v1 -> v2 of lowest penalty, rewrite v1's triangles to v2,
+//           the ones containing v2 die; record (v1, v2)
+//   until no legal substitution is left. Sort: survivors first, then removed vertices from the
+//   last removed to the first; triangles by the resolution at which they die.
+
+#include "tom/builder/builder.h"
+
+#include "format_layout.h"
+#include "morton.h"
+#include "parallel.h"
+#include "passes.h"
+#include "radix_sort.h"
+#include "substitution.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace tom {
+
+namespace build_detail {
+namespace {
+
+using detail::thread_count;
+
+void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& team) {
+    const uint32_t n = b.n;
+    const Topology& topo = b.topo;
+    VertexClasses& cl = b.classes;
+    cl.kind.assign(n, kInterior);
+    cl.border_next.assign(n, kNone);
+    cl.border_prev.assign(n, kNone);
+    // Per vertex v, from its triangles in order: outs = the vertices following v (its outgoing
+    // edges v -> e), ins = those preceding it (incoming w -> v). The multiplicity of the directed
+    // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
+    // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
+    // inconsistently oriented) locks both ends; an edge without its reverse is open.
+    // each vertex writes only its own class and border links: blocks of vertices on the team.
+    // The counts sit in the worker's array, zero between vertices: tally[2x] = x's count in outs,
+    // tally[2x + 1] in ins, held at 2 (only 0, 1 and more than 1 matter)
+    std::vector<std::vector<uint32_t>> lists(2 * size_t(team.size()));
+    std::vector<std::vector<uint8_t>> tallies(team.size());
+    team.blocks(n, 4096, [&](unsigned worker, size_t begin, size_t end) {
+        std::vector<uint32_t>& outs = lists[2 * worker];  // of v, in corner order
+        std::vector<uint32_t>& ins = lists[2 * worker + 1];
+        std::vector<uint8_t>& tally = tallies[worker];
+        if (tally.empty()) tally.assign(2 * size_t(n), 0);
+        for (uint32_t v = uint32_t(begin); v < uint32_t(end); ++v) {
+            outs.clear();
+            ins.clear();
+            topo.each(v, [&](uint32_t t) {
+                uint32_t e, w;
+                topo.others(t, v, e, w);
+                outs.push_back(e);
+                ins.push_back(w);
+                uint8_t& out_count = tally[2 * size_t(e)];
+                uint8_t& in_count = tally[2 * size_t(w) + 1];
+                out_count += out_count < 2;
+                in_count += in_count < 2;
+            });
+            const uint32_t valence = uint32_t(outs.size());
+            const uint32_t* out = outs.data();
+            const uint32_t* in = ins.data();
+            uint32_t open_out = 0, open_in = 0;
+            bool locked = false;
+            // the edge between v and x, x taken from outs (mine = 0) or ins (1): its multiplicity
+            // in that direction is x's count there, the reverse's x's count in the other list
+            auto edge = [&](uint32_t x, size_t mine, uint32_t& link, uint32_t& open) {
+                const uint32_t fwd = tally[2 * size_t(x) + mine], rev = tally[2 * size_t(x) + (1 - mine)];
+                if (fwd > 1 || rev > 1) {
+                    locked = true;
+                } else if (rev == 0) {
+                    link = x;
+                    ++open;
+                }
+            };
+            for (uint32_t i = 0; i < valence; ++i) {
+                edge(out[i], 0, cl.border_next[v], open_out);
+                edge(in[i], 1, cl.border_prev[v], open_in);
+            }
+            if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
+                cl.kind[v] = kLocked;
+            else if (open_out == 1)
+                cl.kind[v] = kBorder;
+            for (uint32_t i = 0; i < valence; ++i) tally[2 * size_t(out[i])] = tally[2 * size_t(in[i]) + 1] = 0;
+        }
+    });
+    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
+    // An open-addressing table of exact position bits groups them: a group of two border vertices
+    // whose border neighbours are coincident too is a seam (the two collapse together); any other
+    // group is locked.
+    cl.partner.assign(n, kNone);
+    {
+        size_t cap = 16;
+        while (cap < size_t(n) * 2) cap *= 2;
+        std::vector<uint32_t> table(cap, kNone), first(n, kNone), count(n, 0), second(n, kNone);
+        auto same = [&](uint32_t a, uint32_t c) { return std::memcmp(&b.pos[a], &b.pos[c], sizeof(Vec3)) == 0; };
+        for (uint32_t v = 0; v < n; ++v) {
+            uint32_t bits[3];
+            std::memcpy(bits, &b.pos[v], 12);
+            uint64_t h = (uint64_t(bits[0]) * 73856093u) ^ (uint64_t(bits[1]) * 19349663u) ^ (uint64_t(bits[2]) * 83492791u);
+            h ^= h >> 29;
+            h *= 0xbf58476d1ce4e5b9ULL;
+            h ^= h >> 32;
+            for (size_t i = size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+                if (table[i] == kNone) {
+                    table[i] = v;
+                    first[v] = v;
+                    count[v] = 1;
+                    break;
+                }
+                if (same(table[i], v)) {
+                    first[v] = table[i];
+                    if (++count[table[i]] == 2) second[table[i]] = v;
+                    break;
+                }
+            }
+        }
+        // position classes: the first copy names the class; copies are linked in a circle
+        cl.wedge.assign(first.begin(), first.end());
+        cl.next_copy.resize(n);
+        {
+            std::vector<uint32_t> last(n, kNone);
+            for (uint32_t v = 0; v < n; ++v) cl.next_copy[v] = v;
+            for (uint32_t v = 0; v < n; ++v) {
+                const uint32_t r = first[v];
+                if (v == r) {
+                    last[r] = v;
+                    continue;
+                }
+                cl.next_copy[v] = r;          // v closes the circle
+                cl.next_copy[last[r]] = v;    // after the class's previous copy
+                last[r] = v;
+            }
+        }
+        auto pos_eq = [&](uint32_t a, uint32_t c) { return a != kNone && c != kNone && same(a, c); };
+        for (uint32_t v = 0; v < n; ++v) {
+            const uint32_t r = first[v];
+            if (count[r] < 2) continue;
+            const uint32_t a = r, c = second[r];
+            const bool seam = count[r] == 2 && cl.kind[a] == kBorder && cl.kind[c] == kBorder &&
+                              ((pos_eq(cl.border_next[a], cl.border_prev[c]) && pos_eq(cl.border_prev[a], cl.border_next[c])) ||
+                               (pos_eq(cl.border_next[a], cl.border_next[c]) && pos_eq(cl.border_prev[a], cl.border_prev[c])));
+            if (seam && allow_seams) {
+                cl.kind[v] = kSeam;
+                cl.partner[v] = v == a ? c : a;
+            } else {
+                cl.kind[v] = kLocked;
+            }
+        }
+    }
+    // a border vertex whose loop neighbour is locked keeps its pointers; pointers of locked
+    // vertices are never followed from a locked vertex itself
+    for (uint32_t v = 0; v < n; ++v) {
+        stats.locked_vertices += cl.kind[v] == kLocked;
+        stats.border_vertices += cl.kind[v] == kBorder;
+        stats.seam_vertices += cl.kind[v] == kSeam;
+    }
+}
+
+void init_quadrics(Builder& b, detail::Team& team) {
+    detail::zero_on_team(team, b.quadric, b.n);
+    detail::scatter_by_vertex_range(team, b.n, b.topo.idx.data(), b.m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
+        auto mine = [&](uint32_t v) { return v >= lo && v < hi; };
+        const uint32_t i0 = b.topo.idx[3 * t], i1 = b.topo.idx[3 * t + 1], i2 = b.topo.idx[3 * t + 2];
+        const Vec3 p0 = b.pos[i0], p1 = b.pos[i1], p2 = b.pos[i2];
+        Vec3 nrm = cross(sub(p1, p0), sub(p2, p0));
+        const float len = length(nrm);
+        if (len == 0.0f) return;
+        const float area = 0.5f * len;
+        nrm = {nrm.x / len, nrm.y / len, nrm.z / len};
+        const double d = -double(dot(nrm, p0));
+        Quadric q{};
+        add_plane(q, nrm.x, nrm.y, nrm.z, d, area);
+        for (const uint32_t v : {i0, i1, i2})
+            if (mine(v)) add(b.quadric[v], q);
+        // open edges: a plane through the edge, perpendicular to the triangle, keeps borders in place
+        const uint32_t c[3] = {i0, i1, i2};
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = c[k], e = c[(k + 1) % 3];
+            if ((!mine(a) && !mine(e)) || b.classes.border_next[a] != e || b.classes.border_prev[e] != a) continue;
+            const Vec3 pa = b.pos[a], pe = b.pos[e];
+            const Vec3 edge = sub(pe, pa);
+            Vec3 en = cross(edge, nrm);
+            const float el = length(en);
+            if (el == 0.0f) continue;
+            en = {en.x / el, en.y / el, en.z / el};
+            Quadric qe{};
+            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(dot(edge, edge)));
+            if (mine(a)) add(b.quadric[a], qe);
+            if (mine(e)) add(b.quadric[e], qe);
+        }
+    });
+}
+
+// Non-edge pairs closer than t, found on a uniform grid of cell size t (at most 8 per vertex).
+void find_pairs(Builder& b, float t, BuildStats& stats) {
+    if (!(t > 0.0f)) return;
+    struct Cell {
+        int64_t key;
+        uint32_t v;
+    };
+    std::vector<Cell> cells(b.n);
+    auto cell_key = [&](int64_t x, int64_t y, int64_t z) { return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL); };
+    auto coord = [&](float x) { return int64_t(std::floor(x / t)); };
+    for (uint32_t v = 0; v < b.n; ++v)
+        cells[v] = {cell_key(coord(b.pos[v].x), coord(b.pos[v].y), coord(b.pos[v].z)), v};
+    std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& c) { return a.key < c.key || (a.key == c.key && a.v < c.v); });
+    std::vector<std::vector<uint32_t>>& found = b.pairs;
+    found.assign(b.n, {});
+    const float t2 = t * t;
+    for (uint32_t v = 0; v < b.n; ++v) {
+        if (b.classes.kind[v] == kLocked) continue;
+        const Vec3 p = b.pos[v];
+        const int64_t cx = coord(p.x), cy = coord(p.y), cz = coord(p.z);
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    const int64_t key = cell_key(cx + dx, cy + dy, cz + dz);
+                    auto it = std::lower_bound(cells.begin(), cells.end(), key, [](const Cell& c, int64_t k) { return c.key < k; });
+                    for (; it != cells.end() && it->key == key && found[v].size() < 8; ++it) {
+                        const uint32_t u = it->v;
+                        const Vec3 d = sub(b.pos[u], p);
+                        if (u != v && dot(d, d) <= t2) found[v].push_back(u);
+                    }
+                }
+        std::sort(found[v].begin(), found[v].end());
+        found[v].erase(std::unique(found[v].begin(), found[v].end()), found[v].end());
+    }
+    // symmetric: u is v's partner iff v is u's
+    for (uint32_t v = 0; v < b.n; ++v)
+        for (const uint32_t u : found[v])
+            if (std::find(found[u].begin(), found[u].end(), v) == found[u].end()) found[u].push_back(v);
+    for (uint32_t v = 0; v < b.n; ++v) {
+        std::sort(found[v].begin(), found[v].end());
+        stats.pair_candidates += uint32_t(found[v].size());
+    }
+}
+
+void run_heap(Builder& b) {
+    struct Entry {
+        float cost;
+        uint32_t v, u, stamp;
+        bool operator<(const Entry& o) const {  // std heap is a max-heap: invert
+            return cost > o.cost || (cost == o.cost && v > o.v);
+        }
+    };
+    std::vector<Entry> heap;
+    std::vector<uint32_t> stamp(b.n, 0);
+    heap.reserve(b.n * 2);
+    auto evaluate_vertex = [&](uint32_t v) {
+        ++stamp[v];
+        Candidate c;
+        if (b.best_target(v, c, true, b.scratch)) {
+            heap.push_back({c.cost, v, c.u, stamp[v]});
+            std::push_heap(heap.begin(), heap.end());
+        }
+    };
+    for (uint32_t v = 0; v < b.n; ++v)
+        if (b.classes.kind[v] != kLocked) {
+            Candidate c;
+            if (b.best_target(v, c, true, b.scratch)) heap.push_back({c.cost, v, c.u, stamp[v]});
+        }
+    std::make_heap(heap.begin(), heap.end());
+    std::vector<uint32_t> ring;
+    while (!heap.empty()) {
+        std::pop_heap(heap.begin(), heap.end());
+        const Entry e = heap.back();
+        heap.pop_back();
+        if (b.removed[e.v] || e.stamp != stamp[e.v]) continue;
+        if (b.removed[e.u]) {  // a pair target went away without touching v's triangles
+            evaluate_vertex(e.v);
+            continue;
+        }
+        b.substitute(e.v, e.u);
+        b.merge_quadrics(e.u, e.v);
+        b.topo.splice(e.v, e.u);
+        b.topo.compact(e.u);
+        ring.clear();
+        ring.push_back(e.u);
+        b.each_distinct_corner(e.u, b.scratch, [&](uint32_t w) {
+            if (w != e.u) ring.push_back(w);
+        });
+        for (uint32_t w : ring) {
+            if (b.classes.kind[w] == kLocked) continue;
+            b.topo.compact(w);
+            evaluate_vertex(w);
+        }
+    }
+}
+
+// the blocks in which the team shares the set-up's and the output's per-vertex and per-triangle loops
+constexpr size_t kRowBlock = 16384;
+
+// dst = src's vertex rows in the given order (row i = src row order[i]) for every stream of
+// `from` into the same stream of `to`; positions included. Streams not one row per vertex are
+// copied as they are (clean_mesh leaves none).
+template <class From, class To>
+void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>& order, detail::Team& team) {
+    auto gather = [&](const std::vector<float>& src, std::vector<float>& dst, size_t width) {
+        if (src.size() != order.size() * width) {
+            dst = src;
+            return;
+        }
+        dst.resize(src.size());
+        team.blocks(order.size(), kRowBlock, [&](unsigned, size_t begin, size_t end) {
+            for (size_t i = begin; i < end; ++i) std::memcpy(&dst[i * width], &src[size_t(order[i]) * width], width * sizeof(float));
+        });
+    };
+    gather(from.positions, to.positions, 3);
+    std::vector<const std::vector<float>*> sources;
+    for_each_attribute_stream(from, [&](const std::vector<float>& values, size_t, const char*) { sources.push_back(&values); });
+    size_t stream = 0;
+    for_each_attribute_stream(to, [&](std::vector<float>& dst, size_t width, const char*) { gather(*sources[stream++], dst, width); });
+}
+
+// The mesh the build runs on: the input with its vertices in Morton order of their positions
+// and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
+// Input vertex orders can be arbitrary (bunny00's triangles span 40% of its vertex range at the
+// median), and the passes then miss the cache on almost every neighbour's quadric and corner
+// list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
+// the positions' bounding box (zero for no vertex), which the codes are taken in.
+Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3],
+                          detail::Team& team) {
+    const uint32_t n = in.vertex_count(), m = in.triangle_count();
+    std::fill(lo, lo + 3, 0.0f);
+    std::fill(hi, hi + 3, 0.0f);
+    for (uint32_t v = 0; v < n; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const float x = in.positions[3 * size_t(v) + size_t(k)];
+            lo[k] = v ? std::min(lo[k], x) : x;
+            hi[k] = v ? std::max(hi[k], x) : x;
+        }
+    std::vector<uint32_t> code(n);
+    vertex_old.resize(n);
+    team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (uint32_t v = uint32_t(begin); v < uint32_t(end); ++v) {
+            uint32_t c = 0;
+            for (int k = 0; k < 3; ++k) {
+                const float extent = hi[k] - lo[k];
+                const float t = extent > 0 ? (in.positions[3 * size_t(v) + size_t(k)] - lo[k]) / extent : 0.0f;
+                c |= uint32_t(detail::spread_bits(uint32_t(std::min(1023.0f, std::max(0.0f, t * 1023.0f))))) << k;  // 10 bits: 30 in all
+            }
+            code[v] = c;
+            vertex_old[v] = v;
+        }
+    });
+    // by the 30-bit codes, stable: equal codes keep input order
+    {
+        std::vector<uint32_t> tmp;
+        detail::radix_sort(vertex_old, tmp, 30, [&](uint32_t v) { return code[v]; }, &team);
+    }
+    std::vector<uint32_t> vertex_new(n);
+    team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (uint32_t i = uint32_t(begin); i < uint32_t(end); ++i) vertex_new[vertex_old[i]] = i;
+    });
+
+    Mesh out;
+    out.name = in.name;
+    out.material = in.material;
+    gather_vertex_streams(in, out, vertex_old, team);
+    // triangles by their lowest new vertex (counting sort, stable)
+    std::vector<uint32_t> first_vertex(m), start(size_t(n) + 1, 0);
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+            const uint32_t* c = &in.indices[3 * t];
+            first_vertex[t] = std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
+        }
+    });
+    for (uint32_t t = 0; t < m; ++t) ++start[first_vertex[t] + 1];
+    for (uint32_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    triangle_old.resize(m);
+    for (uint32_t t = 0; t < m; ++t) triangle_old[start[first_vertex[t]]++] = t;
+    out.indices.resize(in.indices.size());
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t)
+            for (size_t k = 0; k < 3; ++k) out.indices[3 * t + k] = vertex_new[in.indices[3 * size_t(triangle_old[t]) + k]];
+    });
+    return out;
+}
+
+// The input reordered for locality, with what maps it back.
+struct LocalMesh {
+    Mesh mesh;
+    std::vector<uint32_t> vertex_old, triangle_old;  // local vertex / triangle -> input's
+    float bounds_min[3], bounds_max[3];
+    std::vector<float> normals;  // vertex normals computed for the memoryless predicate, when the mesh has none
+};
+
+// The builder's state for `local`: positions, normals, the current triangles, the predicate's
+// parameters and the record's storage.
+void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
+    const Mesh& mesh = local.mesh;
+    b.n = mesh.vertex_count();
+    b.m = mesh.triangle_count();
+    static_assert(sizeof(Vec3) == 12, "Vec3 must alias xyz floats");
+    b.pos = reinterpret_cast<const Vec3*>(mesh.positions.data());
+    if (mesh.normals.size() == mesh.positions.size()) {
+        b.vnormal = reinterpret_cast<const Vec3*>(mesh.normals.data());
+    } else {
+        Mesh tmp;
+        tmp.positions = mesh.positions;
+        tmp.indices = mesh.indices;
+        compute_normals(tmp);
+        local.normals.swap(tmp.normals);
+        b.vnormal = reinterpret_cast<const Vec3*>(local.normals.data());
+    }
+    b.predicate = params.predicate;
+    const double c = std::cos(std::min(90.0, std::max(1.0, double(params.max_rotation_degrees))) * 3.14159265358979323846 / 180.0);
+    b.min_cos2 = float(c * c);
+    b.topo.build(b.n, mesh.indices);  // the triangles around each vertex, from classification to the last substitution
+    b.removed.assign(b.n, 0);
+    b.scratch.stamp.assign(b.n, 0);
+    b.removed_order.reserve(b.n);
+    b.removed_target.reserve(b.n);
+}
+
+// The record and the triangles' deaths back in the input's numbering.
+void to_input_numbering(Builder& b, const LocalMesh& local, detail::Team& team) {
+    std::vector<uint8_t> removed(b.n);
+    team.blocks(b.n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) removed[local.vertex_old[i]] = b.removed[i];
+    });
+    b.removed.swap(removed);
+    for (uint32_t& v : b.removed_order) v = local.vertex_old[v];
+    for (uint32_t& v : b.removed_target) v = local.vertex_old[v];
+    std::vector<uint32_t> death(b.m);
+    team.blocks(b.m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) death[local.triangle_old[t]] = b.topo.death_step[t];
+    });
+    b.topo.death_step.swap(death);
+}
+
+// The total order of the vertices: survivors first (in input order), then the removed ones,
+// last removed first; new_index maps the input's vertices into it.
+void order_vertices(const Builder& b, TomMesh& out, std::vector<uint32_t>& new_index) {
+    const uint32_t n = b.n, removed_count = uint32_t(b.removed_order.size()), s = n - removed_count;
+    out.min_vertex_count = s;
+    new_index.assign(n, kNone);
+    uint32_t next = 0;
+    for (uint32_t v = 0; v < n; ++v)
+        if (!b.removed[v]) new_index[v] = next++;
+    assert(next == s);
+    for (uint32_t j = 0; j < removed_count; ++j) new_index[b.removed_order[j]] = n - 1 - j;
+    out.original_index.resize(n);
+    for (uint32_t v = 0; v < n; ++v) out.original_index[new_index[v]] = v;
+    out.substitute.resize(n);
+    for (uint32_t i = 0; i < s; ++i) out.substitute[i] = i;
+    for (uint32_t j = 0; j < removed_count; ++j) out.substitute[n - 1 - j] = new_index[b.removed_target[j]];
+}
+
+// The triangles by the resolution at which they die: triangle t is alive at resolution
+// r >= key(t), key = n - step for a triangle killed by substitution `step` (its removed vertex
+// gets index n-1-step), s for the survivors. Counting sort by key, stable in input order.
+void order_triangles(const Builder& b, const Mesh& input, const std::vector<uint32_t>& new_index, TomMesh& out, detail::Team& team) {
+    const uint32_t n = b.n, m = b.m, s = out.min_vertex_count;
+    const std::vector<uint32_t>& death = b.topo.death_step;
+    std::vector<uint32_t> bucket(n + 2, 0);
+    auto key_of = [&](uint32_t t) { return death[t] == kNone ? s : n - death[t]; };
+    for (uint32_t t = 0; t < m; ++t) ++bucket[key_of(t) + 1];
+    for (uint32_t k = 0; k <= n; ++k) bucket[k + 1] += bucket[k];
+    out.triangles.resize(size_t(m) * 3);
+    out.original_triangle.resize(m);
+    for (uint32_t t = 0; t < m; ++t) out.original_triangle[bucket[key_of(t)]++] = t;
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t slot = begin; slot < end; ++slot)
+            for (size_t k = 0; k < 3; ++k) out.triangles[3 * slot + k] = new_index[input.indices[3 * size_t(out.original_triangle[slot]) + k]];
+    });
+}
+
+// A seam collapse removed two vertices at steps j, j + 1: they sit at n-2-j and n-1-j, and no
+// resolution may take one without the other.
+void mark_seam_pairs(const Builder& b, TomMesh& out) {
+    if (b.pair_steps.empty()) return;
+    out.pair_bits.assign((size_t(b.n) + 7) / 8, 0);
+    for (const uint32_t j : b.pair_steps) {
+        const uint32_t i = b.n - 2 - j;
+        out.pair_bits[i / 8] |= uint8_t(1u << (i % 8));
+    }
+}
+
+} // namespace
+} // namespace build_detail
+
+using namespace build_detail;
+
+MeshView TomMesh::view() const noexcept {
+    MeshView v;
+    v.name = name;
+    v.vertex_count = vertex_count();
+    v.triangle_count = triangle_count();
+    v.min_vertex_count = min_vertex_count;
+    v.index_size = 4;
+    v.material = material;
+    v.positions = positions.data();
+    int stream = 0;
+    for_each_attribute_stream(*this, [&](const std::vector<float>& values, size_t, const char*) {
+        v.*layout::attribute_streams[stream++].view = values.empty() ? nullptr : values.data();
+    });
+    v.substitute = substitute.data();
+    v.triangles = triangles.data();
+    v.pair_bits = pair_bits.empty() ? nullptr : pair_bits.data();
+    for (int k = 0; k < 3; ++k) v.bounds_min[k] = bounds_min[k], v.bounds_max[k] = bounds_max[k];
+    return v;
+}
+
+const char* to_string(Predicate p) noexcept { return p == Predicate::quadric ? "quadric" : "memoryless"; }
+const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "passes" : "heap"; }
+
+TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
+    BuildStats stats;
+    detail::Team team(thread_count(params.threads));
+    LocalMesh local;
+    local.mesh = reorder_for_locality(input, local.vertex_old, local.triangle_old, local.bounds_min, local.bounds_max, team);
+    Builder b;
+    set_up(b, local, params);
+
+    // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
+    // keep coincident copies locked
+    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), team);
+    if (b.predicate == Predicate::quadric) init_quadrics(b, team);
+    b.attributes.init(local.mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
+    find_pairs(b, params.pair_threshold, stats);
+
+    if (params.strategy == Strategy::heap)
+        run_heap(b);
+    else
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), params.foresight, team, stats);
+
+    to_input_numbering(b, local, team);
+    TomMesh out;
+    out.name = input.name;
+    out.material = input.material;
+    std::vector<uint32_t> new_index;
+    order_vertices(b, out, new_index);
+    gather_vertex_streams(input, out, out.original_index, team);
+    order_triangles(b, input, new_index, out, team);
+    std::copy(local.bounds_min, local.bounds_min + 3, out.bounds_min);
+    std::copy(local.bounds_max, local.bounds_max + 3, out.bounds_max);
+    mark_seam_pairs(b, out);
+
+    stats.substitutions = uint32_t(b.removed_order.size());
+    if (stats_out) *stats_out = stats;
+    return out;
+}
+
+} // namespace tom

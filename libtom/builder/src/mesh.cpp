@@ -1,0 +1,130 @@
+// Mesh validation and normal computation.
+
+#include "tom/builder/mesh.h"
+
+#include <cmath>
+#include <string>
+
+#include "tom/errors.h"
+
+namespace tom {
+
+namespace {
+
+void check_stream(const Mesh& mesh, const std::vector<float>& stream, size_t width, const char* what) {
+    if (!stream.empty() && stream.size() != size_t(mesh.vertex_count()) * width)
+        throw ImportError("mesh '" + mesh.name + "': " + what + " stream has " + std::to_string(stream.size() / width) +
+                          " elements for " + std::to_string(mesh.vertex_count()) + " vertices");
+}
+
+template <class T>
+void compact_stream(std::vector<T>& stream, const std::vector<uint32_t>& remap, size_t width, uint32_t new_count) {
+    if (stream.empty()) return;
+    std::vector<T> out(size_t(new_count) * width);
+    for (size_t v = 0; v < remap.size(); ++v)
+        if (remap[v] != UINT32_MAX)
+            for (size_t k = 0; k < width; ++k) out[remap[v] * width + k] = stream[v * width + k];
+    stream.swap(out);
+}
+
+} // namespace
+
+void compute_normals(Mesh& mesh) {
+    const uint32_t n = mesh.vertex_count();
+    std::vector<float> acc(size_t(n) * 3, 0.0f);
+    const float* p = mesh.positions.data();
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+        const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+        const float e1[3] = {p[3 * b] - p[3 * a], p[3 * b + 1] - p[3 * a + 1], p[3 * b + 2] - p[3 * a + 2]};
+        const float e2[3] = {p[3 * c] - p[3 * a], p[3 * c + 1] - p[3 * a + 1], p[3 * c + 2] - p[3 * a + 2]};
+        // the cross product's length is twice the area: area weighting for free
+        const float nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2], nz = e1[0] * e2[1] - e1[1] * e2[0];
+        for (uint32_t v : {a, b, c}) {
+            acc[3 * v] += nx;
+            acc[3 * v + 1] += ny;
+            acc[3 * v + 2] += nz;
+        }
+    }
+    for (uint32_t v = 0; v < n; ++v) {
+        float* q = &acc[3 * size_t(v)];
+        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (len > 0.0f) {
+            q[0] /= len, q[1] /= len, q[2] /= len;
+        } else {
+            q[0] = 0.0f, q[1] = 0.0f, q[2] = 1.0f;
+        }
+    }
+    mesh.normals.swap(acc);
+}
+
+CleanStats clean_mesh(Mesh& mesh) {
+    CleanStats stats;
+    if (mesh.positions.size() % 3 != 0)
+        throw ImportError("mesh '" + mesh.name + "': position stream length " + std::to_string(mesh.positions.size()) + " is not a multiple of 3");
+    if (mesh.indices.size() % 3 != 0)
+        throw ImportError("mesh '" + mesh.name + "': index count " + std::to_string(mesh.indices.size()) + " is not a multiple of 3");
+    if (mesh.positions.size() / 3 > size_t(UINT32_MAX) - 1 || mesh.indices.size() / 3 > size_t(UINT32_MAX) - 1)
+        throw ImportError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
+    for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char* what) { check_stream(mesh, stream, width, what); });
+    const uint32_t n = mesh.vertex_count();
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!std::isfinite(mesh.positions[i]))
+            throw ImportError("mesh '" + mesh.name + "': vertex " + std::to_string(i / 3) + " has a non-finite position");
+    for (size_t i = 0; i < mesh.indices.size(); ++i)
+        if (mesh.indices[i] >= n)
+            throw ImportError("mesh '" + mesh.name + "': triangle " + std::to_string(i / 3) + " uses vertex " +
+                              std::to_string(mesh.indices[i]) + " but the mesh has " + std::to_string(n) + " vertices");
+    for (float& x : mesh.normals)
+        if (!std::isfinite(x)) x = 0.0f;  // renormalised below
+
+    // drop triangles with a repeated corner: they cover no area and can never be drawn
+    size_t out = 0;
+    for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+        const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
+        if (a == b || b == c || a == c) {
+            ++stats.degenerate_triangles;
+            continue;
+        }
+        mesh.indices[out++] = a, mesh.indices[out++] = b, mesh.indices[out++] = c;
+    }
+    mesh.indices.resize(out);
+
+    // drop unreferenced vertices, keeping the order of the rest
+    std::vector<uint32_t> remap(n, UINT32_MAX);
+    for (uint32_t i : mesh.indices) remap[i] = 0;
+    uint32_t next = 0;
+    for (uint32_t v = 0; v < n; ++v)
+        if (remap[v] == 0) remap[v] = next++;
+    stats.unreferenced_vertices = n - next;
+    if (next != n) {
+        compact_stream(mesh.positions, remap, 3, next);
+        for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char*) { compact_stream(stream, remap, width, next); });
+        for (uint32_t& i : mesh.indices) i = remap[i];
+    }
+
+    if (mesh.normals.empty()) {
+        compute_normals(mesh);
+    } else {
+        // given normals are normalised; zero ones are replaced by computed ones
+        bool missing = false;
+        for (size_t v = 0; v < mesh.normals.size(); v += 3) {
+            float* q = &mesh.normals[v];
+            const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+            if (len > 0.0f)
+                q[0] /= len, q[1] /= len, q[2] /= len;
+            else
+                missing = true;
+        }
+        if (missing) {
+            std::vector<float> given;
+            given.swap(mesh.normals);
+            compute_normals(mesh);
+            for (size_t v = 0; v < given.size(); v += 3)
+                if (given[v] != 0.0f || given[v + 1] != 0.0f || given[v + 2] != 0.0f)
+                    for (int k = 0; k < 3; ++k) mesh.normals[v + size_t(k)] = given[v + size_t(k)];
+        }
+    }
+    return stats;
+}
+
+} // namespace tom

@@ -1,0 +1,535 @@
+#pragma once
+// The state of one build and the operations both strategies share: the binary oracle (legal()),
+// the fairness predicate (cost()), the choice of a vertex's best substitution and the
+// substitution itself. Internal to tom::builder; builder.cpp sets it up, passes.cpp and
+// builder.cpp's heap strategy drive it.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "attribute_error.h"
+#include "parallel.h"
+#include "tom/builder/builder.h"
+#include "vec3.h"
+
+namespace tom::build_detail {
+
+using Vec3 = detail::Vec3T<float>;
+using detail::cross;
+using detail::dot;
+using detail::length;
+using detail::sub;
+
+// Q(p) = p^T A p + 2 b.p + c, A symmetric (a00 a01 a02 a11 a12 a22). The error is divided by
+// the accumulated weight (area), as meshoptimizer does: a mean squared distance rather than an
+// area-weighted sum, so large triangles do not dominate the order.
+struct Quadric {
+    double a00, a01, a02, a11, a12, a22, b0, b1, b2, c;
+    double w;  // accumulated weight (area): the error is reported per unit weight
+};
+
+inline void add_plane(Quadric& q, double nx, double ny, double nz, double d, double w) {
+    q.a00 += w * nx * nx, q.a01 += w * nx * ny, q.a02 += w * nx * nz;
+    q.a11 += w * ny * ny, q.a12 += w * ny * nz, q.a22 += w * nz * nz;
+    q.b0 += w * nx * d, q.b1 += w * ny * d, q.b2 += w * nz * d;
+    q.c += w * d * d;
+    q.w += w;
+}
+
+inline void add(Quadric& q, const Quadric& r) {
+    q.a00 += r.a00, q.a01 += r.a01, q.a02 += r.a02, q.a11 += r.a11, q.a12 += r.a12, q.a22 += r.a22;
+    q.b0 += r.b0, q.b1 += r.b1, q.b2 += r.b2, q.c += r.c;
+    q.w += r.w;
+}
+
+inline double evaluate(const Quadric& q, Vec3 p) {
+    const double x = p.x, y = p.y, z = p.z;
+    const double r = q.a00 * x * x + q.a11 * y * y + q.a22 * z * z + 2 * (q.a01 * x * y + q.a02 * x * z + q.a12 * y * z) +
+                     2 * (q.b0 * x + q.b1 * y + q.b2 * z) + q.c;
+    return r > 0 && q.w > 0 ? r / q.w : 0;
+}
+
+// A vertex's kind, from classify(): what its neighbourhood lets it do.
+enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2, kSeam = 3, kKindCount = 4 };
+
+// The collapse rules of the vertex kinds, read in one place (as meshoptimizer's kCanCollapse).
+// Any vertex may be a target; what differs is where a vertex may go.
+struct CollapseRule {
+    bool moves;         // may be substituted at all
+    bool along_border;  // only onto a neighbour on its border loop (or onto a pair partner)
+    bool with_partner;  // its coincident copy moves with it, onto the target's copy
+};
+constexpr CollapseRule kCollapseRules[kKindCount] = {
+    {true, false, false},  // interior: onto any edge neighbour
+    {true, true, false},   // border: along its loop, so the border keeps its shape
+    {false, false, false}, // locked (non-manifold, border corners, coincident copies): never moves
+    {true, true, true},    // seam: one of two coincident copies on an attribute seam; both move
+                           // along the seam together and stay coincident at every resolution
+};
+
+constexpr uint32_t kNone = UINT32_MAX;
+constexpr float kBoundaryWeight = 4.0f;  // border edge planes vs. area-weighted face planes
+
+struct Candidate {
+    float cost;
+    uint32_t v, u;
+};
+
+// What one thread needs to evaluate substitutions: visit stamps per vertex (deduplication in
+// O(1)) and the candidate targets of one vertex.
+struct Scratch {
+    std::vector<uint32_t> stamp;  // per vertex: the visit that last saw it
+    uint32_t visit = 0;
+    std::vector<Candidate> targets;
+    uint32_t next_visit() {
+        if (++visit == 0) {  // wrapped: clear and start again
+            std::fill(stamp.begin(), stamp.end(), 0u);
+            visit = 1;
+        }
+        return visit;
+    }
+};
+
+// The current triangles and, per vertex, the singly linked list of its corners, which
+// substitutions splice together (nothing is rebuilt between passes).
+struct Topology {
+    std::vector<uint32_t> idx;         // current corners, rewritten by substitutions
+    std::vector<uint8_t> dead;         // per triangle
+    std::vector<uint32_t> death_step;  // per triangle: the substitution that killed it, or kNone
+    std::vector<uint32_t> first, last, next;  // first and last corner of a vertex; next corner of the same vertex
+
+    void build(uint32_t vertex_count, std::vector<uint32_t> indices) {
+        idx = std::move(indices);
+        const size_t triangle_count = idx.size() / 3;
+        dead.assign(triangle_count, 0);
+        death_step.assign(triangle_count, kNone);
+        first.assign(vertex_count, kNone);
+        last.assign(vertex_count, kNone);
+        next.assign(idx.size(), kNone);
+        for (uint32_t c = uint32_t(next.size()); c-- > 0;) {
+            const uint32_t v = idx[c];
+            next[c] = first[v];
+            if (first[v] == kNone) last[v] = c;
+            first[v] = c;
+        }
+    }
+    // f(t) for each live triangle t around v
+    template <class F>
+    void each(uint32_t v, F&& f) const {
+        for (uint32_t c = first[v]; c != kNone; c = next[c])
+            if (!dead[c / 3]) f(c / 3);
+    }
+    // (both without branches: which corner holds v is a coin toss the predictor always loses)
+    bool contains(uint32_t t, uint32_t v) const {
+        const uint32_t* c = &idx[3 * t];
+        return (c[0] == v) | (c[1] == v) | (c[2] == v);
+    }
+    // the two other corners of t in winding order after v
+    void others(uint32_t t, uint32_t v, uint32_t& a, uint32_t& b) const {
+        static constexpr uint8_t after[3] = {1, 2, 0}, before[3] = {2, 0, 1};
+        const uint32_t* c = &idx[3 * t];
+        const uint32_t k = uint32_t(c[1] == v) + 2u * uint32_t(c[2] == v);  // v's corner
+        a = c[after[k]], b = c[before[k]];
+    }
+    void prefetch(uint32_t v) const { __builtin_prefetch(&first[v]); }
+    // what splice(v, u) reads
+    void prefetch_splice(uint32_t v, uint32_t u) const {
+        __builtin_prefetch(&last[v]);
+        __builtin_prefetch(&first[u], 1);
+        __builtin_prefetch(&last[u], 1);
+    }
+    // the second step, once first[v] is in: v's first corner's triangle and link
+    void prefetch_fan(uint32_t v) const {
+        const uint32_t c = first[v];
+        if (c == kNone) return;
+        __builtin_prefetch(&idx[c - c % 3]);
+        __builtin_prefetch(&next[c]);
+    }
+    // drops the corners of dead triangles from v's list
+    void compact(uint32_t v) {
+        uint32_t* link = &first[v];
+        uint32_t tail = kNone;
+        while (*link != kNone) {
+            if (dead[*link / 3]) {
+                *link = next[*link];
+            } else {
+                tail = *link;
+                link = &next[*link];
+            }
+        }
+        last[v] = tail;
+    }
+    // moves v's corners to the front of u's list (after v's triangles were rewritten to u), O(1)
+    void splice(uint32_t v, uint32_t u) {
+        if (first[v] == kNone) return;
+        next[last[v]] = first[u];
+        if (first[u] == kNone) last[u] = last[v];
+        first[u] = first[v];
+        first[v] = last[v] = kNone;
+    }
+};
+
+// Each vertex's kind and the links classify() gives it.
+struct VertexClasses {
+    std::vector<uint8_t> kind;
+    std::vector<uint32_t> border_next, border_prev;  // a border or seam vertex's loop neighbours
+    std::vector<uint32_t> partner;     // a seam vertex's coincident copy, or kNone
+    std::vector<uint32_t> wedge;       // the position class of a vertex: its first coincident copy
+    std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
+};
+
+// Shared state of one build: the mesh, the current triangles, the vertex classes, the costs'
+// quadrics and the record of substitutions.
+struct Builder {
+    uint32_t n = 0, m = 0;
+    const Vec3* pos = nullptr;
+    const Vec3* vnormal = nullptr;
+    Predicate predicate = Predicate::quadric;
+    detail::AttributeError attributes;  // the predicates' attribute term (inactive without attributes)
+    float min_cos2 = 0.0f;  // cos^2 of the largest rotation a surviving triangle's normal may take (0: flips only)
+    Topology topo;
+    VertexClasses classes;
+    detail::TeamVector<Quadric> quadric;
+    // non-edge pairs closer than the threshold, symmetric; a substitution v -> u moves v's pairs
+    // to u (Garland-Heckbert), so parts stay joinable after their first vertices are gone
+    std::vector<std::vector<uint32_t>> pairs;
+    // the record: which vertices went, in order, and where
+    std::vector<uint8_t> removed;
+    std::vector<uint32_t> removed_order, removed_target;
+    std::vector<uint32_t> pair_steps;  // substitution j and j + 1 are one seam collapse
+    Scratch scratch;  // the calling thread's; workers bring their own
+
+    // A border loop of three edges cannot lose a vertex (it would fold onto itself).
+    // A border vertex moves along its loop, or onto a pair partner (joining two parts).
+    bool border_move_allowed(uint32_t v, uint32_t u) const {
+        if (!kCollapseRules[classes.kind[v]].along_border) return true;
+        if (u != classes.border_next[v] && u != classes.border_prev[v])
+            return !pairs.empty() && std::find(pairs[v].begin(), pairs[v].end(), u) != pairs[v].end();
+        return classes.border_next[classes.border_next[v]] != classes.border_prev[v];
+    }
+
+    // For a seam vertex v moving to its border neighbour u: the copy's matching move v' -> u',
+    // u' the copy's border neighbour at u's position; kNone when there is none.
+    uint32_t seam_target(uint32_t v, uint32_t u) const {
+        const uint32_t w = classes.partner[v];
+        if (w == kNone || removed[w]) return kNone;
+        for (const uint32_t c : {classes.border_next[w], classes.border_prev[w]})
+            if (c != kNone && !removed[c] && std::memcmp(&pos[c], &pos[u], sizeof(Vec3)) == 0) return c;
+        return kNone;
+    }
+
+    // The binary oracle's geometric and topological tests for v -> u:
+    // - no surviving triangle of v flips (or becomes zero-area), nor turns its normal by more
+    //   than the maximum rotation (BuildParams::max_rotation_degrees);
+    // - link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
+    //   otherwise edges v-w and u-w merge into a non-manifold edge;
+    // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
+    bool illegal(uint32_t v, uint32_t u, Scratch& sc) const {
+        std::vector<uint32_t>& stamp = sc.stamp;
+        const Vec3 pv = pos[v], pu = pos[u];
+        uint32_t opposite[8];
+        size_t co = 0;
+        bool bad = false;
+        const uint32_t wv = classes.wedge[v], wu = classes.wedge[u];
+        // link condition on the surface welded by position (seam copies are one point): every
+        // class adjacent to both v's and u's must be opposite a triangle joining them, otherwise
+        // two edges merge into a non-manifold one. First, the classes around v and its copies.
+        const uint32_t mark = sc.next_visit();
+        auto is_opposite = [&](uint32_t w) {
+            for (size_t i = 0; i < co; ++i)
+                if (opposite[i] == w) return true;
+            return false;
+        };
+        auto link = [&](uint32_t a, uint32_t c) {
+            const uint32_t wa = classes.wedge[a], wc = classes.wedge[c];
+            stamp[wa] = mark;
+            stamp[wc] = mark;
+            if (wa == wu || wc == wu) {
+                const uint32_t w = wa == wu ? wc : wa;
+                if (!is_opposite(w)) {
+                    if (co < 8) opposite[co++] = w;
+                    else bad = true;
+                }
+            }
+        };
+        // v's own fan in one walk: flips (only v's triangles move; those with u die) and its link
+        topo.each(v, [&](uint32_t t) {
+            if (bad) return;
+            uint32_t a, c;
+            topo.others(t, v, a, c);
+            if (a != u && c != u) {
+                const Vec3 pa = pos[a], pc = pos[c];
+                const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
+                const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
+                const float d = dot(n0, n1), l0 = dot(n0, n0);
+                if (l0 > 0.0f && (d <= 0.0f || d * d <= min_cos2 * l0 * dot(n1, n1))) {
+                    bad = true;
+                    return;
+                }
+            }
+            link(a, c);
+        });
+        for (uint32_t x = classes.next_copy[v]; x != v && !bad; x = classes.next_copy[x])
+            topo.each(x, [&](uint32_t t) {
+                uint32_t a, c;
+                topo.others(t, x, a, c);
+                link(a, c);
+            });
+        if (bad) return true;
+        uint32_t y = u;
+        do {
+            topo.each(y, [&](uint32_t t) {
+                if (bad) return;
+                uint32_t a, c;
+                topo.others(t, y, a, c);
+                const uint32_t wa = classes.wedge[a], wc = classes.wedge[c];
+                if (wa != wv && stamp[wa] == mark && !is_opposite(wa)) bad = true;
+                if (wc != wv && stamp[wc] == mark && !is_opposite(wc)) bad = true;
+                // a tetrahedron folds flat: u's triangle (u, a, c) with both a and c opposite
+                // would be duplicated by v's (v, a, c) rewritten to u
+                if (!bad && y == u && co == 2 && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
+                    topo.each(v, [&](uint32_t s2) {
+                        if (!bad && !topo.contains(s2, u) && topo.contains(s2, a) && topo.contains(s2, c)) bad = true;
+                    });
+                }
+            });
+            y = classes.next_copy[y];
+        } while (y != u && !bad);
+        return bad;
+    }
+
+    // f(w) for every corner w of x's live triangles (x among them; a neighbour once per
+    // triangle it shares with x)
+    template <class F>
+    void each_corner(uint32_t x, F&& f) const {
+        topo.each(x, [&](uint32_t t) {
+            for (int k = 0; k < 3; ++k) f(topo.idx[3 * t + k]);
+        });
+    }
+    // the same, each distinct corner once (in the order first met; sc's stamps mark them);
+    // with g, g(t) for each of x's live triangles t before its corners
+    template <class F, class G = void (*)(uint32_t)>
+    void each_distinct_corner(uint32_t x, Scratch& sc, F&& f, G&& g = [](uint32_t) {}) const {
+        const uint32_t seen = sc.next_visit();
+        topo.each(x, [&](uint32_t t) {
+            g(t);
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t w = topo.idx[3 * t + k];
+                if (sc.stamp[w] == seen) continue;
+                sc.stamp[w] = seen;
+                f(w);
+            }
+        });
+    }
+
+    // starts loading what evaluating v's substitutions reads first
+    void prefetch(uint32_t v) const {
+        if (!quadric.empty()) __builtin_prefetch(&quadric[v]);
+        attributes.prefetch(v);
+        topo.prefetch(v);
+    }
+
+    // the quadric predicate: geometric and attribute error accumulated in v, at u
+    float quadric_cost(uint32_t v, uint32_t u) const {
+        return float(evaluate(quadric[v], pos[u]) + attributes.accumulated(v, &pos[u].x, u));
+    }
+    // quadric_cost(v, u) into `cost` when it may beat (bound, bound_u) in the order (cost, u);
+    // false when it cannot: both terms are >= 0 and rounding is monotone, so the geometric term
+    // alone bounds the sum from below, and the attribute term is skipped (same results)
+    bool quadric_cost_within(uint32_t v, uint32_t u, float bound, uint32_t bound_u, float& cost) const {
+        const double geometric = evaluate(quadric[v], pos[u]);
+        const float lower = float(geometric);
+        if (lower > bound || (lower == bound && u > bound_u)) return false;
+        cost = float(geometric + attributes.accumulated(v, &pos[u].x, u));
+        return true;
+    }
+
+    float cost(uint32_t v, uint32_t u) const {
+        if (predicate == Predicate::quadric) return quadric_cost(v, u);
+        // memoryless penalty (TOM paper section 4.1): volume swept by v's triangles, distance x area
+        // change, rotation of the surviving triangles (inversion penalty), angle between vertex normals
+        const Vec3 pv = pos[v], pu = pos[u];
+        const Vec3 d = sub(pu, pv);
+        const float dist = length(d);
+        float volume = 0, area0 = 0, area1 = 0, rotation = 0;
+        double attribute = 0;  // area-weighted squared attribute error of u against v's fields
+        topo.each(v, [&](uint32_t t) {
+            uint32_t a, b;
+            topo.others(t, v, a, b);
+            const Vec3 pa = pos[a], pb = pos[b];
+            const Vec3 n0 = cross(sub(pa, pv), sub(pb, pv));
+            const float l0 = length(n0);
+            area0 += 0.5f * l0;
+            if (attributes.active()) attribute += 0.5 * l0 * attributes.triangle_error(&pos[0].x, v, a, b, u);
+            if (a == u || b == u) return;  // dies
+            const Vec3 n1 = cross(sub(pa, pu), sub(pb, pu));
+            const float l1 = length(n1);
+            area1 += 0.5f * l1;
+            volume += std::fabs(dot(d, n0)) * (1.0f / 6.0f);
+            if (l0 > 0 && l1 > 0) rotation += 0.5f * l0 * (1.0f - dot(n0, n1) / (l0 * l1));
+        });
+        const float normal_term = 1.0f - dot(vnormal[v], vnormal[u]);
+        // the attribute term in the penalty's units (length^3): RMS attribute error x area
+        const float attribute_term = area0 > 0 ? float(std::sqrt(attribute / area0)) * area0 : 0.0f;
+        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term + attribute_term;
+    }
+
+    // Best substitution of v, or false when v has none. With check_legal the best *legal* one
+    // (cheapest first through the oracle); without, the cheapest by cost alone, to be checked
+    // by the caller when it is about to be applied.
+    bool best_target(uint32_t v, Candidate& best, bool check_legal, Scratch& sc) const {
+        const CollapseRule& rule = kCollapseRules[classes.kind[v]];
+        if (!rule.moves || removed[v]) return false;
+        if (!check_legal && predicate == Predicate::quadric && classes.kind[v] == kInterior && pairs.empty()) {
+            // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
+            // an interior vertex's fan is closed and consistently oriented (every edge has one
+            // triangle on each side), so each neighbour follows v in exactly one triangle
+            bool any = false;
+            topo.each(v, [&](uint32_t t) {
+                uint32_t u, unused;
+                topo.others(t, v, u, unused);
+                if (!any) {
+                    best = {quadric_cost(v, u), v, u};
+                    any = true;
+                    return;
+                }
+                float c;
+                if (quadric_cost_within(v, u, best.cost, best.u, c) && (c < best.cost || (c == best.cost && u < best.u))) best = {c, v, u};
+            });
+            return any;
+        }
+        std::vector<Candidate>& targets = sc.targets;
+        std::vector<uint32_t>& stamp = sc.stamp;
+        targets.clear();
+        const uint32_t seen = sc.next_visit();
+        stamp[v] = seen;
+        auto offer = [&](uint32_t u) {
+            if (stamp[u] == seen || removed[u]) return;
+            stamp[u] = seen;
+            if (!border_move_allowed(v, u)) return;
+            targets.push_back({0.0f, v, u});
+        };
+        if (rule.with_partner) {
+            for (const uint32_t u : {classes.border_next[v], classes.border_prev[v]}) {
+                if (stamp[u] == seen || removed[u]) continue;
+                stamp[u] = seen;
+                const uint32_t u2 = seam_target(v, u);
+                if (u2 == kNone || !border_move_allowed(v, u) || !border_move_allowed(classes.partner[v], u2)) continue;
+                targets.push_back({0.0f, v, u});
+            }
+        } else if (rule.along_border) {
+            offer(classes.border_next[v]);
+            offer(classes.border_prev[v]);
+        } else {
+            topo.each(v, [&](uint32_t t) {
+                uint32_t a, b;
+                topo.others(t, v, a, b);
+                offer(a);
+                offer(b);
+            });
+        }
+        if (!pairs.empty())
+            for (const uint32_t u : pairs[v])
+                if (stamp[u] != seen && !removed[u]) {
+                    stamp[u] = seen;
+                    targets.push_back({0.0f, v, u});
+                }
+        if (targets.empty()) return false;
+        for (Candidate& c : targets) {
+            c.cost = cost(v, c.u);
+            if (rule.with_partner) c.cost += cost(classes.partner[v], seam_target(v, c.u));  // both copies move
+        }
+        if (!check_legal) {
+            best = targets[0];
+            for (const Candidate& c : targets)
+                if (c.cost < best.cost || (c.cost == best.cost && c.u < best.u)) best = c;
+            return true;
+        }
+        // check legality cheapest first; neighbourhoods are small
+        std::sort(targets.begin(), targets.end(), [](const Candidate& a, const Candidate& b) {
+            return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
+        });
+        for (const Candidate& c : targets)
+            if (!illegal(v, c.u, sc) && (!rule.with_partner || !illegal(classes.partner[v], seam_target(v, c.u), sc))) {
+                best = c;
+                return true;
+            }
+        return false;
+    }
+
+    // v's geometric and attribute quadrics into u's (v -> u); nothing without quadrics
+    void merge_quadrics(uint32_t u, uint32_t v) {
+        if (predicate != Predicate::quadric) return;
+        add(quadric[u], quadric[v]);
+        attributes.merge(u, v);
+    }
+    // merge i of a list (target, removed), the rows of merge i + 4 loaded meanwhile
+    void merge_quadrics(const std::vector<std::pair<uint32_t, uint32_t>>& merges, size_t i) {
+        if (i + 4 < merges.size())
+            for (const uint32_t x : {merges[i + 4].first, merges[i + 4].second}) {
+                __builtin_prefetch(&quadric[x]);
+                attributes.prefetch(x);
+            }
+        merge_quadrics(merges[i].first, merges[i].second);
+    }
+
+    // Substitutes v -> u in v's live triangles (those with u die), records it, moves v's pairs and
+    // border links to u. The caller merges v's quadrics into u's (merge_quadrics) before u's
+    // cost is next read, and splices v's corner list into u's.
+    void substitute(uint32_t v, uint32_t u) {
+        substitute_over(v, u, [&](auto&& on) { topo.each(v, on); });
+    }
+    // the same, v's live triangles given (in adjacency order: the foresight's list, while v's fan
+    // is as it saw it), so that their reads need not wait for each other along v's corner list
+    void substitute_listed(uint32_t v, uint32_t u, const uint32_t* triangles, uint32_t count) {
+        substitute_over(v, u, [&](auto&& on) {
+            for (uint32_t i = 0; i < count; ++i) on(triangles[i]);
+        });
+    }
+    template <class Fan>
+    void substitute_over(uint32_t v, uint32_t u, Fan&& fan) {
+        const uint32_t step = uint32_t(removed_order.size());
+        fan([&](uint32_t t) {
+            if (topo.contains(t, u)) {
+                topo.dead[t] = 1;
+                topo.death_step[t] = step;
+            } else {
+                uint32_t* c = &topo.idx[3 * t];
+                for (int k = 0; k < 3; ++k)
+                    if (c[k] == v) c[k] = u;
+            }
+        });
+        removed[v] = 1;
+        if (!pairs.empty()) {
+            for (const uint32_t w : pairs[v]) {
+                std::vector<uint32_t>& back = pairs[w];
+                back.erase(std::remove(back.begin(), back.end(), v), back.end());
+                if (w == u || removed[w]) continue;
+                if (std::find(back.begin(), back.end(), u) == back.end()) back.push_back(u);
+                if (std::find(pairs[u].begin(), pairs[u].end(), w) == pairs[u].end()) pairs[u].push_back(w);
+            }
+            pairs[v].clear();
+        }
+        removed_order.push_back(v);
+        removed_target.push_back(u);
+        if (kCollapseRules[classes.kind[v]].along_border) {
+            const uint32_t p = classes.border_prev[v], q = classes.border_next[v];
+            if (u == q) {
+                classes.border_prev[u] = p;
+                classes.border_next[p] = u;
+            } else if (u == p) {
+                classes.border_next[u] = q;
+                classes.border_prev[q] = u;
+            } else {  // a pair contraction joined this border to another part
+                classes.border_next[p] = u;
+                classes.border_prev[q] = u;
+                if (classes.kind[u] != kLocked) classes.kind[u] = kLocked;
+            }
+        }
+    }
+};
+} // namespace tom::build_detail

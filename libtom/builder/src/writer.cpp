@@ -1,0 +1,197 @@
+// Serialisation of TOM meshes into the .tom format (docs/FORMAT.md).
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include <unistd.h>
+
+#include "coarse.h"
+#include "format_layout.h"
+#include "scene_codec.h"
+#include "tom/errors.h"
+#include "tom/builder/writer.h"
+#include "tom/format.h"
+
+namespace tom {
+
+namespace {
+
+using namespace layout;
+
+struct PendingSection {
+    uint32_t type, mesh;
+    std::vector<uint8_t> bytes;
+};
+
+std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
+    std::vector<uint8_t> out(values.size() * 4);
+    for (size_t i = 0; i < values.size(); ++i) store_f32(&out[4 * i], values[i]);
+    return out;
+}
+
+std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uint32_t index_size) {
+    std::vector<uint8_t> out(values.size() * index_size);
+    for (size_t i = 0; i < values.size(); ++i) {
+        if (index_size == 2) {
+            out[2 * i] = uint8_t(values[i]);
+            out[2 * i + 1] = uint8_t(values[i] >> 8);
+        } else {
+            store_u32(&out[4 * i], values[i]);
+        }
+    }
+    return out;
+}
+
+void pad4(std::vector<uint8_t>& v) {
+    while (v.size() % 4) v.push_back(0);
+}
+
+std::vector<uint8_t> metadata_bytes(const std::vector<MetadataEntry>& entries) {
+    std::vector<uint8_t> out(4);
+    store_u32(out.data(), uint32_t(entries.size()));
+    for (const MetadataEntry& e : entries) {
+        uint8_t head[8];
+        store_u32(head, uint32_t(e.first.size()));
+        store_u32(head + 4, uint32_t(e.second.size()));
+        out.insert(out.end(), head, head + 8);
+        out.insert(out.end(), e.first.begin(), e.first.end());
+        pad4(out);
+        out.insert(out.end(), e.second.begin(), e.second.end());
+        pad4(out);
+    }
+    return out;
+}
+
+// COAR: the corners of the triangles active at a coarse resolution, mapped to it (empty: none)
+std::vector<uint8_t> coarse_bytes(const TomMesh& mesh) {
+    const MeshView view = mesh.view();
+    const uint32_t resolution = detail::coarse_resolution(view);
+    if (resolution == 0) return {};
+    const uint32_t triangles = detail::active_prefix(view, resolution);
+    if (triangles == 0) return {};
+    const uint32_t index_size = detail::coarse_index_size(resolution);
+    std::vector<uint32_t> corners(size_t(triangles) * 3);
+    for (uint32_t c = 0; c < corners.size(); ++c) corners[c] = detail::map_corner(view, c, resolution);
+    std::vector<uint8_t> out(coarse_header_bytes, 0);
+    store_u32(&out[c_resolution], resolution);
+    store_u32(&out[c_triangle_count], triangles);
+    store_u32(&out[c_index_size], index_size);
+    const std::vector<uint8_t> body = index_bytes(corners, index_size);
+    out.insert(out.end(), body.begin(), body.end());
+    return out;
+}
+
+uint32_t choose_index_size(const TomMesh& mesh, IndexSize requested) {
+    if (requested == IndexSize::bits32) return 4;
+    return mesh.vertex_count() <= 65536 ? 2 : 4;
+}
+
+} // namespace
+
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options) { return serialize(meshes, Scene{}, options); }
+
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options) {
+    for (const Instance& inst : scene.instances)
+        if (inst.mesh >= meshes.size())
+            throw ArgumentError("serialize: an instance names mesh " + std::to_string(inst.mesh) + " of " + std::to_string(meshes.size()));
+    std::vector<PendingSection> sections;
+    if (!scene.materials.empty()) sections.push_back({sec_materials, file_level, detail::encode_materials(scene.materials)});
+    if (!scene.instances.empty()) sections.push_back({sec_instances, file_level, detail::encode_instances(scene.instances)});
+    for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
+        const TomMesh& m = meshes[mi];
+        const uint32_t index_size = choose_index_size(m, options.index_size);
+        std::vector<uint8_t> head(mesh_header_bytes, 0);
+        store_u32(&head[m_vertex_count], m.vertex_count());
+        store_u32(&head[m_triangle_count], m.triangle_count());
+        store_u32(&head[m_min_vertex_count], m.min_vertex_count);
+        store_u32(&head[m_index_size], index_size);
+        store_u32(&head[m_material], uint32_t(m.material));
+        // the optional streams, in the order of layout::attribute_streams
+        std::vector<PendingSection> streams;
+        uint32_t attributes = 0;
+        int stream = 0;
+        for_each_attribute_stream(m, [&](const std::vector<float>& values, size_t, const char*) {
+            const AttributeStream& spec = attribute_streams[stream++];
+            if (values.empty()) return;
+            attributes |= spec.flag;
+            streams.push_back({spec.section, mi, float_bytes(values)});
+        });
+        store_u32(&head[m_attributes], attributes);
+        for (int k = 0; k < 3; ++k) {
+            store_f32(&head[m_bounds_min + 4 * k], m.bounds_min[k]);
+            store_f32(&head[m_bounds_max + 4 * k], m.bounds_max[k]);
+        }
+        store_u32(&head[m_name_bytes], uint32_t(m.name.size()));
+        head.insert(head.end(), m.name.begin(), m.name.end());
+        sections.push_back({sec_mesh, mi, std::move(head)});
+        sections.push_back({sec_positions, mi, float_bytes(m.positions)});
+        for (PendingSection& section : streams) sections.push_back(std::move(section));
+        sections.push_back({sec_substitute, mi, index_bytes(m.substitute, index_size)});
+        sections.push_back({sec_triangles, mi, index_bytes(m.triangles, index_size)});
+        std::vector<uint8_t> coarse = coarse_bytes(m);
+        if (!coarse.empty()) sections.push_back({sec_coarse, mi, std::move(coarse)});
+        if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});
+        if (!m.pair_bits.empty()) sections.push_back({sec_pairs, mi, m.pair_bits});
+    }
+    const uint64_t table_offset = header_bytes;
+    uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;
+    std::vector<uint64_t> offsets;
+    for (const PendingSection& s : sections) {
+        offset = (offset + section_alignment - 1) / section_alignment * section_alignment;
+        offsets.push_back(offset);
+        offset += s.bytes.size();
+    }
+    std::vector<uint8_t> file(offset, 0);
+    std::memcpy(file.data(), magic, 8);
+    store_u32(&file[h_version_major], format_version_major);
+    store_u32(&file[h_version_minor], format_version_minor);
+    store_u64(&file[h_file_bytes], offset);
+    store_u32(&file[h_mesh_count], uint32_t(meshes.size()));
+    store_u32(&file[h_section_count], uint32_t(sections.size()));
+    store_u64(&file[h_table_offset], table_offset);
+    for (size_t i = 0; i < sections.size(); ++i) {
+        uint8_t* e = &file[table_offset + i * section_entry_bytes];
+        store_u32(e + s_type, sections[i].type);
+        store_u32(e + s_mesh, sections[i].mesh);
+        store_u64(e + s_offset, offsets[i]);
+        store_u64(e + s_bytes, sections[i].bytes.size());
+        store_u32(e + s_checksum, crc32(sections[i].bytes.data(), sections[i].bytes.size()));
+        if (!sections[i].bytes.empty()) std::memcpy(&file[offsets[i]], sections[i].bytes.data(), sections[i].bytes.size());
+    }
+    store_u32(&file[h_table_checksum], crc32(&file[table_offset], sections.size() * section_entry_bytes));
+    store_u32(&file[h_header_checksum], crc32(file.data(), h_header_checksum));
+    return file;
+}
+
+void write_bytes_atomically(const std::string& path, const void* data, size_t bytes) {
+    static std::atomic<unsigned> counter{0};
+    const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw IoError("cannot create '" + tmp + "': " + std::strerror(errno));
+    const bool ok = std::fwrite(data, 1, bytes, f) == bytes && std::fflush(f) == 0;
+    const int write_errno = errno;
+    if (std::fclose(f) != 0 || !ok) {
+        std::remove(tmp.c_str());
+        throw IoError("cannot write '" + tmp + "': " + std::strerror(write_errno));
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        const int e = errno;
+        std::remove(tmp.c_str());
+        throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + std::strerror(e));
+    }
+}
+
+void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const WriteOptions& options) {
+    write_file(path, meshes, Scene{}, options);
+}
+
+void write_file(const std::string& path, const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options) {
+    const std::vector<uint8_t> bytes = serialize(meshes, scene, options);
+    write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
+} // namespace tom

@@ -1,0 +1,85 @@
+#pragma once
+// Byte layout of .tom files, shared by the writer and the reader (docs/FORMAT.md is the spec).
+
+#include <cstdint>
+#include <cstring>
+
+#include "tom/format.h"
+#include "tom/view.h"
+
+namespace tom::layout {
+
+constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'M', 0x0D, 0x0A, 0x1A, 0x0A};
+constexpr uint32_t header_bytes = 64;
+constexpr uint32_t section_entry_bytes = 32;
+constexpr uint32_t section_alignment = 16;
+constexpr uint32_t mesh_header_bytes = 64;
+
+// header field offsets
+constexpr uint32_t h_version_major = 8, h_version_minor = 12, h_file_bytes = 16, h_mesh_count = 24, h_section_count = 28,
+                   h_table_offset = 32, h_table_checksum = 40, h_header_checksum = 44;
+// section entry field offsets
+constexpr uint32_t s_type = 0, s_mesh = 4, s_offset = 8, s_bytes = 16, s_checksum = 24;
+// mesh header field offsets
+constexpr uint32_t m_vertex_count = 0, m_triangle_count = 4, m_min_vertex_count = 8, m_index_size = 12, m_material = 16,
+                   m_attributes = 20, m_bounds_min = 24, m_bounds_max = 36, m_name_bytes = 48;
+
+// COAR header field offsets
+constexpr uint32_t coarse_header_bytes = 16;
+constexpr uint32_t c_resolution = 0, c_triangle_count = 4, c_index_size = 8;
+
+enum Attribute : uint32_t { attr_normals = 1, attr_texcoords = 2, attr_colors = 4, attr_texcoords1 = 8, attr_tangents = 16 };
+constexpr uint32_t known_attributes = attr_normals | attr_texcoords | attr_colors | attr_texcoords1 | attr_tangents;
+
+constexpr uint32_t fourcc(const char (&s)[5]) {
+    return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 | uint32_t(uint8_t(s[3])) << 24;
+}
+constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), sec_normals = fourcc("NORM"),
+                   sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
+                   sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
+                   sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
+                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR");
+/// The `mesh` field of file-level sections (MATL, INST).
+constexpr uint32_t file_level = SectionInfo::file_level;
+
+/// The optional f32 vertex streams, in the order of tom::for_each_attribute_stream: attribute
+/// flag, section type and name, floats per vertex, and the MeshView member that points at it.
+struct AttributeStream {
+    uint32_t flag;
+    uint32_t section;
+    const char* name;
+    uint32_t components;
+    const float* MeshView::*view;
+};
+constexpr AttributeStream attribute_streams[] = {{attr_normals, sec_normals, "NORM", 3, &MeshView::normals},
+                                                 {attr_texcoords, sec_texcoords, "TEX0", 2, &MeshView::texcoords},
+                                                 {attr_colors, sec_colors, "COL0", 4, &MeshView::colors},
+                                                 {attr_texcoords1, sec_texcoords1, "TEX1", 2, &MeshView::texcoords1},
+                                                 {attr_tangents, sec_tangents, "TANG", 4, &MeshView::tangents}};
+constexpr int attribute_stream_count = int(sizeof(attribute_streams) / sizeof(attribute_streams[0]));
+
+// little-endian loads and stores (the format is little-endian; so is every supported host)
+inline uint32_t load_u32(const uint8_t* p) {
+    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+inline uint64_t load_u64(const uint8_t* p) { return uint64_t(load_u32(p)) | uint64_t(load_u32(p + 4)) << 32; }
+inline float load_f32(const uint8_t* p) {
+    const uint32_t bits = load_u32(p);
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+}
+inline void store_u32(uint8_t* p, uint32_t v) {
+    p[0] = uint8_t(v), p[1] = uint8_t(v >> 8), p[2] = uint8_t(v >> 16), p[3] = uint8_t(v >> 24);
+}
+inline void store_u64(uint8_t* p, uint64_t v) {
+    store_u32(p, uint32_t(v));
+    store_u32(p + 4, uint32_t(v >> 32));
+}
+inline void store_f32(uint8_t* p, float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, 4);
+    store_u32(p, bits);
+}
+
+} // namespace tom::layout

@@ -1,0 +1,155 @@
+// OBJ and PLY output of one resolution of one or more meshes.
+
+#include "tom/io/export.h"
+
+#include <algorithm>
+#include <cstdarg>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "tom/errors.h"
+#include "tom/builder/writer.h"
+#include "tom/format.h"
+
+namespace tom {
+
+namespace {
+
+std::string extension_of(const std::string& path) {
+    const size_t dot = path.find_last_of('.');
+    std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+void append(std::string& out, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+void append(std::string& out, const char* fmt, ...) {
+    char buf[256];
+    va_list args;
+    va_start(args, fmt);
+    const int len = std::vsnprintf(buf, sizeof buf, fmt, args);
+    va_end(args);
+    out.append(buf, size_t(std::max(0, std::min(len, int(sizeof buf) - 1))));
+}
+
+struct Streams {
+    bool normals = true, texcoords = true, colors = true;
+    size_t vertices = 0, triangles = 0;
+};
+
+Streams common_streams(const std::vector<ExportPart>& parts) {
+    Streams s;
+    for (const ExportPart& p : parts) {
+        s.normals &= p.mesh->normals != nullptr;
+        s.texcoords &= p.mesh->texcoords != nullptr;
+        s.colors &= p.mesh->colors != nullptr;
+        s.vertices += p.vertex_count;
+        s.triangles += p.indices.size() / 3;
+    }
+    return s;
+}
+
+std::string obj_text(const std::vector<ExportPart>& parts) {
+    const Streams s = common_streams(parts);
+    std::string out;
+    out.reserve(s.vertices * 100 + s.triangles * 30);
+    append(out, "# %zu vertices, %zu triangles (written by libtom)\n", s.vertices, s.triangles);
+    for (const ExportPart& part : parts) {
+        const MeshView& m = *part.mesh;
+        for (uint32_t v = 0; v < part.vertex_count; ++v) {
+            const float* p = m.positions + 3 * size_t(v);
+            if (s.colors) {
+                const float* c = m.colors + 4 * size_t(v);
+                append(out, "v %.9g %.9g %.9g %.6g %.6g %.6g\n", p[0], p[1], p[2], c[0], c[1], c[2]);
+            } else {
+                append(out, "v %.9g %.9g %.9g\n", p[0], p[1], p[2]);
+            }
+        }
+    }
+    if (s.texcoords)
+        for (const ExportPart& part : parts)
+            for (uint32_t v = 0; v < part.vertex_count; ++v)
+                append(out, "vt %.9g %.9g\n", part.mesh->texcoords[2 * size_t(v)], part.mesh->texcoords[2 * size_t(v) + 1]);
+    if (s.normals)
+        for (const ExportPart& part : parts)
+            for (uint32_t v = 0; v < part.vertex_count; ++v) {
+                const float* q = part.mesh->normals + 3 * size_t(v);
+                append(out, "vn %.7g %.7g %.7g\n", q[0], q[1], q[2]);
+            }
+    size_t base = 1;  // OBJ indices start at 1
+    for (const ExportPart& part : parts) {
+        append(out, "o %.*s\n", int(part.mesh->name.size()), part.mesh->name.data());
+        for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
+            out += 'f';
+            for (int k = 0; k < 3; ++k) {
+                const size_t i = part.indices[t + size_t(k)] + base;
+                if (s.texcoords && s.normals)
+                    append(out, " %zu/%zu/%zu", i, i, i);
+                else if (s.texcoords)
+                    append(out, " %zu/%zu", i, i);
+                else if (s.normals)
+                    append(out, " %zu//%zu", i, i);
+                else
+                    append(out, " %zu", i);
+            }
+            out += '\n';
+        }
+        base += part.vertex_count;
+    }
+    return out;
+}
+
+std::string ply_bytes(const std::vector<ExportPart>& parts) {
+    const Streams s = common_streams(parts);
+    std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by libtom\n";
+    append(out, "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n", s.vertices);
+    if (s.normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (s.texcoords) out += "property float s\nproperty float t\n";
+    if (s.colors) out += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+    append(out, "element face %zu\nproperty list uchar uint vertex_indices\nend_header\n", s.triangles);
+    auto put = [&](const void* p, size_t bytes) { out.append(static_cast<const char*>(p), bytes); };
+    for (const ExportPart& part : parts) {
+        const MeshView& m = *part.mesh;
+        for (uint32_t v = 0; v < part.vertex_count; ++v) {
+            put(m.positions + 3 * size_t(v), 12);
+            if (s.normals) put(m.normals + 3 * size_t(v), 12);
+            if (s.texcoords) put(m.texcoords + 2 * size_t(v), 8);
+            if (s.colors)
+                for (int k = 0; k < 4; ++k) {
+                    const float c = std::min(1.0f, std::max(0.0f, m.colors[4 * size_t(v) + size_t(k)]));
+                    const uint8_t b = uint8_t(c * 255.0f + 0.5f);
+                    put(&b, 1);
+                }
+        }
+    }
+    uint32_t base = 0;
+    for (const ExportPart& part : parts) {
+        for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
+            const uint8_t three = 3;
+            put(&three, 1);
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t i = part.indices[t + size_t(k)] + base;
+                put(&i, 4);
+            }
+        }
+        base += part.vertex_count;
+    }
+    return out;
+}
+
+} // namespace
+
+void export_meshes(const std::string& path, const std::vector<ExportPart>& parts) {
+    const std::string ext = extension_of(path);
+    std::string bytes;
+    if (ext == "obj")
+        bytes = obj_text(parts);
+    else if (ext == "ply")
+        bytes = ply_bytes(parts);
+    else
+        throw IoError("cannot write '" + path + "': unsupported output type '." + ext + "' (use .obj or .ply)");
+    write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
+} // namespace tom

@@ -1,0 +1,33 @@
+#pragma once
+// tinygltf with the configuration every translation unit of tom::io uses (the implementation
+// is compiled once, in gltf_import.cpp).
+
+#define TINYGLTF_ENABLE_DRACO
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tom/builder/mesh.h"
+#include "tom/scene.h"
+
+namespace tom::detail {
+
+/// The materials of `model` and its default scene's node tree flattened into instances:
+/// `mesh_parts[m]` lists the imported meshes (indices into ImportResult::meshes) made from the
+/// triangle primitives of glTF mesh m; each node with a mesh gives one instance per part, with
+/// the node's world transform. \throw ImportError naming `path` and the node for a cycle or a
+/// node tree that would give more than 1,000,000 instances.
+Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path);
+
+/// Bakes the KHR_texture_transform of material `material` (its base colour texture's, else the
+/// first of its textures that has one) into the TEXCOORD set it applies to: .tom keeps texture
+/// references without transforms (and gltfpack's quantized UVs rely on one). Returns a warning
+/// when textures of the material carry different transforms (only one can be baked), else "".
+std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh);
+
+} // namespace tom::detail

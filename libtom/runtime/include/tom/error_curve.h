@@ -1,0 +1,55 @@
+#pragma once
+// A mesh's measured error curve, stored in its .tom metadata (key "error_curve") so a runtime
+// can estimate the geometric error of any resolution without the original mesh.
+//
+// Errors are relative: a fraction of `diagonal` (the Metro denominator: the bounding-box
+// diagonal of the original and the level, each side moved out by 2% of it). `mean` is the
+// larger of the two one-sided Metro mean distances, `max` the Hausdorff distance. The error
+// model is Pasman & Jansen's D = k / N, N the triangle count.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "tom/view.h"
+
+namespace tom {
+
+struct ErrorCurvePoint {
+    uint32_t vertices = 0;
+    uint32_t triangles = 0;
+    float mean = 0;  ///< fraction of the diagonal
+    float max = 0;   ///< fraction of the diagonal
+};
+
+struct ErrorCurve {
+    float diagonal = 0;  ///< object units
+    float k_mean = 0;    ///< D_mean ~ k_mean / triangles
+    float k_max = 0;     ///< D_max ~ k_max / triangles
+    std::vector<ErrorCurvePoint> points;  ///< increasing vertex count, 2..64 points
+};
+
+constexpr const char* error_curve_key = "error_curve";
+
+/// The metadata value for `curve` (layout in docs/FORMAT.md, key error_curve).
+std::vector<uint8_t> encode_error_curve(const ErrorCurve& curve);
+
+/// The curve stored with `mesh`, if any. A malformed value reads as absent (nullopt).
+std::optional<ErrorCurve> read_error_curve(const MeshView& mesh);
+
+/// Estimated relative error (fraction of the diagonal) at `triangles`: log-log interpolation
+/// between the stored points, k / N beyond them. `use_max` selects the max curve.
+double estimate_error(const ErrorCurve& curve, double triangles, bool use_max = false) noexcept;
+
+/// Least-squares fit of D = k / N through (N, D) pairs, in log space: k is the geometric mean of
+/// D * N. Also the free slope b of log D = a + b log N (b = -1 is Pasman's law) and the RMS of
+/// the log10 residuals of the k / N model. Pairs with D <= 0 or N == 0 are ignored.
+struct KFit {
+    double k = 0;
+    double slope = 0;
+    double rms_log10 = 0;
+    size_t used = 0;
+};
+KFit fit_k_over_n(const std::vector<double>& triangles, const std::vector<double>& errors);
+
+} // namespace tom

@@ -1,0 +1,392 @@
+// Mapping and validation of .tom files. Every rule below is numbered as in docs/FORMAT.md;
+// nothing is dereferenced before the rule that makes it safe has passed.
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <string>
+#include <tuple>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "coarse.h"
+#include "format_layout.h"
+#include "scene_codec.h"
+#include "tom/errors.h"
+#include "tom/format.h"
+
+namespace tom {
+
+using namespace layout;
+
+FormatError::FormatError(std::string path, uint64_t offset, std::string field, int rule, const std::string& detail)
+    : Error(path + ": byte " + std::to_string(offset) + ", " + field + ": " + detail + " (FORMAT.md rule " + std::to_string(rule) + ")"),
+      path_(std::move(path)),
+      offset_(offset),
+      field_(std::move(field)),
+      rule_(rule) {}
+
+struct File::Impl {
+    std::string path;
+    // either a mapping or an owned copy
+    void* map = nullptr;
+    size_t map_bytes = 0;
+    std::vector<uint8_t> owned;
+    const uint8_t* data = nullptr;
+    uint64_t size = 0;
+    uint32_t version_major = 0, version_minor = 0;
+    std::vector<MeshView> meshes;
+    std::vector<SectionInfo> sections;
+    Scene scene;
+
+    ~Impl() {
+        if (map) ::munmap(map, map_bytes);
+    }
+
+    [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
+        throw FormatError(path, offset, field, rule, detail);
+    }
+
+    void validate(const OpenOptions& options);
+};
+
+namespace {
+
+std::string type_name(uint32_t type) {
+    std::string s;
+    for (int k = 0; k < 4; ++k) {
+        const char c = char((type >> (8 * k)) & 0xFF);
+        s += (c >= 32 && c < 127) ? c : '?';
+    }
+    return s;
+}
+
+struct MeshSections {
+    const SectionInfo* mesh = nullptr;
+    const SectionInfo* positions = nullptr;
+    const SectionInfo* streams[attribute_stream_count] = {};  // as layout::attribute_streams
+    const SectionInfo* substitute = nullptr;
+    const SectionInfo* triangles = nullptr;
+    const SectionInfo* metadata = nullptr;
+    const SectionInfo* pairs = nullptr;
+    const SectionInfo* coarse = nullptr;
+};
+
+} // namespace
+
+void File::Impl::validate(const OpenOptions& options) {
+    // rule 1: the header fits
+    if (size < header_bytes) fail(0, "header", 1, "file is " + std::to_string(size) + " bytes, shorter than the 64-byte header");
+    // rule 2: magic
+    if (std::memcmp(data, magic, 8) != 0) fail(0, "magic", 2, "not a .tom file (bad magic)");
+    // rule 3: version
+    version_major = load_u32(data + h_version_major);
+    version_minor = load_u32(data + h_version_minor);
+    if (version_major != format_version_major)
+        fail(h_version_major, "version_major", 3,
+             "unsupported version " + std::to_string(version_major) + "." + std::to_string(version_minor) + " (this reader reads " +
+                 std::to_string(format_version_major) + ".x)");
+    // rule 4: header checksum
+    const uint32_t header_crc = load_u32(data + h_header_checksum);
+    if (crc32(data, h_header_checksum) != header_crc) fail(h_header_checksum, "header_checksum", 4, "header checksum mismatch");
+    // rule 5: declared size
+    const uint64_t declared = load_u64(data + h_file_bytes);
+    if (declared != size)
+        fail(h_file_bytes, "file_bytes", 5,
+             declared > size ? "file is truncated: " + std::to_string(size) + " bytes of " + std::to_string(declared)
+                             : "file has " + std::to_string(size - declared) + " bytes past its declared end");
+    // rule 6: section table
+    const uint32_t mesh_count = load_u32(data + h_mesh_count);
+    const uint32_t section_count = load_u32(data + h_section_count);
+    const uint64_t table_offset = load_u64(data + h_table_offset);
+    const uint64_t table_bytes = uint64_t(section_count) * section_entry_bytes;
+    if (table_offset < header_bytes || table_offset > size || table_bytes > size - table_offset)
+        fail(h_table_offset, "section_table", 6, std::to_string(section_count) + " sections at offset " + std::to_string(table_offset) + " do not fit in the file");
+    if (crc32(data + table_offset, table_bytes) != load_u32(data + h_table_checksum))
+        fail(h_table_checksum, "table_checksum", 6, "section table checksum mismatch");
+    if (mesh_count > section_count) fail(h_mesh_count, "mesh_count", 9, std::to_string(mesh_count) + " meshes but only " + std::to_string(section_count) + " sections");
+
+    std::vector<MeshSections> per_mesh(mesh_count);
+    const SectionInfo* materials_section = nullptr;
+    const SectionInfo* instances_section = nullptr;
+    sections.resize(section_count);
+    for (uint32_t i = 0; i < section_count; ++i) {
+        const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
+        SectionInfo& s = sections[i];
+        const uint32_t type = load_u32(data + e + s_type);
+        for (int k = 0; k < 4; ++k) s.type[k] = type_name(type)[k];
+        s.mesh = load_u32(data + e + s_mesh);
+        s.offset = load_u64(data + e + s_offset);
+        s.bytes = load_u64(data + e + s_bytes);
+        s.checksum = load_u32(data + e + s_checksum);
+        const std::string field = "section " + std::to_string(i) + " (" + type_name(type) + ")";
+        // rule 7: placement
+        if (s.offset % section_alignment != 0) fail(e + s_offset, field, 7, "offset " + std::to_string(s.offset) + " is not a multiple of 16");
+        if (s.offset < table_offset + table_bytes || s.offset > size || s.bytes > size - s.offset)
+            fail(e + s_offset, field, 7, std::to_string(s.bytes) + " bytes at offset " + std::to_string(s.offset) + " lie outside the file's data area");
+        // rule 8: content checksum
+        if (options.verify_checksums && crc32(data + s.offset, s.bytes) != s.checksum)
+            fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
+        // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
+        if (type == sec_materials || type == sec_instances) {
+            if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
+            const SectionInfo*& file_slot = type == sec_materials ? materials_section : instances_section;
+            if (file_slot) fail(e, field, 9, "the file has this section twice");
+            file_slot = &s;
+            continue;
+        }
+        const SectionInfo** slot = nullptr;
+        int stream = -1;
+        for (int k = 0; k < attribute_stream_count; ++k)
+            if (type == attribute_streams[k].section) stream = k;
+        if (type == sec_mesh || type == sec_positions || stream >= 0 || type == sec_substitute || type == sec_triangles ||
+            type == sec_metadata || type == sec_pairs || type == sec_coarse) {
+            if (s.mesh >= mesh_count)
+                fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
+            MeshSections& ms = per_mesh[s.mesh];
+            slot = type == sec_mesh ? &ms.mesh
+                 : type == sec_positions ? &ms.positions
+                 : stream >= 0 ? &ms.streams[stream]
+                 : type == sec_substitute ? &ms.substitute
+                 : type == sec_triangles ? &ms.triangles
+                 : type == sec_pairs     ? &ms.pairs
+                 : type == sec_coarse    ? &ms.coarse
+                                         : &ms.metadata;
+            if (*slot) fail(e, field, 9, "mesh " + std::to_string(s.mesh) + " has this section twice");
+            *slot = &s;
+        }  // unknown types are skipped (forward compatibility)
+    }
+
+    meshes.resize(mesh_count);
+    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+        const MeshSections& ms = per_mesh[mi];
+        const std::string mesh_field = "mesh " + std::to_string(mi);
+        for (auto [sec, name] : {std::pair{ms.mesh, "MESH"}, std::pair{ms.positions, "POSI"}, std::pair{ms.substitute, "SUBS"},
+                                 std::pair{ms.triangles, "TRIS"}})
+            if (!sec) fail(table_offset, mesh_field, 9, std::string("required section ") + name + " is missing");
+        // rule 10: mesh header
+        const uint8_t* h = data + ms.mesh->offset;
+        if (ms.mesh->bytes < mesh_header_bytes) fail(ms.mesh->offset, mesh_field + " MESH", 10, "mesh header shorter than 64 bytes");
+        MeshView& v = meshes[mi];
+        v.vertex_count = load_u32(h + m_vertex_count);
+        v.triangle_count = load_u32(h + m_triangle_count);
+        v.min_vertex_count = load_u32(h + m_min_vertex_count);
+        v.index_size = load_u32(h + m_index_size);
+        v.material = int32_t(load_u32(h + m_material));
+        const uint32_t attributes = load_u32(h + m_attributes);
+        for (int k = 0; k < 3; ++k) {
+            v.bounds_min[k] = load_f32(h + m_bounds_min + 4 * k);
+            v.bounds_max[k] = load_f32(h + m_bounds_max + 4 * k);
+        }
+        const uint32_t name_bytes = load_u32(h + m_name_bytes);
+        if (uint64_t(name_bytes) + mesh_header_bytes != ms.mesh->bytes)
+            fail(ms.mesh->offset + m_name_bytes, mesh_field + " name_bytes", 10, "name of " + std::to_string(name_bytes) + " bytes does not match the section size");
+        v.name = std::string_view(reinterpret_cast<const char*>(h + mesh_header_bytes), name_bytes);
+        if (v.index_size != 2 && v.index_size != 4)
+            fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "index size " + std::to_string(v.index_size) + " is not 2 or 4");
+        if (v.index_size == 2 && v.vertex_count > 65536)
+            fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "16-bit indices for " + std::to_string(v.vertex_count) + " vertices");
+        if (attributes & ~known_attributes) fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "unknown attribute flags");
+        for (int k = 0; k < attribute_stream_count; ++k)
+            if (bool(attributes & attribute_streams[k].flag) != (ms.streams[k] != nullptr))
+                fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10,
+                     std::string("attribute flags and section ") + attribute_streams[k].name + " disagree");
+        // rule 11: stream sizes
+        auto check_size = [&](const SectionInfo* sec, uint64_t expected, const char* name) {
+            if (sec && sec->bytes != expected)
+                fail(sec->offset, mesh_field + " " + name, 11,
+                     std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(expected));
+        };
+        const uint64_t nv = v.vertex_count, nt = v.triangle_count;
+        check_size(ms.positions, nv * 12, "POSI");
+        for (int k = 0; k < attribute_stream_count; ++k)
+            check_size(ms.streams[k], nv * 4 * attribute_streams[k].components, attribute_streams[k].name);
+        check_size(ms.substitute, nv * v.index_size, "SUBS");
+        check_size(ms.triangles, nt * 3 * v.index_size, "TRIS");
+        v.positions = reinterpret_cast<const float*>(data + ms.positions->offset);
+        for (int k = 0; k < attribute_stream_count; ++k)
+            v.*attribute_streams[k].view = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
+        v.substitute = data + ms.substitute->offset;
+        v.triangles = data + ms.triangles->offset;
+        // rule 12: resolution range
+        if (v.min_vertex_count > v.vertex_count || (v.vertex_count > 0 && v.min_vertex_count == 0))
+            fail(ms.mesh->offset + m_min_vertex_count, mesh_field + " min_vertex_count", 12,
+                 std::to_string(v.min_vertex_count) + " is not in [1, vertex_count = " + std::to_string(v.vertex_count) + "]");
+        if (v.vertex_count == 0 && v.triangle_count > 0) fail(ms.mesh->offset, mesh_field + " vertex_count", 12, "triangles without vertices");
+        // rule 13: substitutes point strictly down (so every chain ends), survivors to themselves
+        for (uint32_t i = 0; i < v.vertex_count; ++i) {
+            const uint32_t s = v.substitute_at(i);
+            if (i < v.min_vertex_count ? s != i : s >= i)
+                fail(ms.substitute->offset + uint64_t(i) * v.index_size, mesh_field + " substitute[" + std::to_string(i) + "]", 13,
+                     "value " + std::to_string(s) + (i < v.min_vertex_count ? " must equal its own index (survivor)" : " must be smaller than its index"));
+        }
+        // rule 14: triangle corners in range and distinct
+        for (uint32_t t = 0; t < v.triangle_count; ++t) {
+            const uint32_t a = v.corner(3 * t), b = v.corner(3 * t + 1), c = v.corner(3 * t + 2);
+            const uint64_t at = ms.triangles->offset + uint64_t(t) * 3 * v.index_size;
+            if (a >= v.vertex_count || b >= v.vertex_count || c >= v.vertex_count)
+                fail(at, mesh_field + " triangle " + std::to_string(t), 14,
+                     "index out of range (" + std::to_string(std::max(a, std::max(b, c))) + " >= vertex_count " + std::to_string(v.vertex_count) + ")");
+            if (a == b || b == c || a == c) fail(at, mesh_field + " triangle " + std::to_string(t), 14, "degenerate triangle (repeated corner)");
+        }
+        // rule 15: metadata entries
+        if (ms.metadata) {
+            const uint8_t* p = data + ms.metadata->offset;
+            const uint64_t bytes = ms.metadata->bytes;
+            if (bytes < 4) fail(ms.metadata->offset, mesh_field + " META", 15, "shorter than its entry count");
+            const uint32_t count = load_u32(p);
+            uint64_t at = 4;
+            for (uint32_t k = 0; k < count; ++k) {
+                if (bytes - at < 8) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry header past the section end");
+                const uint64_t key_bytes = load_u32(p + at), value_bytes = load_u32(p + at + 4);
+                const uint64_t need = 8 + (key_bytes + 3) / 4 * 4 + (value_bytes + 3) / 4 * 4;
+                if (need > bytes - at) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry runs past the section end");
+                at += need;
+            }
+            if (at != bytes) fail(ms.metadata->offset + at, mesh_field + " META", 15, "bytes after the last entry");
+            v.metadata = p;
+            v.metadata_bytes = bytes;
+        }
+        // rule 16: seam pairs: (V + 7) / 8 bytes, pairs of removed vertices, never overlapping
+        if (ms.pairs) {
+            if (ms.pairs->bytes != (nv + 7) / 8)
+                fail(ms.pairs->offset, mesh_field + " PAIR", 16, std::to_string(ms.pairs->bytes) + " bytes where the vertex count requires " + std::to_string((nv + 7) / 8));
+            const uint8_t* bits = data + ms.pairs->offset;
+            bool previous = false;
+            for (uint32_t i = 0; i < v.vertex_count; ++i) {
+                const bool set = (bits[i / 8] >> (i % 8)) & 1u;
+                if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count || previous))
+                    fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16,
+                         "a pair must join two removed vertices and pairs must not overlap");
+                previous = set;
+            }
+            v.pair_bits = bits;
+        }
+    }
+    // rules 17 and 18: the scene
+    if (materials_section) {
+        scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
+        for (uint32_t mi = 0; mi < mesh_count; ++mi)
+            if (meshes[mi].material >= 0 && size_t(meshes[mi].material) >= scene.materials.size())
+                fail(per_mesh[mi].mesh->offset + m_material, "mesh " + std::to_string(mi) + " material", 17,
+                     "material " + std::to_string(meshes[mi].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
+    }
+    if (instances_section)
+        scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
+    // rule 19: coarse corners are exactly the active triangles' corners mapped to their resolution
+    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+        const SectionInfo* sec = per_mesh[mi].coarse;
+        if (!sec) continue;
+        MeshView& v = meshes[mi];
+        const std::string field = "mesh " + std::to_string(mi) + " COAR";
+        const uint8_t* p = data + sec->offset;
+        if (sec->bytes < coarse_header_bytes) fail(sec->offset, field, 19, "shorter than its 16-byte header");
+        const uint32_t resolution = load_u32(p + c_resolution), triangles = load_u32(p + c_triangle_count), index_size = load_u32(p + c_index_size);
+        if (resolution < v.min_vertex_count || resolution > v.vertex_count || resolution == 0)
+            fail(sec->offset + c_resolution, field + " resolution", 19,
+                 std::to_string(resolution) + " is not in [min_vertex_count, vertex_count] = [" + std::to_string(v.min_vertex_count) + ", " +
+                     std::to_string(v.vertex_count) + "]");
+        if (index_size != detail::coarse_index_size(resolution))
+            fail(sec->offset + c_index_size, field + " index_size", 19,
+                 "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + std::to_string(detail::coarse_index_size(resolution)));
+        if (triangles > v.triangle_count)
+            fail(sec->offset + c_triangle_count, field + " triangle_count", 19, std::to_string(triangles) + " is more than the mesh's " + std::to_string(v.triangle_count));
+        if (sec->bytes != coarse_header_bytes + uint64_t(triangles) * 3 * index_size)
+            fail(sec->offset, field, 19, std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(coarse_header_bytes + uint64_t(triangles) * 3 * index_size));
+        const uint8_t* corners = p + coarse_header_bytes;
+        for (uint32_t c = 0; c < triangles * 3; ++c) {
+            const uint32_t stored = index_size == 2 ? uint32_t(reinterpret_cast<const uint16_t*>(corners)[c]) : reinterpret_cast<const uint32_t*>(corners)[c];
+            const uint32_t expected = detail::map_corner(v, c, resolution);
+            if (stored != expected)
+                fail(sec->offset + coarse_header_bytes + uint64_t(c) * index_size, field + " corner " + std::to_string(c), 19,
+                     "value " + std::to_string(stored) + " is not corner " + std::to_string(c) + " mapped to resolution " + std::to_string(resolution) + " (" + std::to_string(expected) + ")");
+        }
+        if ((triangles > 0 && !detail::triangle_active(v, triangles - 1, resolution)) ||
+            (triangles < v.triangle_count && detail::triangle_active(v, triangles, resolution)))
+            fail(sec->offset + c_triangle_count, field + " triangle_count", 19,
+                 std::to_string(triangles) + " is not the number of triangles active at resolution " + std::to_string(resolution));
+        v.coarse_corners = corners;
+        v.coarse_resolution = resolution;
+        v.coarse_triangle_count = triangles;
+        v.coarse_index_size = index_size;
+    }
+}
+
+File::File(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+File::File(File&&) noexcept = default;
+File& File::operator=(File&&) noexcept = default;
+File::~File() = default;
+
+File File::open(const std::string& path, const OpenOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    impl->path = path;
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw IoError("cannot open '" + path + "': " + std::strerror(errno));
+    struct stat st;
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw IoError("cannot read '" + path + "': not a regular file");
+    }
+    impl->size = uint64_t(st.st_size);
+    if (impl->size > 0) {
+        void* p = ::mmap(nullptr, size_t(impl->size), PROT_READ, MAP_PRIVATE, fd, 0);
+        if (p == MAP_FAILED) {
+            const int e = errno;
+            ::close(fd);
+            throw IoError("cannot map '" + path + "': " + std::strerror(e));
+        }
+        impl->map = p;
+        impl->map_bytes = size_t(impl->size);
+        impl->data = static_cast<const uint8_t*>(p);
+    } else {
+        impl->data = reinterpret_cast<const uint8_t*>("");
+    }
+    ::close(fd);
+    impl->validate(options);
+    return File(std::move(impl));
+}
+
+File File::from_bytes(const void* bytes, size_t size, const std::string& name, const OpenOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    impl->path = name;
+    impl->owned.assign(static_cast<const uint8_t*>(bytes), static_cast<const uint8_t*>(bytes) + size);
+    impl->owned.reserve(size + 1);  // non-null data pointer even for size 0
+    impl->data = impl->owned.data();
+    impl->size = size;
+    impl->validate(options);
+    return File(std::move(impl));
+}
+
+const std::string& File::path() const noexcept { return impl_->path; }
+uint32_t File::version_major() const noexcept { return impl_->version_major; }
+uint32_t File::version_minor() const noexcept { return impl_->version_minor; }
+uint64_t File::file_bytes() const noexcept { return impl_->size; }
+uint32_t File::mesh_count() const noexcept { return uint32_t(impl_->meshes.size()); }
+const MeshView& File::mesh(uint32_t index) const noexcept { return impl_->meshes[index]; }
+const std::vector<SectionInfo>& File::sections() const noexcept { return impl_->sections; }
+const Scene& File::scene() const noexcept { return impl_->scene; }
+
+MetadataValue find_metadata(const MeshView& view, std::string_view key) noexcept {
+    MetadataValue r;
+    if (!view.metadata || view.metadata_bytes < 4) return r;
+    const uint8_t* p = view.metadata;
+    const uint32_t count = load_u32(p);
+    size_t at = 4;
+    for (uint32_t k = 0; k < count && at + 8 <= view.metadata_bytes; ++k) {
+        const uint32_t key_bytes = load_u32(p + at), value_bytes = load_u32(p + at + 4);
+        const uint8_t* key_ptr = p + at + 8;
+        const uint8_t* value_ptr = key_ptr + (size_t(key_bytes) + 3) / 4 * 4;
+        if (std::string_view(reinterpret_cast<const char*>(key_ptr), key_bytes) == key) {
+            r.data = value_ptr;
+            r.bytes = value_bytes;
+            return r;
+        }
+        at += 8 + (size_t(key_bytes) + 3) / 4 * 4 + (size_t(value_bytes) + 3) / 4 * 4;
+    }
+    return r;
+}
+
+} // namespace tom
