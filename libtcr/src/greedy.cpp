@@ -44,6 +44,7 @@ void solve_greedy(const Problem& p, const SelectParams&, Plan& plan) {
     }
     std::vector<Entry>& heap = plan.work_heap;
     heap.clear();
+    heap.reserve(n);  // one entry per object at most (each pop is followed by at most one push)
     // over budget: step down the cheapest losses per ms
     if (cost > p.budget_ms) {
         auto loss = [&](size_t i) {

@@ -272,17 +272,14 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
             renderer->render(cam.view, cam.projection, draws, indices, at);
             render_ms = ms_since(render_start);
         } else {
-            // the calibrated model's time plus noise; the safety allowance is, by definition,
-            // the bound of the system's noise: |noise| <= safety_ms
-            // simulated: the model's time for extraction and rendering, plus noise within the
-            // safety allowance (which is, by definition, the bound of the system's noise)
-            // relative noise as calibrated, never past the safety margin
-            // the simulated truth is the calibrated model itself: the prediction without the
-            // runtime's correction (which, fed its own output, would otherwise drift)
+            // simulated: the calibrated model's time (without the runtime's correction, which, fed
+            // its own output, would drift) plus the calibrated relative noise, bounded by the
+            // safety allowance, so a frame may exceed its prediction and the runtime's correction
+            // follows noise as it does on a real renderer
             const double fixed = model.t_init_ms + model.t_final_ms;
             const double expected = fixed + (r.predicted_ms - model.frame_fixed_ms()) / std::max(1e-9, r.correction);
             const double e = std::max(-2.0, std::min(2.0, noise(noise_rng))) * std::max(model.noise_rel, 0.01);
-            render_ms = std::max(0.0, std::min(r.predicted_ms, expected * (1.0 + e)));
+            render_ms = std::max(0.0, expected + std::max(-model.safety_ms, std::min(model.safety_ms, expected * e)));
         }
         // measured: everything but the renderer. Simulated: the planning time reserved for this
         // frame (the real cull and optimise times, which a busy machine can stretch, stay in the

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The walkthrough end to end on a small scene: a scene file, a calibration on the headless
 # renderer, a short real-rendered path with screenshots, and a simulated path in which the
-# barrier and exact selectors must keep every frame within the budget.
+# barrier and exact selectors must hold the budget against the calibrated noise.
 set -u
 tools="$1"; walk="$2"; data="$3"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
@@ -63,16 +63,22 @@ for s in ['exact', 'barrier']:
 check "plots of the run" "$src/scripts/plot-walk.py" "$work/real" --format png
 check "the plots exist" test -s "$work/real/frame-times.png" -a -s "$work/real/triangles.png"
 
-# the simulated path: every selector, barrier and exact never over budget
+# the simulated path: every selector; barrier and exact hold the budget
 check "a simulated path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --simulate --selector all --frames 300 \
   --budget-ms "$budget" --out "$work/sim" --json
-check "barrier and exact keep every simulated frame within budget" /usr/bin/python3 -c "
+check "barrier and exact hold the budget against simulated noise: none over 1.1x, at most 10% over" /usr/bin/python3 -c "
 import csv
 for s in ['barrier', 'exact']:
     rows = list(csv.DictReader(open('$work/sim/frames-%s.csv' % s)))
     assert len(rows) == 300
-    worst = max(float(r['measured_ms']) for r in rows)
-    assert worst <= $budget, (s, worst)
+    measured = [float(r['measured_ms']) for r in rows]
+    assert max(measured) <= 1.1 * $budget, (s, max(measured))
+    over = sum(m > $budget for m in measured)
+    assert over <= 30, (s, over)
+    # the noise is real (bounded by the safety allowance, not by the prediction): many frames take
+    # longer than predicted, and the runtime's correction, which follows the measured frames, errs too
+    over_prediction = sum(m > float(r['predicted_ms']) + 1e-6 for m, r in zip(measured, rows))
+    assert over_prediction > 30, (s, over_prediction)
 "
 check "at a quarter of full detail's cost, exact draws under a third of its triangles" /usr/bin/python3 -c "
 import json

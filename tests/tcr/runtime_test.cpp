@@ -261,7 +261,8 @@ TEST_CASE("error-bounded mode: every object at the smallest resolution within th
 
 TEST_CASE("a warm runtime allocates nothing per frame", "[tcr][runtime][alloc]") {
     SceneFixture fx;
-    for (tcr::SelectorKind k : {tcr::SelectorKind::greedy, tcr::SelectorKind::barrier, tcr::SelectorKind::exact, tcr::SelectorKind::static_size}) {
+    for (tcr::SelectorKind k : {tcr::SelectorKind::greedy, tcr::SelectorKind::barrier, tcr::SelectorKind::exact, tcr::SelectorKind::static_size,
+                               tcr::SelectorKind::stress}) {
         tcr::Runtime rt(model(), k);
         fill_scene(rt, fx.file, 300);
         tcr::FrameParams f;
@@ -272,11 +273,19 @@ TEST_CASE("a warm runtime allocates nothing per frame", "[tcr][runtime][alloc]")
             rt.plan_frame(f);
         }
         const size_t before = g_allocations.load();
+        uint32_t drawn = 0;
         for (int frame = 0; frame < 10; ++frame) {
             f.camera = camera_at(6.0f + 0.01f * frame);
-            rt.plan_frame(f);
+            f.previous_frame_ms = frame % 2 ? 2.0 : 7.0;  // the stress selector's feedback moves its factor
+            drawn += rt.plan_frame(f).drawn;
         }
         INFO(tcr::selector_name(k));
         CHECK(g_allocations.load() == before);
+        CHECK(drawn > 0);
     }
+    // the count sees allocations: one vector's buffer moves it
+    const size_t before = g_allocations.load();
+    std::vector<double> grown(1000);
+    CHECK(g_allocations.load() > before);
+    CHECK(grown.size() == 1000);
 }
