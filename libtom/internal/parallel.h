@@ -50,15 +50,13 @@ inline unsigned thread_count(unsigned threads) noexcept { return threads ? threa
 
 /// Helper threads kept for a run of many short parallel loops (the builder's passes: several
 /// loops per pass, a hundred passes), so a loop costs a hand-over instead of creating and joining
-/// threads (about 50 us each here, as much as a sleeping thread's wake-up). Runs work(worker,
+/// threads (each costs as much as a sleeping thread's wake-up). Runs work(worker,
 /// begin, end) as parallel_blocks describes; one loop at a time, from the team's owner.
 /// Between loops a helper spins for up to kSpin before it sleeps (yielding its core between looks
 /// after the first kSpinAlone), so loops separated by short sequential work start at once. A
 /// helper joins a loop only while it is open: once the owner has taken every block it closes the
-/// loop and waits only for the helpers that joined, so a helper the system is not running does
-/// not hold it up (with a one-core busy loop beside it, bunny00's build took 0.41 s when the owner
-/// waited for every helper, 0.16 s with the closing, 0.08 s with the yielding as well; 0.04 s on
-/// a quiet machine). A team made for one loop (`spin` false) never spins: its threads wait
+/// loop and waits only for the helpers that joined, so a helper the system is not running (on a
+/// machine where other work holds a core) does not hold it up. A team made for one loop (`spin` false) never spins: its threads wait
 /// asleep, leaving the cores to other work (the report runs its levels and its error curve at
 /// once, four threads on two cores, where spinning took 2.5% of the time).
 class Team {

@@ -157,7 +157,7 @@ struct Options {
     double optimize_share = 0.1;  // the optimiser's deadline, as a share of the budget
     double hysteresis = 0.05;
     double noise = 1.0;           // simulated: noise in standard deviations of the calibrated noise (clamped to +-2)
-    double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise (measured on one calibration: 0.25 gave means of 37.3-37.5 ms at a 40 ms budget with 2-4% of frames over 1.1x, 0.5 gave 36.0-36.2 ms with 0.7-1%)
+    double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise: less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
 };
 
@@ -228,8 +228,8 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
     }
     // then 8 frames at the path's first position, planned, drawn and fed back as every
     // frame is but not recorded: the runtime's model correction starts from this scene's
-    // measured frames instead of the calibration's isolated objects (frame 0 came out 25-35%
-    // over the budget, and the next few frames over too, while the correction caught up)
+    // measured frames instead of the calibration's isolated objects, which would put the first
+    // frames over the budget while the correction caught up
     const int64_t settle = none ? 0 : 8;  // full detail has no budget to settle on
     for (int64_t step = -settle; step < int64_t(o.frames); ++step) {
         const bool recorded = step >= 0;

@@ -88,12 +88,10 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     }
     const double h = edges / (3.0 * m);
     const double uv_scale = uv_area > 0 ? std::sqrt(area / uv_area) : 0.0;
-    // Relative weights of the channels at weight 1, chosen by measurement (scripts/attribute-weights.sh:
-    // Metro mean error, mean normal deviation and UV displacement at 25/10/5/2% on bunny, fandisk,
-    // elephant, ClearCoatTest and spider): the largest normal weight that keeps fandisk's mean error
-    // at 10/5/2% below meshopt_simplify's (0.03 raised it 33% at 10%), which still takes its normal
-    // deviation at 25% from 14 to 1.2 degrees; UVs at 0.3 cut ClearCoatTest's displacement at 25/10/5%
-    // by 7-12% (it halved it at 2% before the 60-degree rotation limit took most spikes away)
+    // Relative weights of the channels at weight 1, chosen with scripts/attribute-weights.sh (Metro
+    // mean error, mean normal deviation and UV displacement on the sample meshes): the largest
+    // normal weight that keeps the geometric error of a hard-edged CAD mesh below
+    // meshopt_simplify's, and the UV weight past which the texture displacement stops falling.
     constexpr double normal_scale = 0.015, uv_weight = 0.3, color_scale = 0.1;
     values_.resize(size_t(n) * size_t(channels_));
     for (uint32_t v = 0; v < n; ++v) {

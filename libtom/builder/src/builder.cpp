@@ -332,9 +332,8 @@ void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>
 
 // The mesh the build runs on: the input with its vertices in Morton order of their positions
 // and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
-// Input vertex orders can be arbitrary (bunny00's triangles span 40% of its vertex range at the
-// median), and the passes then miss the cache on almost every neighbour's quadric and corner
-// list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
+// Input vertex orders can be arbitrary (a triangle's corners far apart in the vertex range), and
+// the passes would then miss the cache on almost every neighbour's quadric and corner list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
 // the positions' bounding box (zero for no vertex), which the codes are taken in.
 Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3],
                           detail::Team& team) {

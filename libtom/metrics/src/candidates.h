@@ -11,17 +11,10 @@
 // the run's own size, and made conservative: each bound lowered by more than every rounding of
 // the floats can add (candidates.cpp): a bound is never above the exact one, so a candidate the
 // exact bound keeps is never dropped (a few more are kept, and their exact distance decides).
-// The hits are compacted without branches (a table of lane indices per mask). History, on
-// bunny00's 7-level report: bounds in doubles four candidates at a time with a branch per hit,
-// then floats eight candidates at a time for one point (the backward searches 15% faster), then
-// candidates nearest box first with a scan stopped at the first eight too far (7% fewer
-// instructions in all), now one candidate against eight points at a time, candidates nearest
-// box first until the farthest point's best (5.5% fewer again, the levels 7.7% faster: 0.82 ->
-// 0.76 s, medians of 6 interleaved runs), each candidate's fields made when it is reached, with
-// a lowering of its own (the run's candidates beyond the stop are never converted); then the
-// edge lines (exact tests a sample 2.4 -> 2.0 in the backward direction; in the forward one
-// 2.1 -> 1.5 at 50%, 0.9 -> 0.2 at 0.5%; 3% fewer instructions, the report 6% faster: 1.048 ->
-// 0.981 s, medians of 7 interleaved runs). The same figures throughout. Internal to tom::metrics.
+// The hits are compacted without branches (a table of lane indices per mask). One candidate is
+// tested against eight points at a time, candidates nearest box first until the farthest
+// point's best; each candidate's fields are made when it is reached, with a lowering of its own,
+// so the run's candidates beyond the stop are never converted. Internal to tom::metrics.
 
 #include <cstddef>
 #include <cstdint>

@@ -17,12 +17,10 @@
 // bound is under their best so far, until the boxes lie beyond every sample's best. Exact: the
 // figures are those of a full nearest search per sample (to 2^-40 of the target's size, where a
 // search stops: wide_tree.h). Samples are processed in fixed chunks combined in order, so the
-// figures do not depend on the number of threads. (Measured on bunny00's 7-level report: 1.8x
-// faster than one tree descent per sample from the previous sample's triangle.) The descents
-// read CGAL's hierarchy from a compact four-way copy (wide_tree.h), and the collecting one takes
-// children left to right (ordering them by distance, as the nearest search must, cost two box
-// distances a node for nothing): together, bunny00's report in 1.78 s instead of 2.09 s
-// (medians of 5 interleaved runs).
+// figures do not depend on the number of threads. Two descents a cell cost far less than one a
+// sample. The descents read CGAL's hierarchy from a compact four-way copy (wide_tree.h), and the
+// collecting one takes children left to right (ordering them by distance, as the nearest search
+// must, would cost two box distances a node for nothing).
 // With FaceHints (the error curve's: a level's faces over the original's), each point also
 // starts from its face's hint: a descent of its own starts near its answer, and in a cell the
 // nearer of the centre's triangle and the hint bounds the reach.
@@ -131,7 +129,7 @@ inline V3 high(const CGAL::Bbox_3& b) { return {b.xmax(), b.ymax(), b.zmax()}; }
 // A target mesh: its triangles as Flat records in the order of the leaves of CGAL's tree (a
 // descent reads neighbouring records, not scattered ones), and that tree's hierarchy as a
 // compact four-way copy. CGAL's tree and its triangles are needed only to build these, and go
-// (on a 2M-triangle mesh they held about 360 MB more).
+// (they hold several times the records' memory).
 struct Mesh3 {
     std::vector<Flat> flat;              // in leaf order
     std::vector<EdgeLines> lines;        // of each record, for the candidate bounds
@@ -256,7 +254,6 @@ struct RunSearch {
     template <class Emit>
     void run(size_t b, size_t e, Emit& emit) {
         // a few points (sparse samples): a descent each costs less than gathering candidates
-        // (measured on bunny00's error curve: 3.50G instructions with 4, 3.39G with 8 or 16)
         if (e - b < 8 || target.flat.size() < 8) return each(b, e, emit);
         V3 lo = points[b], hi = lo;
         for (size_t i = b + 1; i < e; ++i) {
@@ -270,9 +267,6 @@ struct RunSearch {
         // most d(centre) + the run's spread (the bound of the single descent that collected while
         // finding c, used before) and much less where the points lie far from the surface (about
         // sqrt(d^2 + spread^2) against d + spread), which shrinks the candidates of far runs.
-        // Measured on bunny00's 7 levels (callgrind): 9% fewer instructions in all, 23% fewer in
-        // the candidate bounds; with |p - q| for U (q: the centre's nearest point, no
-        // point-triangle distance per point) 6% fewer
         double centre_d2;
         const uint32_t c = nearest(target, centre, hint, centre_d2, starts ? starts[b + (e - b) / 2] : kNoRecord);
         const size_t n = e - b;

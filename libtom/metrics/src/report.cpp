@@ -55,8 +55,8 @@ FaceHints level_hints(const TomMesh& built, const Level& l, const std::vector<ui
     return h;
 }
 
-// Median of 5 timed batches of about 0.2 ms each (a batch of 1 ms and 7 of them made the timing
-// a third of the report of a file of many small meshes: 2CylinderEngine's 34 took 2.7 s of CPU)
+// Median of 5 timed batches of about 0.2 ms each: short enough that timing a file of many small
+// meshes stays a small part of its report.
 double median_extract_seconds(const MeshView& v, uint32_t n, std::vector<uint32_t>& buffer) {
     using Clock = std::chrono::steady_clock;
     constexpr double kBatchSeconds = 2e-4;
@@ -187,11 +187,9 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
 } // namespace
 
 // The curve is a runtime estimate (the runtime reads its means): area-uniform face samples, a
-// budget that grows with the mesh up to a cap, and fewer on a level of a few faces. Measured
-// against 32768 samples per direction on bunny00, fandisk, elephant, 2CylinderEngine and
-// ClearCoatTest (818 points): the means differ by 2.8% on average (0.6% with 8192 samples
-// throughout), and the curves take half the time (1.9 s against 3.6 s; most of it the 61 small
-// meshes of the two glTF files, which 8192 samples each made cost 40x their build)
+// budget that grows with the mesh up to a cap, and fewer on a level of a few faces: its means stay
+// within a few percent of a dense sampling's at half its cost, and a file of many small meshes
+// does not pay a dense sampling per mesh.
 static DistanceParams curve_distance_params(const ReportParams& params, size_t triangles) {
     DistanceParams dp = params.distance;
     dp.threads = 1;  // the points run in parallel instead (curve_with's workers)
@@ -262,9 +260,9 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
     if (params.error_curve)
         curve = std::async(std::launch::async, [&] { return curve_with(built, params, curve_reference, params.distance.threads); });
     // the levels two at a time, each on every core: one's sequential parts (its tree, its
-    // samples' sort) overlap the other's searches (bunny00's report 1.28 -> 1.14 s, medians of 5
-    // interleaved runs); each level in flight holds its samples (about 80 bytes a sample, 10 a
-    // triangle: 60 MB on bunny00), so a mesh of more than kPairedTriangles takes them in turn
+    // samples' sort) overlap the other's searches; each level in flight holds its samples (about
+    // 80 bytes a sample, 10 samples a triangle), so a mesh of more than kPairedTriangles takes
+    // them in turn
     constexpr uint32_t kPairedTriangles = 1u << 20;
     std::vector<size_t> measured;  // the levels not repeating an earlier one
     for (size_t i = 0; i < r.levels.size(); ++i)

@@ -56,10 +56,9 @@ double face_areas(const Surface& s, std::vector<double>& areas) {
 
 // Sorts distinct words whose key bits [low, low + key_bits) sit above an index ascending in
 // `items`' order: the same order as radix_sort() by key (equal keys by index), in fewer passes
-// over memory. One scatter by the key's top kTopBits (an octree level of 4096 cells: bunny00's
-// samples fill 805, 937 samples each on average, 3241 at most), then each bucket, in cache, by the
-// rest of the key, least significant digit first (stable: the index order kept) or, for a few
-// words, by insertion. On bunny00's 754K samples 6.6 ms against 14.8 (medians of 11).
+// over memory. One scatter by the key's top kTopBits (an octree level of 4096 cells, of which a
+// surface fills a fifth or so), then each bucket, in cache, by the rest of the key, least
+// significant digit first (stable: the index order kept) or, for a few words, by insertion.
 void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int key_bits, int low, Team* team) {
     constexpr int kTopBits = 12, kDigitBits = 10;
     constexpr size_t kTop = size_t(1) << kTopBits, kDigit = size_t(1) << kDigitBits, kInsertion = 48;

@@ -58,8 +58,8 @@ public:
     //
     // `enough`: a squared distance so small that nearest() stops there, (2^-40 of the tree's
     // size)^2. Without it a point on the surface (squared distance 1e-30 from rounding, not 0)
-    // made the search open every box around it, in case a triangle were nearer still: on CAD
-    // meshes, whose long thin triangles' boxes overlap, that was 60% of the error curve's time.
+    // made the search open every box around it, in case a triangle were nearer still, which on
+    // CAD meshes, whose long thin triangles' boxes overlap, is most of the search.
     // What it can cost a distance, 2^-40 of the size, is far below the input's own precision.
     struct Query {
         float x0, y0, z0, x1, y1, z1;  // the box queried (a point: both corners the same)

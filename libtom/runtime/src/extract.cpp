@@ -148,15 +148,10 @@ __attribute__((target("avx2"))) inline __m256i gather_substitutes(const I* sub, 
 }
 
 // Stragglers: when at most this many of a round's 32 lanes still walk, they finish one by one
-// (scalar) instead of the whole round gathering again for them. Chains are short and their
-// lengths skewed (bunny00 at 50%: 62% of corners take 0 steps, 34% one, 4.7% two or more), so
-// most rounds would otherwise gather twice more for one or two lanes. Only while the substitute
-// array is cache-resident: a scalar walk then hits the cache, while out of it each step waits for
-// its miss where a gather overlaps eight. Measured in thread CPU time against gathers to the end,
-// the same level repeated and varied levels alike: bunny00 (75 KB array) 50% 1.5x, 25% 1.4x,
-// 10% 1.2x, 1% 1.3x faster; a 2M-triangle sphere (4 MB) 1.3x slower from 5 to 50%, hence the
-// limit. Of 4, 8, 12, 16 and 20 lanes, 12 to 16 gained most; 32 (scalar after one round) lost
-// the varied levels to branch mispredictions.
+// (scalar) instead of the whole round gathering again for them: chains are short and their
+// lengths skewed, so most rounds would otherwise gather again for one or two lanes. Only while
+// the substitute array is cache-resident: a scalar walk then hits the cache, while out of it
+// each step waits for its miss where a gather overlaps eight.
 constexpr int kStragglers = 12;
 constexpr size_t kCacheResidentBytes = 256 * 1024;
 

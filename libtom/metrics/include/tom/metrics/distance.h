@@ -79,8 +79,7 @@ struct Distance {
 /// starts from the hinted face of the sample's face too, near its answer, and a sample's
 /// distance to it narrows the candidates of the sample's grid cell. Only the speed depends on
 /// them: the searches are exact, so the figures are those without (up to 2^-40 of the surface's
-/// size, where a search stops). The error curve uses them: 2CylinderEngine's curves took 1.62 s
-/// with one thread before, 1.06 s with them.
+/// size, where a search stops). The error curve uses them.
 /// Each is asked only about the faces that carry samples (once for each run of neighbouring
 /// samples on a face), so a hint costs nothing for the faces never sampled (most of a large
 /// mesh's, with the curve's 4096 samples).
