@@ -184,33 +184,51 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
     return at;
 }
 
-Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
-            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows) {
-    const bool none = selector == "none";
-    tcr::SelectorKind kind = tcr::SelectorKind::exact;
-    if (!none) tcr::parse_selector(selector, kind);
-    tcr::CostModel model = calibrated;
-    // the allowance for the renderer's noise at this budget: `safety_sigma` standard deviations
-    model.safety_ms = std::max(model.safety_ms, o.safety_sigma * model.noise_rel * o.budget_ms);
-    tcr::Runtime rt(model, kind);
-    add_objects(rt, w);
+// One selector's run along the path: the runtime and what it carries from frame to frame.
+struct PathRun {
+    const World& w;
+    const Options& o;
+    walk::Renderer* renderer;  // null: simulated
+    const std::vector<uint32_t>& mesh_handles;
+    const bool none;           // full detail, no budget
+    tcr::CostModel model;
+    tcr::Runtime rt;
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
-    uint32_t shots[3];
-    walk::viewpoints(o.frames, shots);
-    std::mt19937_64 noise_rng(o.seed);
-    std::normal_distribution<double> noise(0.0, o.noise);  // clamped below
-    double overhead_ms = 0, previous_render_ms = 0, extract_ms_per_triangle = 0;
+    std::mt19937_64 noise_rng;
+    std::normal_distribution<double> noise;  // clamped where drawn
+    double overhead_ms = 0;         // the planning time reserved for the next frame
+    double previous_render_ms = 0;  // what the runtime predicts (extraction and rendering), fed back
     std::array<double, 8> recent_cpu{};
-    rows.clear();
-    {  // warm up at the path's start (not counted): learn the planning time and the extraction
-        // cost per triangle, which joins the model's per-triangle cost (the CPU's share of a triangle)
+
+    PathRun(const World& world, const std::string& selector, const Options& options, const tcr::CostModel& calibrated, walk::Renderer* r,
+            const std::vector<uint32_t>& handles)
+        : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), model(allowance(calibrated, options)),
+          rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise) {
+        add_objects(rt, w);
+    }
+
+    // the allowance for the renderer's noise at this budget: `safety_sigma` standard deviations
+    static tcr::CostModel allowance(tcr::CostModel m, const Options& o) {
+        m.safety_ms = std::max(m.safety_ms, o.safety_sigma * m.noise_rel * o.budget_ms);
+        return m;
+    }
+    static tcr::SelectorKind kind_of(const std::string& selector) {
+        tcr::SelectorKind kind = tcr::SelectorKind::exact;
+        if (selector != "none") tcr::parse_selector(selector, kind);
+        return kind;
+    }
+
+    // Four generous frames at the path's start, not counted: the planning time, and the
+    // extraction cost per triangle, which joins the model's per-triangle cost (the CPU's share of
+    // a triangle).
+    void warm_up() {
         const tcr::Camera cam = camera_for(0, o.frames, o.width, o.height);
         double extract_per_triangle = 0;
         for (size_t k = 0; k < 4; ++k) {
             tcr::FrameParams fp;
             fp.camera = cam;
-            fp.budget_ms = none ? 1e12 : 4 * o.budget_ms;  // a generous plan: many triangles to time
+            fp.budget_ms = none ? 1e12 : 4 * o.budget_ms;  // many triangles to time
             const tcr::FrameReport& r = rt.plan_frame(fp);
             recent_cpu[k] = r.cull_ms + r.optimize_ms;
             ensure(indices, size_t(r.triangles) * 3);  // outside the timing
@@ -220,29 +238,17 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
             if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at);
         }
         if (!none) {
-            extract_ms_per_triangle = 1.25 * extract_per_triangle;
-            model.t_tri_ms += extract_ms_per_triangle;
+            model.t_tri_ms += 1.25 * extract_per_triangle;
             rt.set_cost_model(model);
         }
-        overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end()));
+        note_planning_time();
     }
-    // then 8 frames at the path's first position, planned, drawn and fed back as every
-    // frame is but not recorded: the runtime's model correction starts from this scene's
-    // measured frames instead of the calibration's isolated objects, which would put the first
-    // frames over the budget while the correction caught up
-    const int64_t settle = none ? 0 : 8;  // full detail has no budget to settle on
-    for (int64_t step = -settle; step < int64_t(o.frames); ++step) {
-        const bool recorded = step >= 0;
-        const uint32_t f = uint32_t(std::max<int64_t>(step, 0));
-        const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
-        const auto frame_start = Clock::now();
-        Row row{};
-        row.frame = f;
-        row.gap = NAN;
-        // plan: libtcr chooses the resolutions (for "none": every visible object at full detail)
+
+    // The frame's request to the runtime: the budget less the planning time reserved (for
+    // "none": every visible object at full detail).
+    tcr::FrameParams frame_params(const tcr::Camera& cam, double planning_reserve_ms) const {
         tcr::FrameParams fp;
         fp.camera = cam;
-        const double planning_reserve_ms = std::min(overhead_ms, 0.9 * o.budget_ms);
         fp.budget_ms = o.budget_ms - planning_reserve_ms;  // the renderer's share
         fp.previous_frame_ms = previous_render_ms;
         fp.deadline_ms = o.optimize_share * o.budget_ms;
@@ -251,35 +257,51 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
             fp.budget_ms = 1e12;
             fp.max_error_px = 0;
         }
-        const tcr::FrameReport& r = rt.plan_frame(fp);
+        return fp;
+    }
+
+    // Simulated: the calibrated model's time (without the runtime's correction, which, fed its
+    // own output, would drift) plus the calibrated relative noise, bounded by the safety
+    // allowance, so a frame may exceed its prediction and the runtime's correction follows noise
+    // as it does on a real renderer.
+    double simulated_render_ms(const tcr::FrameReport& r) {
+        const double fixed = model.t_init_ms + model.t_final_ms;
+        const double expected = fixed + (r.predicted_ms - model.frame_fixed_ms()) / std::max(1e-9, r.correction);
+        const double e = std::max(-2.0, std::min(2.0, noise(noise_rng))) * std::max(model.noise_rel, 0.01);
+        return std::max(0.0, expected + std::max(-model.safety_ms, std::min(model.safety_ms, expected * e)));
+    }
+
+    // The next frame's culling and optimisation is estimated by twice the largest of the last
+    // eight (planning times jitter), and at least 2% of the budget; extraction is in the model's
+    // per-triangle cost.
+    void note_planning_time() { overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end())); }
+
+    // One frame: plan, extract, render (or simulate), and what the runtime is fed back.
+    Row frame(uint32_t f, size_t slot, size_t& index_count) {
+        const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
+        const auto frame_start = Clock::now();
+        Row row{};
+        row.frame = f;
+        const double planning_reserve_ms = std::min(overhead_ms, 0.9 * o.budget_ms);
+        const tcr::FrameReport& r = rt.plan_frame(frame_params(cam, planning_reserve_ms));
         row.cull_ms = r.cull_ms;
         row.optimize_ms = r.optimize_ms;
         row.visible_objects = r.visible;
         row.drawn_objects = r.drawn;
         row.visible_triangles = r.visible_triangles;
         row.drawn_triangles = r.triangles;
-        row.predicted_ms = r.predicted_ms;
         row.benefit = r.benefit;
         row.gap = r.gap;
-        // extract: each drawn object's level into the frame's index array
         const auto extract_start = Clock::now();
-        const size_t at = extract_frame(w, rt, mesh_handles, kSand, indices, draws);
+        index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws);
         row.extract_ms = ms_since(extract_start);
-        // render, or simulate its time from the calibrated model
         double render_ms;
         if (renderer) {
             const auto render_start = Clock::now();
-            renderer->render(cam.view, cam.projection, draws, indices, at);
+            renderer->render(cam.view, cam.projection, draws, indices, index_count);
             render_ms = ms_since(render_start);
         } else {
-            // simulated: the calibrated model's time (without the runtime's correction, which, fed
-            // its own output, would drift) plus the calibrated relative noise, bounded by the
-            // safety allowance, so a frame may exceed its prediction and the runtime's correction
-            // follows noise as it does on a real renderer
-            const double fixed = model.t_init_ms + model.t_final_ms;
-            const double expected = fixed + (r.predicted_ms - model.frame_fixed_ms()) / std::max(1e-9, r.correction);
-            const double e = std::max(-2.0, std::min(2.0, noise(noise_rng))) * std::max(model.noise_rel, 0.01);
-            render_ms = std::max(0.0, expected + std::max(-model.safety_ms, std::min(model.safety_ms, expected * e)));
+            render_ms = simulated_render_ms(r);
         }
         // measured: everything but the renderer. Simulated: the planning time reserved for this
         // frame (the real cull and optimise times, which a busy machine can stretch, stay in the
@@ -290,29 +312,50 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
         // the runtime's prediction covers extraction and rendering; the frame adds cull and
         // optimise. The safety allowance is a margin, not part of the prediction.
         row.predicted_ms = r.predicted_ms - model.safety_ms + r.cull_ms + r.optimize_ms;
-        // the next frame's culling and optimisation is estimated by the largest of the last
-        // eight (extraction is in the model's per-triangle cost)
-        recent_cpu[size_t(step + settle) % recent_cpu.size()] = r.cull_ms + r.optimize_ms;
-        // twice the recent maximum, and at least 2% of the budget: planning times jitter
-        overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end()));
-        previous_render_ms = renderer ? render_ms + row.extract_ms : render_ms;  // what the runtime predicts: extraction and rendering
-        if (!recorded) continue;
-        rows.push_back(row);
-        // screenshots at A, B and C: the frame as drawn, then each object coloured by its level
-        if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2])) {
-            const char name = f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C');
-            const std::string base = (fs::path(o.out) / "shots" / (selector + "-" + name)).string();
-            fs::create_directories(fs::path(base).parent_path());
-            renderer->save_png(base + ".png");
-            size_t k = 0;
-            for (uint32_t id = 0; id < rt.object_count(); ++id) {
-                const tcr::ObjectResult& obj = rt.object(id);
-                if (!obj.drawn) continue;
-                lod_color(double(obj.triangles) / w.meshes[w.scene.instances[id].mesh]->triangle_count, draws[k++].color);
-            }
-            renderer->render(cam.view, cam.projection, draws, indices, at);
-            renderer->save_png(base + "-lod.png");
+        recent_cpu[slot % recent_cpu.size()] = r.cull_ms + r.optimize_ms;
+        note_planning_time();
+        previous_render_ms = renderer ? render_ms + row.extract_ms : render_ms;
+        return row;
+    }
+
+    // The frame as drawn, then each object coloured by its level, as shots/SELECTOR-NAME*.png
+    void save_shots(const std::string& selector, char name, uint32_t f, size_t index_count) {
+        const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
+        const std::string base = (fs::path(o.out) / "shots" / (selector + "-" + name)).string();
+        fs::create_directories(fs::path(base).parent_path());
+        renderer->save_png(base + ".png");
+        size_t k = 0;
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& obj = rt.object(id);
+            if (!obj.drawn) continue;
+            lod_color(double(obj.triangles) / w.meshes[w.scene.instances[id].mesh]->triangle_count, draws[k++].color);
         }
+        renderer->render(cam.view, cam.projection, draws, indices, index_count);
+        renderer->save_png(base + "-lod.png");
+    }
+};
+
+// A selector's run: the warm-up, then 8 frames at the path's first position, planned, drawn and
+// fed back as every frame is but not recorded (the runtime's model correction starts from this
+// scene's measured frames instead of the calibration's isolated objects, which would put the
+// first frames over the budget while the correction caught up), then the recorded path, with
+// screenshots at A, B and C.
+Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
+            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows) {
+    PathRun path(w, selector, o, calibrated, renderer, mesh_handles);
+    path.warm_up();
+    uint32_t shots[3];
+    walk::viewpoints(o.frames, shots);
+    rows.clear();
+    const int64_t settle = path.none ? 0 : 8;  // full detail has no budget to settle on
+    for (int64_t step = -settle; step < int64_t(o.frames); ++step) {
+        const uint32_t f = uint32_t(std::max<int64_t>(step, 0));
+        size_t index_count = 0;
+        const Row row = path.frame(f, size_t(step + settle), index_count);
+        if (step < 0) continue;
+        rows.push_back(row);
+        if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2]))
+            path.save_shots(selector, f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C'), f, index_count);
     }
     return summarize(selector, o.budget_ms, rows);
 }
@@ -386,117 +429,135 @@ uint32_t referenced_vertices(const std::vector<uint32_t>& indices, uint32_t n, s
 }
 
 // Renders sample objects at several resolutions and sizes, fits the cost model by least squares.
-tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::vector<uint32_t>& handles, std::FILE* log) {
-    auto median = [](std::vector<double> v) {
-        std::sort(v.begin(), v.end());
-        return v[v.size() / 2];
-    };
+namespace calib {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// The calibration's view: from the origin down -z, 60 degrees, the renderer's viewport.
+tcr::Camera camera(const walk::Renderer& renderer) {
     tcr::Camera cam;
     const float eye[3] = {0, 0, 0}, target[3] = {0, 0, -1}, up[3] = {0, 1, 0};
     tcr::look_at(eye, target, up, cam.view);
     tcr::perspective(60.0f * 3.14159265f / 180.0f, float(renderer.width()) / float(renderer.height()), 0.05f, 200.0f, cam.projection);
     cam.viewport_width = renderer.width();
     cam.viewport_height = renderer.height();
+    return cam;
+}
+
+// `count` renders of the same frame, each timed
+std::vector<double> time_frames(walk::Renderer& renderer, const tcr::Camera& cam, const std::vector<walk::Renderer::Draw>& draws,
+                                const std::vector<uint32_t>& indices, size_t index_count, int count) {
+    std::vector<double> times;
+    for (int r = 0; r < count; ++r) {
+        const auto t0 = Clock::now();
+        renderer.render(cam.view, cam.projection, draws, indices, index_count);
+        times.push_back(ms_since(t0));
+    }
+    return times;
+}
+
+// One configuration of a calibration draw: a level of a mesh (scaled to diagonal 1) at a
+// distance, in `copies` copies side by side (8, or 64 small ones for the per-draw cost).
+struct Config {
+    double fraction;
+    float distance;
+    int copies;
+};
+
+std::vector<Config> configs() {
+    std::vector<Config> out;
+    for (double fraction : {1.0, 0.4, 0.15, 0.05, 0.015})
+        for (float distance : {1.6f, 4.0f, 10.0f}) out.push_back({fraction, distance, 8});
+    out.push_back({0.015, 10.0f, 64});
+    out.push_back({0.05, 10.0f, 64});
+    return out;
+}
+
+// What the sampling draws reuse.
+struct Frame {
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
-    // warm up, then empty frames: t_init + t_final
-    for (int r = 0; r < 10; ++r) renderer.render(cam.view, cam.projection, draws, indices, 0);
-    std::vector<double> empty;
-    for (int r = 0; r < 25; ++r) {
-        const auto t0 = Clock::now();
-        renderer.render(cam.view, cam.projection, draws, indices, 0);
-        empty.push_back(ms_since(t0));
-    }
-    const double empty_ms = median(empty);
-    std::vector<tcr::CostSample> samples;
-    std::vector<std::array<float, 16>> models(64);
+    std::vector<std::array<float, 16>> models = std::vector<std::array<float, 16>>(64);
     std::vector<uint8_t> used;
+};
+
+// The time per object of one configuration, above the empty frame's: the copies drawn
+// `repeats` times in the frame (up to 64), toward kCalibrationTriangles a frame, so that even a
+// small level's time stands well above the empty frame's jitter; the median of 7 frames.
+tcr::CostSample sample(const tom::MeshView& mesh, uint32_t handle, const Config& cfg, const tcr::Camera& cam, double empty_ms,
+                       walk::Renderer& renderer, Frame& f) {
+    double d2 = 0;
+    float c[3];
+    for (int k = 0; k < 3; ++k) {
+        d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
+        c[k] = 0.5f * (mesh.bounds_min[k] + mesh.bounds_max[k]);
+    }
+    const uint32_t n = tom::vertex_count_for_fraction(mesh, cfg.fraction);
+    const uint32_t tris = tom::active_triangle_count(mesh, n);
+    f.indices.resize(size_t(tris) * 3);
+    tom::extract(mesh, n, f.indices.data(), f.indices.size());
+    f.draws.clear();
+    double pixels = 0;
+    const float s = float(1.0 / std::sqrt(d2));
+    const int copies = cfg.copies, columns = copies == 8 ? 4 : 8;
+    const float spacing = copies == 8 ? cfg.distance * 0.42f : cfg.distance * 0.13f;
+    const tcr::Box box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
+    for (int k = 0; k < copies; ++k) {
+        std::array<float, 16>& t = f.models[k];
+        const float x = (float(k % columns) - 0.5f * (columns - 1)) * spacing, y = (float(k / columns) - 0.5f * (copies / columns - 1)) * spacing;
+        t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -cfg.distance - s * c[2], 1};
+        f.draws.push_back({handle, t.data(), 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}});
+        pixels += tcr::project_box(cam, t.data(), box).coverage_px;
+    }
+    const int repeats = std::max(1, std::min(64, int(std::ceil(kCalibrationTriangles / (double(tris) * copies)))));
+    for (int rep = 1; rep < repeats; ++rep)
+        for (int k = 0; k < copies; ++k) f.draws.push_back(f.draws[size_t(k)]);
+    const double frame_ms = median(time_frames(renderer, cam, f.draws, f.indices, f.indices.size(), 7));
+    tcr::CostSample out;
+    out.triangles = tris;
+    out.vertices = referenced_vertices(f.indices, n, f.used);  // what the renderer shades: a level's prefix may hold unused survivors
+    out.pixels = pixels / copies;
+    out.time_ms = std::max(0.0, frame_ms - empty_ms) / (copies * repeats);
+    if (std::getenv("TCRWALK_DEBUG"))
+        std::fprintf(stderr, "  sample level %.3f distance %.1f x%d: tris %u verts %u pixels %.0f time/object %.4f ms (frame %.3f)\n", cfg.fraction,
+                     cfg.distance, copies, tris, n, out.pixels, out.time_ms, frame_ms);
+    return out;
+}
+
+// The renderer's noise: one heavy frame (the draws of the last configuration, at the first
+// mesh's full detail) drawn again and again; its relative standard deviation.
+double frame_noise(const tom::MeshView& mesh, uint32_t handle, const tcr::Camera& cam, walk::Renderer& renderer, Frame& f) {
+    f.indices.resize(size_t(mesh.triangle_count) * 3);
+    tom::extract(mesh, mesh.vertex_count, f.indices.data(), f.indices.size());
+    for (walk::Renderer::Draw& d : f.draws) d.index_count = mesh.triangle_count * 3, d.mesh = handle;
+    const std::vector<double> times = time_frames(renderer, cam, f.draws, f.indices, f.indices.size(), 31);
+    double mean = 0, var = 0;
+    for (double t : times) mean += t / times.size();
+    for (double t : times) var += (t - mean) * (t - mean) / times.size();
+    return mean > 0 ? std::sqrt(var) / mean : 0.0;
+}
+
+} // namespace calib
+
+// Fits the cost model on this renderer: the empty frame gives t_init + t_final and the safety
+// allowance, draws of up to four meshes at five levels, three distances and two copy counts give
+// the per-draw, per-triangle, per-vertex and per-pixel costs, and a repeated heavy frame the noise.
+tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::vector<uint32_t>& handles, std::FILE* log) {
+    const tcr::Camera cam = calib::camera(renderer);
+    calib::Frame frame;
+    for (int r = 0; r < 10; ++r) renderer.render(cam.view, cam.projection, frame.draws, frame.indices, 0);  // warm up
+    const std::vector<double> empty = calib::time_frames(renderer, cam, frame.draws, frame.indices, 0, 25);
+    const double empty_ms = calib::median(empty);
+
+    std::vector<tcr::CostSample> samples;
     const size_t mesh_count = std::min<size_t>(w.meshes.size(), 4);
-    for (size_t mi = 0; mi < mesh_count; ++mi) {
-        const tom::MeshView& mesh = *w.meshes[mi];
-        double d2 = 0;
-        float c[3];
-        for (int k = 0; k < 3; ++k) {
-            d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
-            c[k] = 0.5f * (mesh.bounds_min[k] + mesh.bounds_max[k]);
-        }
-        // objects of a fixed size (diagonal 1) at three distances: the pixel counts vary; eight
-        // copies side by side, or 64 small ones for the per-draw cost
-        struct Config {
-            double fraction;
-            float distance;
-            int copies;
-        };
-        std::vector<Config> configs;
-        for (double fraction : {1.0, 0.4, 0.15, 0.05, 0.015})
-            for (float distance : {1.6f, 4.0f, 10.0f}) configs.push_back({fraction, distance, 8});
-        configs.push_back({0.015, 10.0f, 64});
-        configs.push_back({0.05, 10.0f, 64});
-        for (const Config& cfg : configs) {
-            const double fraction = cfg.fraction;
-            const float distance = cfg.distance;
-            const int copies = cfg.copies;
-            {
-                const uint32_t n = tom::vertex_count_for_fraction(mesh, fraction);
-                const uint32_t tris = tom::active_triangle_count(mesh, n);
-                indices.resize(size_t(tris) * 3);
-                tom::extract(mesh, n, indices.data(), indices.size());
-                draws.clear();
-                double pixels = 0;
-                const float s = float(1.0 / std::sqrt(d2));
-                const int columns = copies == 8 ? 4 : 8;
-                const float spacing = copies == 8 ? distance * 0.42f : distance * 0.13f;
-                for (int k = 0; k < copies; ++k) {
-                    std::array<float, 16>& t = models[k];
-                    const float x = (float(k % columns) - 0.5f * (columns - 1)) * spacing, y = (float(k / columns) - 0.5f * (copies / columns - 1)) * spacing;
-                    t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -distance - s * c[2], 1};
-                    walk::Renderer::Draw d{handles[mi], t.data(), 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}};
-                    draws.push_back(d);
-                    tcr::Box box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
-                    pixels += tcr::project_box(cam, t.data(), box).coverage_px;
-                }
-                // the copies drawn `repeats` times in the frame (up to 64), toward kCalibrationTriangles
-                // a frame, so that even a small level's time stands well above the empty frame's jitter
-                const int repeats = std::max(1, std::min(64, int(std::ceil(kCalibrationTriangles / (double(tris) * copies)))));
-                for (int rep = 1; rep < repeats; ++rep)
-                    for (int k = 0; k < copies; ++k) draws.push_back(draws[size_t(k)]);
-                std::vector<double> times;
-                for (int r = 0; r < 7; ++r) {
-                    const auto t0 = Clock::now();
-                    renderer.render(cam.view, cam.projection, draws, indices, indices.size());
-                    times.push_back(ms_since(t0));
-                }
-                tcr::CostSample sample;
-                sample.triangles = tris;
-                sample.vertices = referenced_vertices(indices, n, used);  // what the renderer shades: a level's prefix may hold unused survivors
-                sample.pixels = pixels / copies;
-                sample.time_ms = std::max(0.0, median(times) - empty_ms) / (copies * repeats);
-                samples.push_back(sample);
-                if (std::getenv("TCRWALK_DEBUG"))
-                    std::fprintf(log, "  sample mesh %zu level %.3f distance %.1f x%d: tris %u verts %u pixels %.0f time/object %.4f ms (frame %.3f)\n", mi,
-                                 fraction, distance, copies, tris, n, sample.pixels, sample.time_ms, median(times));
-            }
-        }
-    }
-    // the renderer's noise: one heavy frame (the last configuration of the first mesh, full
-    // detail, eight copies) drawn again and again
-    double noise_rel = 0;
-    {
-        const tom::MeshView& mesh = *w.meshes[0];
-        indices.resize(size_t(mesh.triangle_count) * 3);
-        tom::extract(mesh, mesh.vertex_count, indices.data(), indices.size());
-        for (walk::Renderer::Draw& d : draws) d.index_count = mesh.triangle_count * 3, d.mesh = handles[0];
-        std::vector<double> times;
-        for (int r = 0; r < 31; ++r) {
-            const auto t0 = Clock::now();
-            renderer.render(cam.view, cam.projection, draws, indices, indices.size());
-            times.push_back(ms_since(t0));
-        }
-        double mean = 0, var = 0;
-        for (double t : times) mean += t / times.size();
-        for (double t : times) var += (t - mean) * (t - mean) / times.size();
-        noise_rel = mean > 0 ? std::sqrt(var) / mean : 0.0;
-    }
+    for (size_t mi = 0; mi < mesh_count; ++mi)
+        for (const calib::Config& cfg : calib::configs()) samples.push_back(calib::sample(*w.meshes[mi], handles[mi], cfg, cam, empty_ms, renderer, frame));
+    const double noise_rel = calib::frame_noise(*w.meshes[0], handles[0], cam, renderer, frame);
+
     const tcr::CalibrationResult fit = tcr::fit_cost_model(samples);
     tcr::CostModel m = fit.model;
     m.t_init_ms = 0.5 * empty_ms;

@@ -39,7 +39,9 @@ namespace {
 
 using detail::thread_count;
 
-void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& team) {
+// Each vertex's kind from the edges of its fan: interior, border (one open edge out and one in,
+// whose ends become its loop neighbours) or locked.
+void classify_by_edges(Builder& b, detail::Team& team) {
     const uint32_t n = b.n;
     const Topology& topo = b.topo;
     VertexClasses& cl = b.classes;
@@ -101,10 +103,15 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& tea
             for (uint32_t i = 0; i < valence; ++i) tally[2 * size_t(out[i])] = tally[2 * size_t(in[i]) + 1] = 0;
         }
     });
-    // coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
-    // An open-addressing table of exact position bits groups them: a group of two border vertices
-    // whose border neighbours are coincident too is a seam (the two collapse together); any other
-    // group is locked.
+}
+
+// Coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
+// An open-addressing table of exact position bits groups them into position classes (wedge,
+// next_copy): a group of two border vertices whose border neighbours are coincident too is a seam
+// (the two collapse together, when `allow_seams`); any other group is locked.
+void group_coincident(Builder& b, bool allow_seams) {
+    const uint32_t n = b.n;
+    VertexClasses& cl = b.classes;
     cl.partner.assign(n, kNone);
     {
         size_t cap = 16;
@@ -165,12 +172,18 @@ void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& tea
             }
         }
     }
-    // a border vertex whose loop neighbour is locked keeps its pointers; pointers of locked
-    // vertices are never followed from a locked vertex itself
-    for (uint32_t v = 0; v < n; ++v) {
-        stats.locked_vertices += cl.kind[v] == kLocked;
-        stats.border_vertices += cl.kind[v] == kBorder;
-        stats.seam_vertices += cl.kind[v] == kSeam;
+}
+
+// The vertex classes: kinds by edges, then coincident copies grouped. A border vertex whose loop
+// neighbour is locked keeps its pointers; pointers of locked vertices are never followed from a
+// locked vertex itself.
+void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& team) {
+    classify_by_edges(b, team);
+    group_coincident(b, allow_seams);
+    for (const uint8_t kind : b.classes.kind) {
+        stats.locked_vertices += kind == kLocked;
+        stats.border_vertices += kind == kBorder;
+        stats.seam_vertices += kind == kSeam;
     }
 }
 

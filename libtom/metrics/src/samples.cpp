@@ -179,123 +179,152 @@ void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& 
 
 // Vertices first, then points along the edges, then area-uniform random points on the faces,
 // about `target` in all (Metro's order and budget).
+namespace {
+
+// Where sample_surface() puts its points, with the face each came from when asked.
+struct SampleSink {
+    Samples& out;
+    std::vector<uint32_t>& faces;
+    bool with_faces;
+    void add(const V3& point, uint32_t face) {
+        out.points.push_back(point);
+        if (with_faces) faces.push_back(face);
+    }
+};
+
+// Every vertex that a face uses, once.
+void sample_vertices(const Surface& s, SampleSink& sink) {
+    constexpr uint32_t kUnused = 0xffffffffu;
+    std::vector<uint32_t> face_of(s.vertex_count, kUnused);  // a vertex's first face
+    for (size_t i = s.triangle_count * 3; i-- > 0;) face_of[s.indices[i]] = uint32_t(i / 3);
+    for (uint32_t v = 0; v < s.vertex_count; ++v)
+        if (face_of[v] != kUnused) sink.add(vertex(s, v), face_of[v]);
+}
+
+// Points spaced along every edge once, in the order of (lower vertex, higher vertex): the square
+// root of the area density along a length. A radix sort of the two vertices packed into one key
+// finds the edges, with the first face that has each.
+void sample_edges(const Surface& s, double per_area, const DistanceParams& p, MortonScratch& scratch, SampleSink& sink) {
+    int bits = 1;
+    while (bits < 32 && (uint64_t(1) << bits) < s.vertex_count) ++bits;
+    std::vector<std::pair<uint64_t, uint32_t>>& edges = scratch.keyed;
+    edges.clear();
+    edges.reserve(s.triangle_count * 3);
+    for (size_t t = 0; t < s.triangle_count; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
+            edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), uint32_t(t)});
+        }
+    radix_sort(edges, scratch.other, 2 * bits, [](const std::pair<uint64_t, uint32_t>& edge) { return edge.first; }, p.threads);
+    edges.erase(std::unique(edges.begin(), edges.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), edges.end());
+    const double per_length = std::sqrt(per_area);
+    const uint64_t low = (uint64_t(1) << bits) - 1;
+    for (const auto& edge : edges) {
+        const uint32_t a = uint32_t(edge.first >> bits), b = uint32_t(edge.first & low);
+        const V3 pa = vertex(s, a), pb = vertex(s, b);
+        const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
+        for (int i = 1; i <= n; ++i) sink.add(pa + (double(i) / double(n + 1)) * (pb - pa), edge.second);
+    }
+}
+
+// Face t's samples [first, first + n) of `points` (base-relative indices), stratified as Metro's
+// similar-triangles sampling: the face is cut into m x m similar triangles, one random point in
+// each, visited row by row in serpentine order so consecutive samples are neighbours; the n - m^2
+// left over fall anywhere on the face. A point is made from its weights (u, v) of the face's
+// edges from its first corner. Every `every`-th sample (0: none) is also recorded in `picked`.
+void sample_face(const Surface& s, size_t t, uint64_t first, uint64_t n, uint64_t seed, V3* points, uint64_t every,
+                 std::vector<FaceSample>* picked) {
+    Random rng{(seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
+    uint64_t index = first;  // of the face sample made next
+    const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
+    const uint64_t m = uint64_t(std::sqrt(double(n)));
+    struct Weights {
+        double u, v;
+    };
+    auto random_in = [&](Weights w0, Weights w1, Weights w2) {
+        double s1, s2;
+        rng.in_triangle(s1, s2);
+        const double u = w0.u + s1 * (w1.u - w0.u) + s2 * (w2.u - w0.u), v = w0.v + s1 * (w1.v - w0.v) + s2 * (w2.v - w0.v);
+        points[index] = a + u * (b - a) + v * (c - a);
+        if (every && index % every == 0) (*picked)[index / every] = {uint32_t(t), u, v};
+        ++index;
+    };
+    auto grid = [&](uint64_t i, uint64_t j) { return Weights{double(i) / double(m), double(j) / double(m)}; };
+    for (uint64_t i = 0; i < m; ++i) {
+        const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
+        for (uint64_t k = 0; k < cells; ++k) {
+            const uint64_t cell = (i % 2 == 0) ? k : cells - 1 - k;
+            const uint64_t j = cell / 2;
+            if (cell % 2 == 0)
+                random_in(grid(i, j), grid(i + 1, j), grid(i, j + 1));
+            else
+                random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
+        }
+    }
+    for (uint64_t i = m * m; i < n; ++i) random_in({0, 0}, {1, 0}, {0, 1});
+}
+
+// About `remaining` area-uniform points: each face gets its expected share, the fraction rounded
+// at random, then its points on the team (each face with its own generator: the same points
+// whatever the threads). Returns `every`, the picking stride among the face samples (0: none).
+uint64_t sample_faces(const Surface& s, double remaining, const std::vector<double>& areas, const DistanceParams& p, SampleSink& sink,
+                      PickedFaceSamples* pick, uint64_t pick_count) {
+    Samples& out = sink.out;
+    const size_t base = out.points.size();
+    Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
+    std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
+    for (size_t t = 0; t < s.triangle_count; ++t) {
+        const double expected = remaining * areas[t] / out.area;
+        first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
+    }
+    out.points.resize(base + first.back());
+    if (sink.with_faces) {
+        sink.faces.resize(base + first.back());
+        for (size_t t = 0; t < s.triangle_count; ++t)
+            std::fill(sink.faces.begin() + std::ptrdiff_t(base + first[t]), sink.faces.begin() + std::ptrdiff_t(base + first[t + 1]), uint32_t(t));
+    }
+    uint64_t every = 0;
+    if (pick && pick_count > 0 && first.back() > 0) {
+        every = std::max<uint64_t>(1, uint64_t(std::llround(double(first.back()) / double(pick_count))));
+        pick->picked.resize((first.back() + every - 1) / every);
+    }
+    V3* points = out.points.data() + base;
+    parallel_chunks(first.back(), p.threads, [&](size_t, size_t begin, size_t end) {
+        // the faces whose first sample falls in [begin, end)
+        const size_t t0 = size_t(std::lower_bound(first.begin(), first.end() - 1, begin) - first.begin());
+        const size_t t1 = size_t(std::lower_bound(first.begin(), first.end() - 1, end) - first.begin());
+        for (size_t t = t0; t < t1; ++t)
+            if (first[t + 1] > first[t]) sample_face(s, t, first[t], first[t + 1] - first[t], p.seed, points, every, pick ? &pick->picked : nullptr);
+    });
+    return every;
+}
+
+} // namespace
+
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick,
                     uint64_t pick_count, bool with_faces) {
     with_faces = with_faces || pick;
     out.points.clear();
-    std::vector<uint32_t>& faces = scratch.faces;  // of each point, in the order made
-    faces.clear();
+    scratch.faces.clear();  // of each point, in the order made
     out.vertex = out.edge = out.face = 0;
     std::vector<double> areas;
     out.area = face_areas(s, areas);
     out.points.reserve(target + target / 8 + 16);  // face samples round up at random: a little over the target
     const double per_area = out.area > 0 ? double(target) / out.area : 0.0;
-    if (p.vertex_samples) {
-        constexpr uint32_t kUnused = 0xffffffffu;
-        std::vector<uint32_t> face_of(s.vertex_count, kUnused);  // a vertex's first face
-        for (size_t i = s.triangle_count * 3; i-- > 0;) face_of[s.indices[i]] = uint32_t(i / 3);
-        for (uint32_t v = 0; v < s.vertex_count; ++v)
-            if (face_of[v] != kUnused) {
-                out.points.push_back(vertex(s, v));
-                if (with_faces) faces.push_back(face_of[v]);
-            }
-        out.vertex = out.points.size();
-    }
-    if (p.edge_samples && per_area > 0) {
-        // every edge once, in the order of (lower vertex, higher vertex): a radix sort of the two
-        // packed into one key, with the first face that has the edge
-        int bits = 1;
-        while (bits < 32 && (uint64_t(1) << bits) < s.vertex_count) ++bits;
-        std::vector<std::pair<uint64_t, uint32_t>>& edges = scratch.keyed;
-        edges.clear();
-        edges.reserve(s.triangle_count * 3);
-        for (size_t t = 0; t < s.triangle_count; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t a = s.indices[3 * t + k], b = s.indices[3 * t + (k + 1) % 3];
-                edges.push_back({uint64_t(std::min(a, b)) << bits | std::max(a, b), uint32_t(t)});
-            }
-        radix_sort(edges, scratch.other, 2 * bits, [](const std::pair<uint64_t, uint32_t>& edge) { return edge.first; }, p.threads);
-        edges.erase(std::unique(edges.begin(), edges.end(), [](const auto& x, const auto& y) { return x.first == y.first; }), edges.end());
-        const double per_length = std::sqrt(per_area);
-        const uint64_t low = (uint64_t(1) << bits) - 1;
-        for (const auto& edge : edges) {
-            const uint32_t a = uint32_t(edge.first >> bits), b = uint32_t(edge.first & low);
-            const V3 pa = vertex(s, a), pb = vertex(s, b);
-            const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
-            for (int i = 1; i <= n; ++i) {
-                const double t = double(i) / double(n + 1);
-                out.points.push_back(pa + t * (pb - pa));
-                if (with_faces) faces.push_back(edge.second);
-            }
-        }
-        out.edge = out.points.size() - out.vertex;
-    }
+    SampleSink sink{out, scratch.faces, with_faces};
+
+    if (p.vertex_samples) sample_vertices(s, sink);
+    out.vertex = out.points.size();
+    if (p.edge_samples && per_area > 0) sample_edges(s, per_area, p, scratch, sink);
+    out.edge = out.points.size() - out.vertex;
     const double remaining = double(target) - double(out.points.size());
     const size_t base = out.points.size();  // the first face sample's
-    uint64_t every = 0;  // picking every this-th face sample (0: none)
     if (pick) pick->picked.clear();
-    if (p.face_samples && remaining > 0 && out.area > 0) {
-        // each face gets its expected share, the fraction rounded at random: area-uniform overall
-        Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
-        std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
-        for (size_t t = 0; t < s.triangle_count; ++t) {
-            const double expected = remaining * areas[t] / out.area;
-            first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
-        }
-        out.points.resize(base + first.back());
-        if (with_faces) {
-            faces.resize(base + first.back());
-            for (size_t t = 0; t < s.triangle_count; ++t)
-                std::fill(faces.begin() + std::ptrdiff_t(base + first[t]), faces.begin() + std::ptrdiff_t(base + first[t + 1]), uint32_t(t));
-        }
-        if (pick && pick_count > 0 && first.back() > 0) {
-            every = std::max<uint64_t>(1, uint64_t(std::llround(double(first.back()) / double(pick_count))));
-            pick->picked.resize((first.back() + every - 1) / every);
-        }
-        // faces in parallel, each with its own generator: the same points whatever the threads
-        parallel_chunks(first.back(), p.threads, [&](size_t, size_t begin, size_t end) {
-            // the faces whose first sample falls in [begin, end)
-            const size_t t0 = size_t(std::lower_bound(first.begin(), first.end() - 1, begin) - first.begin());
-            const size_t t1 = size_t(std::lower_bound(first.begin(), first.end() - 1, end) - first.begin());
-            for (size_t t = t0; t < t1; ++t) {
-                const uint64_t n = first[t + 1] - first[t];
-                if (n == 0) continue;
-                Random rng{(p.seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
-                uint64_t index = first[t];  // of the face sample made next
-                const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
-                // stratified as Metro's similar-triangles sampling: the face is cut into m x m similar
-                // triangles, one random point in each, visited row by row in serpentine order so
-                // consecutive samples are neighbours; the n - m^2 left over fall anywhere on the face.
-                // A point is made from its weights (u, v) of the face's edges from a.
-                const uint64_t m = uint64_t(std::sqrt(double(n)));
-                struct Weights {
-                    double u, v;
-                };
-                auto random_in = [&](Weights w0, Weights w1, Weights w2) {
-                    double s1, s2;
-                    rng.in_triangle(s1, s2);
-                    const double u = w0.u + s1 * (w1.u - w0.u) + s2 * (w2.u - w0.u), v = w0.v + s1 * (w1.v - w0.v) + s2 * (w2.v - w0.v);
-                    out.points[base + index] = a + u * (b - a) + v * (c - a);
-                    if (every && index % every == 0) pick->picked[index / every] = {uint32_t(t), u, v};
-                    ++index;
-                };
-                auto grid = [&](uint64_t i, uint64_t j) { return Weights{double(i) / double(m), double(j) / double(m)}; };
-                for (uint64_t i = 0; i < m; ++i) {
-                    const uint64_t cells = 2 * (m - i) - 1;  // up and down triangles of row i
-                    for (uint64_t k = 0; k < cells; ++k) {
-                        const uint64_t cell = (i % 2 == 0) ? k : cells - 1 - k;
-                        const uint64_t j = cell / 2;
-                        if (cell % 2 == 0)
-                            random_in(grid(i, j), grid(i + 1, j), grid(i, j + 1));
-                        else
-                            random_in(grid(i + 1, j), grid(i + 1, j + 1), grid(i, j + 1));
-                    }
-                }
-                for (uint64_t i = m * m; i < n; ++i) random_in({0, 0}, {1, 0}, {0, 1});
-            }
-        });
-        out.face = out.points.size() - out.vertex - out.edge;
-    }
+    uint64_t every = 0;  // picking every this-th face sample (0: none)
+    if (p.face_samples && remaining > 0 && out.area > 0) every = sample_faces(s, remaining, areas, p, sink, pick, pick_count);
+    out.face = out.points.size() - out.vertex - out.edge;
+
+    // Morton order, and each point's face (and pick) carried along
     std::vector<uint32_t>& order = scratch.order;
     order_morton(out.points, out.keys, out.extent, scratch, p.threads, with_faces ? &order : nullptr);
     if (!with_faces) {
@@ -304,7 +333,7 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
     }
     out.faces.resize(order.size());
     parallel_chunks(order.size(), p.threads, [&](size_t, size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out.faces[i] = faces[order[i]];
+        for (size_t i = begin; i < end; ++i) out.faces[i] = scratch.faces[order[i]];
     });
     if (!pick) return;
     pick->of_point.resize(order.size());
