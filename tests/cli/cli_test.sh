@@ -26,6 +26,19 @@ cp "$data/assimp/OBJ/spider.obj" "$data/assimp/OBJ/spider.mtl" "$work/in/sub/"
 cp "$data/assimp/glTF2/IndexOutOfRange/IndexOutOfRange.gltf" "$data/assimp/glTF2/IndexOutOfRange/IndexOutOfRange.bin" "$work/in/sub/"
 cp "$data/assimp/OBJ/testpoints.obj" "$work/in/"
 
+# every hostile file of the first fuzzing run among good ones: the good ones convert, each bad one
+# is named with its reason, no signal ends the run, and the summary is written
+mkdir -p "$work/hostile"
+cp "$data/meshes/fandisk.off" "$work/hostile/a.off"
+cp "$data/meshes/cow.off" "$work/hostile/c.off"
+cp "$src"/tests/data/hostile/* "$work/hostile/"
+check "a batch with the fuzzing run's files converts the good ones and exits 1" expect_exit 1 "$tools/tombuild" "$work/hostile" -o "$work/hostile-out" --report-json "$work/hostile-reports"
+check "the good inputs of that batch are converted" test -s "$work/hostile-out/a.tom" -a -s "$work/hostile-out/c.tom" -a -s "$work/hostile-out/E-coincident-neighbours.tom"
+check "every converted file of that batch is valid" bash -c "for f in '$work'/hostile-out/*.tom; do '$tools/tominfo' \"\$f\" >/dev/null || exit 1; done"
+check "each hostile input is named with its reason" bash -c "n=\$(grep -c '^error: .*hostile/[A-I]-' '$work/stderr'); test \"\$n\" -eq 9"
+check "the batch's summary lists the converted meshes" test "$(wc -l < "$work/hostile-reports/summary.csv")" -eq 4
+check "tombuild -v on the coincident-copies OBJ ends" timeout 20 "$tools/tombuild" "$work/hostile/E-coincident-neighbours.obj" -o "$work/hostile-v" -v
+
 check "usage error without -o exits 2" expect_exit 2 "$tools/tombuild" "$work/in"
 check "unknown option exits 2" expect_exit 2 "$tools/tombuild" "$work/in" -o "$work/o" --no-such-option
 check "bad predicate exits 2" expect_exit 2 "$tools/tombuild" "$work/in" -o "$work/o" --predicate nonsense

@@ -4,6 +4,8 @@
 
 #include "support.h"
 #include "tom/builder/builder.h"
+#include "tom/errors.h"
+#include "tom/scene.h"
 #include "tom/extract.h"
 #include "tom/builder/writer.h"
 #include "tom/format.h"
@@ -159,6 +161,40 @@ TEST_CASE("the foresight is only a speed-up: real meshes build the same bytes wi
         }
     }
     CHECK(foreseen_meshes >= 4);
+}
+
+TEST_CASE("two coincident copies that are each other's border neighbours build a file the reader accepts", "[builder][edge][hostile]") {
+    // the fuzzing run's 48-byte OBJ (tests/data/hostile/E-coincident-neighbours.obj): copies 1/2
+    // and 0/3 coincide, and each pair closes a zero-length border edge; they were classed as a
+    // seam and each substituted onto the other (substitute[2] == 3, FORMAT.md rule 13)
+    tom::Mesh m;
+    m.positions = {0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0};
+    m.indices = {3, 2, 1, 3, 1, 0};
+    tom::clean_mesh(m);
+    tom::BuildStats stats;
+    const tom::TomMesh t = tom::build(m, {}, &stats);
+    for (uint32_t i = t.min_vertex_count; i < t.vertex_count(); ++i) CHECK(t.substitute[i] < i);
+    CHECK(stats.seam_vertices == 0);
+    const std::vector<uint8_t> bytes = tom::serialize({t});
+    const tom::File f = tom::File::from_bytes(bytes.data(), bytes.size(), "coincident.tom");
+    CHECK(tom::active_triangle_count(f.mesh(0), f.mesh(0).min_vertex_count) <= 2);
+}
+
+TEST_CASE("the writer never produces a file the reader rejects", "[builder][format][hostile]") {
+    tom::Mesh m = test::generated_meshes()[0].mesh;
+    tom::TomMesh t = tom::build(m);
+    tom::Scene scene;
+    scene.materials.resize(1);
+    t.material = 4;  // past the scene's one material: FORMAT.md rule 17
+    try {
+        tom::serialize({t}, scene);
+        FAIL("serialized a mesh whose material is not stored");
+    } catch (const tom::ArgumentError& e) {
+        CHECK(std::string(e.what()).find("rule 17") != std::string::npos);
+    }
+    t.material = 0;
+    t.substitute.back() = t.vertex_count() - 1;  // a removed vertex that substitutes itself: rule 13
+    CHECK_THROWS_AS(tom::serialize({t}, scene), tom::ArgumentError);
 }
 
 TEST_CASE("a single triangle and a lone quad build and extract", "[builder][edge]") {

@@ -161,7 +161,10 @@ void group_coincident(Builder& b, bool allow_seams) {
             const uint32_t r = first[v];
             if (count[r] < 2) continue;
             const uint32_t a = r, c = second[r];
-            const bool seam = count[r] == 2 && cl.kind[a] == kBorder && cl.kind[c] == kBorder &&
+            // two copies that are each other's border neighbours close a zero-length border edge:
+            // each would be the other's target, so they are locked, not a seam
+            const bool adjacent = cl.border_next[a] == c || cl.border_prev[a] == c;
+            const bool seam = count[r] == 2 && cl.kind[a] == kBorder && cl.kind[c] == kBorder && !adjacent &&
                               ((pos_eq(cl.border_next[a], cl.border_prev[c]) && pos_eq(cl.border_prev[a], cl.border_next[c])) ||
                                (pos_eq(cl.border_next[a], cl.border_next[c]) && pos_eq(cl.border_prev[a], cl.border_prev[c])));
             if (seam && allow_seams) {

@@ -164,6 +164,15 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
     }
     store_u32(&file[h_table_checksum], crc32(&file[table_offset], sections.size() * section_entry_bytes));
     store_u32(&file[h_header_checksum], crc32(file.data(), h_header_checksum));
+    // the writer never produces what the reader rejects: a mesh the builder got wrong, or a
+    // scene whose references do not hold, fails here instead of in an engine
+    OpenOptions no_checksums;
+    no_checksums.verify_checksums = false;  // just computed
+    try {
+        validate_bytes(file.data(), file.size(), "<serialized>", no_checksums);
+    } catch (const FormatError& e) {
+        throw ArgumentError(std::string("serialize: the meshes would make a file the reader rejects: ") + e.what());
+    }
     return file;
 }
 

@@ -13,6 +13,7 @@
 #include <iterator>
 
 #include "gltf_meshopt.h"
+#include "gltf_references.h"
 #include "gltf_schema.h"
 #include "import_backends.h"
 #include "tom/errors.h"
@@ -223,11 +224,12 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     loader.SetImageLoader(skip_image, nullptr);
     std::vector<uint8_t> bytes = read_whole_file(path);
     nlohmann::json doc = check_gltf_schema(bytes, binary, path);
+    const size_t slash = path.find_last_of('/');
+    const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+    check_gltf_references(doc, bytes, binary, base_dir, path);  // tinygltf follows indices unchecked
     const bool meshopt = prepare_meshopt(doc, bytes, binary, path);
     tinygltf::Model model;
     std::string err, warn;
-    const size_t slash = path.find_last_of('/');
-    const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
     const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), unsigned(bytes.size()), base_dir)
                            : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()), unsigned(bytes.size()), base_dir);
     if (!ok) {
@@ -276,6 +278,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             if (pos_index < 0) reader.fail("has no POSITION attribute");
             Mesh mesh;
             mesh.name = stem + "/" + mesh_name + (gm.primitives.size() > 1 ? "#" + std::to_string(pi) : std::string());
+            if (prim.material >= int(model.materials.size()))
+                reader.fail("names material " + std::to_string(prim.material) + ", the file has " + std::to_string(model.materials.size()));
             mesh.material = prim.material;
             mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, PrimitiveReader::Kind::position, 0);
             const size_t n = mesh.positions.size() / 3;

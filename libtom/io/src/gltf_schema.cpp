@@ -227,6 +227,10 @@ nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary,
         doc = json::parse(json_begin, json_begin + json_size);
     } catch (const json::parse_error& e) {
         throw ImportError(file + ": the glTF JSON does not parse at byte " + std::to_string(e.byte) + (binary ? " of the JSON chunk" : ""));
+    } catch (const json::exception& e) {  // a number past double's range (out_of_range.406), ...
+        std::string what = e.what();
+        const size_t close = what.find("] ");
+        throw ImportError(file + ": the glTF JSON does not parse: " + (close == std::string::npos ? what : what.substr(close + 2)));
     }
     static const RulePtr schema = gltf_schema();
     check(doc, *schema, "$", file);

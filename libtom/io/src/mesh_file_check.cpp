@@ -142,6 +142,31 @@ bool parse_number(std::string_view s) {
     return errno != ERANGE && std::isfinite(value);
 }
 
+// True when an input stream reading a float from `s` succeeds: `s` starts with a number (sign,
+// digits, point, an exponent only when digits follow it) within float range. OpenMesh's OBJ
+// reader reads coordinates this way and takes the rest of the token as the next value's, so
+// "3.1+e2" is 3.1 but "%0" is nothing, and then no vertex is added for its line.
+bool number_prefix(std::string_view s) {
+    size_t i = 0;
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    size_t digits = 0;
+    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+    if (i < s.size() && s[i] == '.') {
+        ++i;
+        while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
+    }
+    if (digits == 0) return false;
+    if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+        size_t j = i + 1;
+        if (j < s.size() && (s[j] == '+' || s[j] == '-')) ++j;
+        if (j < s.size() && s[j] >= '0' && s[j] <= '9') {
+            i = j;
+            while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+        }
+    }
+    return parse_number(s.substr(0, i));
+}
+
 [[noreturn]] void fail(const std::string& path, size_t line, const std::string& problem) {
     throw ImportError(path + ":" + std::to_string(line) + ": " + problem);
 }
@@ -300,8 +325,14 @@ void check_ply(const std::string& path, std::string_view text) {
             } else {
                 fail(path, line, "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with known types, found " + quoted(w.size() > 1 ? w[1] : w[0]));
             }
+        } else {
+            // other lines (an exporter's note without 'comment') are skipped, as OpenMesh does,
+            // but its header parser reads words, not lines: a keyword after unknown words ("x
+            // element") is taken as one, and it then loops or reads past its lists
+            for (size_t k = 1; k < w.size(); ++k)
+                if (w[k] == "element" || w[k] == "property" || w[k] == "format" || w[k] == "end_header")
+                    fail(path, line, "a header line starting with " + quoted(w[0]) + " has the keyword " + quoted(w[k]) + " after it (expected format, element, property, comment, obj_info or end_header first)");
         }
-        // other lines (an exporter's note without 'comment') are skipped, as OpenMesh does
     }
     if (format.empty()) fail(path, in.line_number(), "the header has no format line");
     uint64_t vertices = 0;
@@ -333,6 +364,11 @@ void check_ply(const std::string& path, std::string_view text) {
                             fail(path, line, e.name + " " + std::to_string(i) + ": " + quoted(w[k]) + (p.indices ? " is not a vertex of the " + std::to_string(vertices) : " is not a number"));
                     }
                 }
+                // OpenMesh reads values, not lines: one value too many shifts every later one
+                // (a face's corner count read from a vertex's extra value)
+                if (k < w.size())
+                    fail(path, line, e.name + " " + std::to_string(i) + ": " + std::to_string(w.size() - k) + " value" + (w.size() - k > 1 ? "s" : "") +
+                                         " past its " + std::to_string(e.properties.size()) + " propert" + (e.properties.size() > 1 ? "ies" : "y") + ", from " + quoted(w[k]));
             }
         }
         return;
@@ -418,11 +454,21 @@ void check_obj(const std::string& path, std::string_view text) {
         const size_t line = in.last_line();
         // values are OpenMesh's to read (it takes what parses, as "3.1+e2" -> 3.1); indices are
         // what it would follow out of bounds
+        // a v, vt or vn line whose numbers do not read adds nothing in OpenMesh, while the counts
+        // above (and every later index) took it: such a line is an error
+        auto numbers = [&](size_t count, const char* what) {
+            for (size_t k = 1; k <= count; ++k)
+                if (k >= w.size() || !number_prefix(w[k]))
+                    fail(path, line, std::string(what) + " needs " + std::to_string(count) + " numbers, found " + (k < w.size() ? quoted(w[k]) : "the end of the line"));
+        };
         if (w[0] == "v") {
+            numbers(3, "a vertex");
             ++seen_v;
         } else if (w[0] == "vt") {
+            numbers(2, "a texture coordinate");
             ++seen_vt;
         } else if (w[0] == "vn") {
+            numbers(3, "a normal");
             ++seen_vn;
         } else if (w[0] == "f") {
             for (size_t k = 1; k < w.size(); ++k) {

@@ -124,22 +124,27 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     om.request_vertex_colors();
     OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
                                 OpenMesh::IO::Options::FaceTexCoord | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
-    std::ostringstream messages;
+    std::string messages;
     Importer importer(om);
     bool ok;
     {
         std::lock_guard<std::mutex> lock(openmesh_mutex());
-        static const bool detached = [] {
+        // one sink, connected once: OpenMesh's stream multiplexer allocates a target on every
+        // connect and never frees it, so a connect per import would leak in a long process
+        static std::ostringstream sink;
+        static const bool connected = [] {
             ::omerr().disconnect(std::cerr);
             ::omlog().disable();
             ::omout().disable();
+            ::omerr().connect(sink);
             return true;
         }();
-        (void)detached;
-        ::omerr().connect(messages);
+        (void)connected;
+        sink.str("");
+        sink.clear();
         ok = OpenMesh::IO::IOManager().read(path, importer, opt);
         ::omerr().flush();
-        ::omerr().disconnect(messages);
+        messages = sink.str();
     }
     // STL holds positions (and face normals) only, but its reader leaves the requested vertex
     // attribute flags set: never trust them for STL
@@ -150,7 +155,7 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         opt -= OpenMesh::IO::Options::VertexColor;
     }
     ImportResult result;
-    result.warnings = summarize(messages.str());
+    result.warnings = summarize(messages);
     if (!ok) {
         std::string reason = result.warnings.empty() ? "the " + extension + " reader rejected it" : result.warnings.front();
         throw ImportError(path + ": cannot read as ." + extension + ": " + reason);

@@ -58,7 +58,8 @@ std::optional<ErrorCurve> read_error_curve(const MeshView& mesh) {
     c.diagonal = getf(v.data + 8);
     c.k_mean = getf(v.data + 12);
     c.k_max = getf(v.data + 16);
-    if (!std::isfinite(c.diagonal) || !std::isfinite(c.k_mean) || !std::isfinite(c.k_max)) return std::nullopt;
+    if (!std::isfinite(c.diagonal) || !std::isfinite(c.k_mean) || !std::isfinite(c.k_max) || c.k_mean < 0 || c.k_max < 0 || c.diagonal < 0)
+        return std::nullopt;  // (a negative k would make estimate_error() negative)
     for (uint32_t i = 0; i < count; ++i) {
         const uint8_t* p = v.data + kHeaderBytes + size_t(i) * kPointBytes;
         ErrorCurvePoint q{get32(p), get32(p + 4), getf(p + 8), getf(p + 12)};

@@ -360,6 +360,14 @@ File File::from_bytes(const void* bytes, size_t size, const std::string& name, c
     return File(std::move(impl));
 }
 
+void validate_bytes(const void* bytes, size_t size, const std::string& name, const OpenOptions& options) {
+    File::Impl impl;
+    impl.path = name;
+    impl.data = size > 0 ? static_cast<const uint8_t*>(bytes) : reinterpret_cast<const uint8_t*>("");
+    impl.size = size;
+    impl.validate(options);
+}
+
 const std::string& File::path() const noexcept { return impl_->path; }
 uint32_t File::version_major() const noexcept { return impl_->version_major; }
 uint32_t File::version_minor() const noexcept { return impl_->version_minor; }

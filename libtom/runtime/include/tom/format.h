@@ -56,9 +56,14 @@ public:
 
 private:
     struct Impl;
+    friend void validate_bytes(const void*, size_t, const std::string&, const OpenOptions&);
     explicit File(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };
+
+/// Checks `bytes` against every rule of FORMAT.md in place, keeping nothing: what File::open
+/// would accept. `name` stands for the path in messages. \throw FormatError.
+void validate_bytes(const void* bytes, size_t size, const std::string& name, const OpenOptions& options = {});
 
 /// CRC-32 (IEEE 802.3, reflected, as zlib's crc32) of a byte range.
 uint32_t crc32(const void* data, size_t bytes, uint32_t crc = 0) noexcept;

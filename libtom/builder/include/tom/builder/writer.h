@@ -21,7 +21,10 @@ struct WriteOptions {
     IndexSize index_size = IndexSize::automatic;
 };
 
-/// The complete file image of `meshes`. Deterministic: equal inputs give equal bytes.
+/// The complete file image of `meshes`. Deterministic: equal inputs give equal bytes. The image
+/// is validated as the reader would (\throw tom::ArgumentError when it breaks a rule, such as a
+/// mesh's material index past the scene's materials): no writer call produces a file the reader
+/// rejects.
 std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
 /// The same with a scene: its materials and instances are stored in the file-level sections.
 /// \pre every instance names a mesh < meshes.size() (\throw tom::ArgumentError otherwise).
