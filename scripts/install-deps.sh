@@ -15,6 +15,7 @@ packages=(
   libosmesa6-dev libegl-dev libgl-dev libstb-dev  # headless rendering (Mesa), PNG screenshots
   python3 python3-matplotlib python3-jsonschema   # plots; report schema check in the tests
   valgrind                             # instruction counts in benchmarks
+  clang libclang-rt-14-dev             # libFuzzer and the sanitizers' runtime (scripts/fuzz.sh, CI's sanitizer run)
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
 )
 

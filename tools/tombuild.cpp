@@ -1,11 +1,20 @@
 // tombuild: converts mesh files (OBJ, PLY, OFF, STL, glTF, GLB) or folders of them into .tom files.
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <new>
 #include <thread>
+
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "tom/builder/builder.h"
 #include "tom/errors.h"
@@ -37,6 +46,9 @@ struct Options {
     uint64_t seed = 1;
     bool no_error_curve = false;
     uint32_t curve_points = 16;
+    double timeout_seconds = 3600;  // per input
+    double max_memory_mb = 0;       // per input; 0: three quarters of the machine's memory over the jobs
+    bool isolate = true;            // each input in a worker process of its own
 };
 
 struct Outcome {
@@ -146,9 +158,130 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
         if (opt.verbose > 0)
             for (const std::string& w : imported.warnings) out.text += "  warning: " + w + "\n";
         out.ok = true;
+    } catch (const std::bad_alloc&) {
+        out.text = "error: " + job.input + ": needs more memory than this process may take" +
+                   (opt.isolate ? " (--max-memory " + std::to_string(int64_t(opt.max_memory_mb)) + " MB)" : std::string()) + "\n";
     } catch (const std::exception& e) {
         out.text = std::string("error: ") + e.what() + "\n";
     }
+    return out;
+}
+
+// --- worker processes ---------------------------------------------------------------------
+// Each input is converted in a child process with an address-space limit, watched for a time
+// limit: a crash, a hang or a memory-hungry reader fails that input alone, with a message naming
+// it and the cause, while the batch goes on. The child sends its Outcome back through a pipe.
+
+void put_string(std::string& wire, const std::string& s) {
+    const uint64_t n = s.size();
+    wire.append(reinterpret_cast<const char*>(&n), sizeof n);
+    wire += s;
+}
+bool get_string(const std::string& wire, size_t& at, std::string& s) {
+    uint64_t n = 0;
+    if (at + sizeof n > wire.size()) return false;
+    std::memcpy(&n, wire.data() + at, sizeof n);
+    at += sizeof n;
+    if (n > wire.size() - at) return false;
+    s.assign(wire, at, size_t(n));
+    at += size_t(n);
+    return true;
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;  // its shadow memory needs the whole address space
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
+// The temporary files a killed child may have left beside `output` (write_bytes_atomically's).
+void remove_temporaries(const std::string& output, pid_t child) {
+    std::error_code ec;
+    const fs::path out(output);
+    const std::string prefix = out.filename().string() + ".tmp." + std::to_string(child) + ".";
+    for (const fs::directory_entry& e : fs::directory_iterator(out.parent_path().empty() ? "." : out.parent_path(), ec))
+        if (e.path().filename().string().rfind(prefix, 0) == 0) fs::remove(e.path(), ec);
+}
+
+Outcome convert_isolated(const tools::Job& job, const Options& opt, const tom::BuildParams& params, const tom::WriteOptions& wopt,
+                         const tom::ReportParams& rparams, const std::string& report_path) {
+    Outcome out;
+    int fds[2];
+    if (::pipe(fds) != 0) return convert(job, opt, params, wopt, rparams, report_path);
+    std::fflush(stdout);
+    std::fflush(stderr);
+    const pid_t child = ::fork();
+    if (child < 0) {
+        ::close(fds[0]);
+        ::close(fds[1]);
+        return convert(job, opt, params, wopt, rparams, report_path);
+    }
+    if (child == 0) {
+        ::close(fds[0]);
+        if (!kAddressSanitizer && opt.max_memory_mb > 0) {
+            const rlim_t bytes = rlim_t(opt.max_memory_mb * 1024.0 * 1024.0);
+            const struct rlimit limit = {bytes, bytes};
+            ::setrlimit(RLIMIT_AS, &limit);
+        }
+        const Outcome r = convert(job, opt, params, wopt, rparams, report_path);
+        std::string wire(1, r.ok ? '1' : '0');
+        put_string(wire, r.text);
+        put_string(wire, r.summary_csv);
+        for (size_t at = 0; at < wire.size();) {
+            const ssize_t n = ::write(fds[1], wire.data() + at, wire.size() - at);
+            if (n <= 0) break;
+            at += size_t(n);
+        }
+        ::close(fds[1]);
+        ::_exit(0);
+    }
+    ::close(fds[1]);
+    // read what the child sends until it closes the pipe, or the time limit passes
+    std::string wire;
+    const auto start = std::chrono::steady_clock::now();
+    bool timed_out = false;
+    for (char buffer[65536];;) {
+        const double left = opt.timeout_seconds - seconds_since(start);
+        if (left <= 0) {
+            timed_out = true;
+            break;
+        }
+        struct pollfd pfd = {fds[0], POLLIN, 0};
+        const int ready = ::poll(&pfd, 1, int(std::min(left * 1000.0, 1000.0)) + 1);
+        if (ready < 0 && errno == EINTR) continue;
+        if (ready <= 0) continue;
+        const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;
+        wire.append(buffer, size_t(n));
+    }
+    ::close(fds[0]);
+    if (timed_out) ::kill(child, SIGKILL);
+    int status = 0;
+    while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+    }
+    size_t at = 1;
+    if (!timed_out && WIFEXITED(status) && WEXITSTATUS(status) == 0 && !wire.empty() && get_string(wire, at, out.text) &&
+        get_string(wire, at, out.summary_csv)) {
+        out.ok = wire[0] == '1';
+        return out;
+    }
+    remove_temporaries(job.output, child);
+    char reason[256];
+    if (timed_out)
+        std::snprintf(reason, sizeof reason, "took longer than --timeout %g s and was stopped", opt.timeout_seconds);
+    else if (WIFSIGNALED(status))
+        std::snprintf(reason, sizeof reason, "the conversion crashed (signal %d, %s)%s", WTERMSIG(status), strsignal(WTERMSIG(status)),
+                      WTERMSIG(status) == SIGABRT || WTERMSIG(status) == SIGSEGV ? "; at the memory limit a failed allocation can end this way" : "");
+    else
+        std::snprintf(reason, sizeof reason, "the conversion ended without a result (exit status %d)", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    out.text = "error: " + job.input + ": " + reason + "\n";
     return out;
 }
 
@@ -195,6 +328,14 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.01, 1000.0))
         ->group("Reports");
     app.add_option("--seed", opt.seed, "Sampling seed; the same seed gives the same figures (default 1)")->group("Reports");
+    app.add_option("--timeout", opt.timeout_seconds, "Seconds an input may take before it is stopped and reported (default 3600)")
+        ->check(CLI::PositiveNumber)
+        ->group("Batch");
+    app.add_option("--max-memory", opt.max_memory_mb, "MB of address space an input's conversion may take (default: 3/4 of the memory over the jobs)")
+        ->check(CLI::PositiveNumber)
+        ->group("Batch");
+    app.add_flag("!--no-isolate", opt.isolate, "Convert in this process instead of one worker process per input (no --timeout or --max-memory)")
+        ->group("Batch");
     app.footer("Exit codes: 0 every input converted, 1 some inputs failed (the others are still written), 2 usage error.\n"
                "Example: tombuild data/meshes/bunny00.off assets/ -o out/ -j 2");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
@@ -218,6 +359,10 @@ int main(int argc, char** argv) {
         const unsigned per_job = std::max(1u, std::max(1u, std::thread::hardware_concurrency()) / std::max(1u, opt.jobs));
         const tom::ReportParams rparams = report_params(opt, per_job);
         if (params.threads == 0) params.threads = per_job;
+        if (opt.max_memory_mb == 0) {
+            const double total_mb = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)) / (1024.0 * 1024.0);
+            opt.max_memory_mb = std::max(1024.0, 0.75 * total_mb / double(std::max(1u, opt.jobs)));
+        }
         std::vector<std::string> summary_rows(jobs.size());
         auto report_path_of = [&](const tools::Job& job) -> std::string {
             if (opt.report_json_dir.empty()) return "";
@@ -230,7 +375,8 @@ int main(int argc, char** argv) {
         std::mutex print_mutex;
         auto worker = [&] {
             for (size_t i; (i = next++) < jobs.size();) {
-                const Outcome r = convert(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]));
+                const Outcome r = opt.isolate ? convert_isolated(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]))
+                                              : convert(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]));
                 std::lock_guard<std::mutex> lock(print_mutex);
                 summary_rows[i] = r.summary_csv;
                 ++done;

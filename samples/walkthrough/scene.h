@@ -26,7 +26,7 @@ struct Scene {
     std::vector<Instance> instances;
 };
 
-/// \throw std::runtime_error naming the file and line.
+/// \throw tom::ParseError naming the file and line; tom::IoError when unreadable.
 Scene read_scene(const std::string& path);
 void write_scene(const std::string& path, const Scene& scene);
 /// A crowd of about 60% of the instances within radius 6 of the origin (any mesh), the rest

@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang, AddressSanitizer, UBSan) in build-fuzz/ and runs one, or
+# all in turn, for as long as asked, from its seed corpus (tests/fuzz/corpus/TARGET, plus seeds
+# made from the sample meshes when data/ holds them) with its format's dictionary.
+# Usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]
+#        scripts/fuzz.sh list
+# A finding ends the run with a non-zero exit and leaves the input in build-fuzz/findings/.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+targets=(reader_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
+         builder_fuzz calibration_fuzz scene_fuzz)
+if [ "${1:-}" = "list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
+[ $# -ge 2 ] || { echo "usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]" >&2; exit 2; }
+target="$1"; seconds="$2"; shift 2
+build="$root/build-fuzz"
+
+CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DTOM_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build "$build" -j "$(nproc)" >/dev/null
+
+dict_of() {
+  case "$1" in
+    reader_fuzz) echo tom ;;
+    import_off_fuzz|builder_fuzz) echo off ;;
+    import_obj_fuzz) echo obj ;;
+    import_ply_fuzz) echo ply ;;
+    import_stl_fuzz) echo stl ;;
+    import_gltf_fuzz|import_glb_fuzz) echo gltf ;;
+    calibration_fuzz) echo calibration ;;
+    scene_fuzz) echo scene ;;
+  esac
+}
+
+# the seeds: the committed ones, and what the samples and tools make (a .tom with coarse corners
+# and 32-bit indices, a Draco glTF with its buffer embedded, meshopt-compressed glTF)
+seed() {
+  local t="$1" corpus="$build/corpus/$1"
+  mkdir -p "$corpus"
+  cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/" 2>/dev/null || true
+  local tools="$root/build/tools" data="$root/data"
+  case "$t" in
+    reader_fuzz)
+      if [ -x "$tools/tombuild" ] && [ ! -f "$corpus/grid64-32bit.tom" ]; then
+        /usr/bin/python3 -c "
+n = 64
+print('OFF'); print(n * n, 2 * (n - 1) * (n - 1), 0)
+for j in range(n):
+    for i in range(n): print(i, j, (i * 7 + j * 3) % 5 * 0.1)
+for j in range(n - 1):
+    for i in range(n - 1):
+        a = j * n + i; print(3, a, a + 1, a + n + 1); print(3, a, a + n + 1, a + n)" > "$build/grid64-32bit.off"
+        "$tools/tombuild" "$build/grid64-32bit.off" -o "$corpus" -q --index-size 32
+      fi ;;
+    import_gltf_fuzz)
+      if [ -f "$data/assimp/glTF2/draco/2CylinderEngine.gltf" ] && [ ! -f "$corpus/draco-embedded.gltf" ]; then
+        /usr/bin/python3 -c "
+import base64, json, sys
+d = json.load(open(sys.argv[1]))
+d['buffers'][0]['uri'] = 'data:application/octet-stream;base64,' + base64.b64encode(open(sys.argv[2], 'rb').read()).decode()
+json.dump(d, open(sys.argv[3], 'w'))" "$data/assimp/glTF2/draco/2CylinderEngine.gltf" "$data/assimp/glTF2/draco/2CylinderEngine.bin" "$corpus/draco-embedded.gltf"
+      fi ;;
+    import_glb_fuzz)
+      local pack="$root/.tools/node_modules/.bin/gltfpack"
+      if [ -x "$pack" ] && [ ! -f "$corpus/cube-meshopt.glb" ]; then
+        "$pack" -i "$root/tests/fuzz/corpus/import_glb_fuzz/cube-lods.glb" -o "$corpus/cube-meshopt.glb" -c >/dev/null 2>&1 || true
+        "$pack" -i "$root/tests/fuzz/corpus/import_glb_fuzz/tetra.glb" -o "$corpus/tetra-quantized.glb" >/dev/null 2>&1 || true
+      fi ;;
+  esac
+}
+
+run() {
+  local t="$1"; shift
+  seed "$t"
+  mkdir -p "$build/findings/$t"
+  echo "fuzz: $t for $seconds s"
+  # -malloc_limit_mb: an allocation of more than this from an input of a few KB is a finding
+  "$build/tests/fuzz/$t" "$build/corpus/$t" -dict="$root/tests/fuzz/dict/$(dict_of "$t").dict" -max_total_time="$seconds" \
+    -rss_limit_mb=2048 -malloc_limit_mb=512 -timeout=20 -max_len=65536 -print_final_stats=1 \
+    -artifact_prefix="$build/findings/$t/" "$@" 2>&1 | grep -E '^(#[0-9]+.*DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
+  return "${PIPESTATUS[0]}"
+}
+
+export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
+status=0
+if [ "$target" = all ]; then
+  for t in "${targets[@]}"; do run "$t" "$@" || status=1; done
+else
+  run "$target" "$@" || status=1
+fi
+exit $status

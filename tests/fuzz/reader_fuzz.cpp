@@ -1,0 +1,47 @@
+// The .tom reader on hostile bytes: open from memory, then everything an engine does with a file
+// it accepted: extraction at several resolutions into 32- and 16-bit buffers (from the coarse
+// corners too), the scene's draw list, the stored error curve and its estimates, geomorphs.
+// A file the reader accepts must never make any of these read or write out of bounds.
+
+#include <cstdint>
+#include <vector>
+
+#include "tom/error_curve.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/scene.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    try {
+        tom::OpenOptions options;
+        options.verify_checksums = size % 2 == 0;  // half the inputs reach the structural rules past a broken checksum
+        const tom::File file = tom::File::from_bytes(data, size, "fuzz.tom", options);
+        std::vector<uint32_t> wide;
+        std::vector<uint16_t> narrow;
+        for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+            const tom::MeshView& m = file.mesh(i);
+            wide.assign(size_t(m.triangle_count) * 3, 0);
+            const uint32_t ns[] = {0, m.min_vertex_count, m.coarse_resolution / 2, m.coarse_resolution, m.coarse_resolution + 1, m.vertex_count / 2,
+                                   m.vertex_count, tom::vertex_count_for_fraction(m, 0.1), tom::vertex_count_for_triangles(m, 7)};
+            for (const uint32_t n : ns) {
+                const tom::Extracted e = tom::extract(m, n, wide.data(), wide.size());
+                for (size_t c = 0; c < size_t(e.triangle_count) * 3; ++c)
+                    if (wide[c] >= e.vertex_count) __builtin_trap();  // an index past the level's vertices
+                if (m.vertex_count <= 65536) {
+                    narrow.assign(wide.size(), 0);
+                    tom::extract(m, n, narrow.data(), narrow.size());
+                }
+                if (n < m.vertex_count) (void)tom::geomorph(m, n, 0.5f);
+            }
+            if (const auto curve = tom::read_error_curve(m)) {
+                for (const double t : {0.0, 1.0, 100.0, double(m.triangle_count), 1e9})
+                    if (!(tom::estimate_error(*curve, t) >= 0)) __builtin_trap();  // never negative, never NaN
+            }
+        }
+        for (const tom::Instance& inst : tom::draw_list(file.scene(), file.mesh_count()))
+            if (inst.mesh >= file.mesh_count()) __builtin_trap();
+    } catch (const tom::FormatError&) {
+    }
+    return 0;
+}
