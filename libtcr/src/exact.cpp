@@ -19,11 +19,10 @@ void solve_exact(const Problem& p, const SelectParams& params, Plan& plan) {
     const Deadline deadline(params.deadline_ms);
     const double budget = variable_budget(p, plan.drawn);
     std::vector<double>& C = plan.work_b;
-    double at_hi = 0, at_lo = 0, mu_max = 0;
+    double at_hi = 0, mu_max = 0;
     for (size_t i = 0; i < n; ++i) {
         if (!plan.drawn[i]) continue;
         at_hi += p.per_tri_ms[i] * p.hi[i];
-        at_lo += p.per_tri_ms[i] * p.lo[i];
         C[i] = p.error[i] > 0 ? closed_form_coefficient(p, i) : 0.0;
         if (C[i] > 0) mu_max = std::max(mu_max, p.hi[i] / C[i]);
     }
@@ -40,7 +39,7 @@ void solve_exact(const Problem& p, const SelectParams& params, Plan& plan) {
             if (plan.drawn[i]) c += p.per_tri_ms[i] * clamp(C[i] * mu, p.lo[i], p.hi[i]);
         return c;
     };
-    // cost(0) = at_lo <= budget < at_hi = cost(mu_max)
+    // cost(0), the minima's, is within the budget (the over-budget policy saw to it) < at_hi = cost(mu_max)
     double a = 0, b = mu_max;
     const double tolerance = std::max(1e-15, params.tolerance * 1e-3);
     for (int it = 0; it < 100; ++it) {

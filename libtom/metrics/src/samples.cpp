@@ -117,6 +117,12 @@ void sort_words(std::vector<uint64_t>& items, std::vector<uint64_t>& other, int 
 void order_morton(std::vector<V3>& points, std::vector<uint64_t>& keys, double& extent, MortonScratch& scratch, unsigned threads,
                   std::vector<uint32_t>* permutation) {
     const size_t n = points.size();
+    if (n == 0) {  // nothing to order (and no first point to take bounds from)
+        keys.clear();
+        extent = 0;
+        if (permutation) permutation->clear();
+        return;
+    }
     // one team for the whole ordering, where the points are many enough to share
     std::unique_ptr<Team> team;
     if (n >= kParallelSortItems && thread_count(threads) > 1) team = std::make_unique<Team>(thread_count(threads), false);
