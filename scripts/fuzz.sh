@@ -75,8 +75,11 @@ run() {
   # -malloc_limit_mb: an allocation of more than this from an input of a few KB is a finding
   "$build/tests/fuzz/$t" "$build/corpus/$t" -dict="$root/tests/fuzz/dict/$(dict_of "$t").dict" -max_total_time="$seconds" \
     -rss_limit_mb=2048 -malloc_limit_mb=512 -timeout=20 -max_len=65536 -print_final_stats=1 \
-    -artifact_prefix="$build/findings/$t/" "$@" 2>&1 | grep -E '^(#[0-9]+.*DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' || true
-  return "${PIPESTATUS[0]}"
+    -artifact_prefix="$build/findings/$t/" "$@" > "$build/findings/$t.log" 2>&1
+  local status=$?
+  grep -E '^(#[0-9]+.*DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' "$build/findings/$t.log" || true
+  [ $status -eq 0 ] || echo "fuzz: $t found something (exit $status): build-fuzz/findings/$t.log"
+  return $status
 }
 
 export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"

@@ -307,6 +307,7 @@ void check_ply(const std::string& path, std::string_view text) {
         if (w[0] == "end_header") break;
         if (w[0] == "comment" || w[0] == "obj_info") continue;
         if (w[0] == "format") {
+            if (!format.empty()) fail(path, line, "a second format line");
             if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian") || w[2] != "1.0")
                 fail(path, line, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
             format = std::string(w[1]);
@@ -328,9 +329,10 @@ void check_ply(const std::string& path, std::string_view text) {
         } else {
             // other lines (an exporter's note without 'comment') are skipped, as OpenMesh does,
             // but its header parser reads words, not lines: a keyword after unknown words ("x
-            // element") is taken as one, and it then loops or reads past its lists
+            // element ..."), and a format or type word there makes it loop: such a line is an error
             for (size_t k = 1; k < w.size(); ++k)
-                if (w[k] == "element" || w[k] == "property" || w[k] == "format" || w[k] == "end_header")
+                if (w[k] == "element" || w[k] == "property" || w[k] == "format" || w[k] == "end_header" || w[k] == "ply" || w[k] == "list" ||
+                    w[k] == "ascii" || w[k] == "binary_little_endian" || w[k] == "binary_big_endian" || ply_type(w[k]).size > 0)
                     fail(path, line, "a header line starting with " + quoted(w[0]) + " has the keyword " + quoted(w[k]) + " after it (expected format, element, property, comment, obj_info or end_header first)");
         }
     }
@@ -338,6 +340,8 @@ void check_ply(const std::string& path, std::string_view text) {
     uint64_t vertices = 0;
     for (const PlyElement& e : elements)
         if (e.name == "vertex") vertices = e.count;
+    for (const PlyElement& e : elements)
+        if (e.name == "face" && e.count > 0 && vertices == 0) fail(path, e.line, "faces without a vertex element before them");
     if (format == "ascii") {
         for (const PlyElement& e : elements) {
             // one instance per line; counts bounded by the lines the file can hold
@@ -456,9 +460,12 @@ void check_obj(const std::string& path, std::string_view text) {
         // what it would follow out of bounds
         // a v, vt or vn line whose numbers do not read adds nothing in OpenMesh, while the counts
         // above (and every later index) took it: such a line is an error
+        // (the stream reads the line's values one after another: only the last may carry a
+        // suffix, which the stream leaves unread, as "3.1+e2" reads 3.1; "1o" before another
+        // value makes that value's read fail)
         auto numbers = [&](size_t count, const char* what) {
             for (size_t k = 1; k <= count; ++k)
-                if (k >= w.size() || !number_prefix(w[k]))
+                if (k >= w.size() || !(k < count ? parse_number(w[k]) : number_prefix(w[k])))
                     fail(path, line, std::string(what) + " needs " + std::to_string(count) + " numbers, found " + (k < w.size() ? quoted(w[k]) : "the end of the line"));
         };
         if (w[0] == "v") {
