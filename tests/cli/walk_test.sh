@@ -63,8 +63,11 @@ for s in ['exact', 'barrier']:
 check "plots of the run" "$src/scripts/plot-walk.py" "$work/real" --format png
 check "the plots exist" test -s "$work/real/frame-times.png" -a -s "$work/real/triangles.png"
 
-# the simulated path: every selector; barrier and exact hold the budget
-check "a simulated path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --simulate --selector all --frames 300 \
+# the simulated path: every selector; barrier and exact hold the budget. Its noise is the
+# calibration's at a fixed 10% of the frame (the measured one follows the machine's load, and
+# the frames over budget with it)
+sed 's/^noise_rel .*/noise_rel 0.1/' "$work/calibration.txt" > "$work/calibration-sim.txt"
+check "a simulated path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration-sim.txt" --simulate --selector all --frames 300 \
   --budget-ms "$budget" --out "$work/sim" --json
 check "barrier and exact hold the budget against simulated noise: none over 1.1x, at most 10% over" /usr/bin/python3 -c "
 import csv
@@ -75,6 +78,7 @@ for s in ['barrier', 'exact']:
     assert max(measured) <= 1.1 * $budget, (s, max(measured))
     over = sum(m > $budget for m in measured)
     assert over <= 30, (s, over)
+    assert sum(measured) / len(measured) <= $budget, (s, sum(measured) / len(measured))
     # the noise is real (bounded by the safety allowance, not by the prediction): many frames take
     # longer than predicted, and the runtime's correction, which follows the measured frames, errs too
     over_prediction = sum(m > float(r['predicted_ms']) + 1e-6 for m, r in zip(measured, rows))
