@@ -9,7 +9,7 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
 scripts/install-deps.sh
 scripts/fetch-samples.sh
-cmake -S "$root" -B "$root/build-asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTOM_SANITIZE=ON -DTOM_BUILD_SAMPLES=OFF >/dev/null
+cmake -S "$root" -B "$root/build-asan" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTOM_SANITIZE=ON -DTOM_BUILD_SAMPLES=OFF -DTOM_BUILD_TOOLS=OFF >/dev/null
 cmake --build "$root/build-asan" -j "$(nproc)"
 export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
