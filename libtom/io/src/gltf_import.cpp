@@ -278,8 +278,6 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             if (pos_index < 0) reader.fail("has no POSITION attribute");
             Mesh mesh;
             mesh.name = stem + "/" + mesh_name + (gm.primitives.size() > 1 ? "#" + std::to_string(pi) : std::string());
-            if (prim.material >= int(model.materials.size()))
-                reader.fail("names material " + std::to_string(prim.material) + ", the file has " + std::to_string(model.materials.size()));
             mesh.material = prim.material;
             mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, PrimitiveReader::Kind::position, 0);
             const size_t n = mesh.positions.size() / 3;

@@ -52,17 +52,10 @@ bool prepare_meshopt(json& doc, std::vector<uint8_t>& bytes, bool binary, const 
         return true;
     }
     // a new GLB: the changed JSON chunk, the original BIN chunk (if any) unchanged
-    const size_t bin_at = 20 + size_t(le32(&bytes[12]));
+    const GlbChunk chunk = glb_second_chunk(bytes);
     std::vector<uint8_t> bin;
-    bool has_bin = false;
-    if (bin_at + 8 <= bytes.size()) {
-        const uint32_t bin_len = le32(&bytes[bin_at]);
-        if (bin_len <= bytes.size() - bin_at - 8) {
-            bin.assign(bytes.begin() + ptrdiff_t(bin_at + 8), bytes.begin() + ptrdiff_t(bin_at + 8 + bin_len));
-            has_bin = true;
-        }
-    }
-    bytes = glb_bytes(text, has_bin ? &bin : nullptr);
+    if (chunk.found) bin.assign(bytes.begin() + ptrdiff_t(chunk.offset), bytes.begin() + ptrdiff_t(chunk.offset + chunk.length));
+    bytes = glb_bytes(text, chunk.found ? &bin : nullptr);
     return true;
 }
 

@@ -10,12 +10,12 @@
 #include "gltf_references.h"
 
 #include <cstring>
-#include <fstream>
-#include <iterator>
 
 #include <draco/compression/decode.h>
 
 #include "glb.h"
+#include "gltf_model.h"
+#include "import_backends.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
@@ -49,36 +49,30 @@ void check_member(const json& doc, const char* list, const char* key, const char
     }
 }
 
-// The bytes of buffer b: the GLB's BIN chunk, a base64 data URI, or a file beside the glTF.
-// Empty when it cannot be had (tinygltf then reports it).
+// The bytes of buffer b as tinygltf will load them: the GLB's BIN chunk, a data URI (decoded by
+// tinygltf's own decoder), or a file beside the glTF. Empty when they cannot be had (tinygltf
+// then reports it).
 std::vector<uint8_t> buffer_bytes(const json& doc, size_t b, const std::vector<uint8_t>& bytes, bool binary, const std::string& base_dir) {
     const json& buffer = doc["buffers"][b];
     if (!buffer.contains("uri")) {
         if (!binary || b != 0 || bytes.size() < 20) return {};
-        const size_t json_end = 20 + size_t(le32(&bytes[12]));
-        if (json_end + 8 > bytes.size()) return {};
-        const uint32_t length = le32(&bytes[json_end]);
-        if (le32(&bytes[json_end + 4]) != 0x004E4942u || length > bytes.size() - json_end - 8) return {};
-        return std::vector<uint8_t>(bytes.begin() + std::ptrdiff_t(json_end + 8), bytes.begin() + std::ptrdiff_t(json_end + 8 + length));
+        const GlbChunk chunk = glb_second_chunk(bytes);
+        if (!chunk.found || chunk.type != kGlbBin) return {};
+        return std::vector<uint8_t>(bytes.begin() + std::ptrdiff_t(chunk.offset), bytes.begin() + std::ptrdiff_t(chunk.offset + chunk.length));
     }
     const std::string uri = buffer["uri"].get<std::string>();
-    if (uri.rfind("data:", 0) == 0) {
-        const size_t comma = uri.find(";base64,");
-        if (comma == std::string::npos) return {};
-        std::vector<uint8_t> out;
-        uint32_t bits = 0;
-        int count = 0;
-        for (size_t i = comma + 8; i < uri.size(); ++i) {
-            const char c = uri[i];
-            int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52 : c == '+' ? 62 : c == '/' ? 63 : -1;
-            if (v < 0) continue;  // padding, line breaks
-            bits = bits << 6 | uint32_t(v);
-            if ((count += 6) >= 8) out.push_back(uint8_t(bits >> (count -= 8)));
-        }
+    std::vector<uint8_t> out;
+    if (tinygltf::IsDataURI(uri)) {
+        std::string mime;
+        if (!tinygltf::DecodeDataURI(&out, mime, uri, 0, false)) out.clear();
         return out;
     }
-    std::ifstream in(base_dir + "/" + uri, std::ios::binary);
-    return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
+    try {
+        out = read_whole_file(base_dir + "/" + uri);
+    } catch (const Error&) {
+        out.clear();
+    }
+    return out;
 }
 
 // A Draco primitive's extension: its view, the accessors it fills, and its attribute ids in the

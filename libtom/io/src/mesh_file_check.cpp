@@ -91,8 +91,10 @@ bool parse_integer(std::string_view s, long long& value) {
 
 // A number as an input stream reads it into a float: decimal digits with an optional sign,
 // point and exponent, within float range (no nan, inf or hexadecimal: the stream stops there,
-// and OpenMesh's readers then read every later value from a failed stream).
-bool parse_number(std::string_view s) {
+// and OpenMesh's readers then read every later value from a failed stream). With `prefix`, only
+// the start of `s` must be such a number: the stream stops where it ends and leaves the rest, so
+// "3.1+e2" reads 3.1 but "%0" reads nothing (OpenMesh's OBJ reader then adds no vertex).
+bool parse_number(std::string_view s, bool prefix = false) {
     size_t i = 0;
     auto digits = [&] {
         const size_t start = i;
@@ -114,15 +116,21 @@ bool parse_number(std::string_view s) {
     long exponent = 0;
     bool has_exponent = false;
     if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
-        ++i;
+        const size_t marker = i++;
         const bool negative = i < s.size() && s[i] == '-';
         if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
         const size_t exponent_start = i;
-        if (!digits()) return false;
-        for (size_t k = exponent_start; k < i && exponent < 100000; ++k) exponent = exponent * 10 + (s[k] - '0');
-        if (negative) exponent = -exponent;
-        has_exponent = true;
+        if (digits()) {
+            for (size_t k = exponent_start; k < i && exponent < 100000; ++k) exponent = exponent * 10 + (s[k] - '0');
+            if (negative) exponent = -exponent;
+            has_exponent = true;
+        } else if (prefix) {
+            i = marker;  // the stream reads no exponent there
+        } else {
+            return false;
+        }
     }
+    if (prefix) s = s.substr(0, i);
     if (i != s.size() || s.size() > 64) return false;
     // the decimal magnitude of the first non-zero digit: within 1e-30..1e30 the value is a
     // finite, normal float, and strtof (what the range check below asks) cannot fail
@@ -140,31 +148,6 @@ bool parse_number(std::string_view s) {
     errno = 0;
     const float value = std::strtof(buffer, nullptr);
     return errno != ERANGE && std::isfinite(value);
-}
-
-// True when an input stream reading a float from `s` succeeds: `s` starts with a number (sign,
-// digits, point, an exponent only when digits follow it) within float range. OpenMesh's OBJ
-// reader reads coordinates this way and takes the rest of the token as the next value's, so
-// "3.1+e2" is 3.1 but "%0" is nothing, and then no vertex is added for its line.
-bool number_prefix(std::string_view s) {
-    size_t i = 0;
-    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
-    size_t digits = 0;
-    while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
-    if (i < s.size() && s[i] == '.') {
-        ++i;
-        while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i, ++digits;
-    }
-    if (digits == 0) return false;
-    if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
-        size_t j = i + 1;
-        if (j < s.size() && (s[j] == '+' || s[j] == '-')) ++j;
-        if (j < s.size() && s[j] >= '0' && s[j] <= '9') {
-            i = j;
-            while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
-        }
-    }
-    return parse_number(s.substr(0, i));
 }
 
 [[noreturn]] void fail(const std::string& path, size_t line, const std::string& problem) {
@@ -465,7 +448,7 @@ void check_obj(const std::string& path, std::string_view text) {
         // value makes that value's read fail)
         auto numbers = [&](size_t count, const char* what) {
             for (size_t k = 1; k <= count; ++k)
-                if (k >= w.size() || !(k < count ? parse_number(w[k]) : number_prefix(w[k])))
+                if (k >= w.size() || !parse_number(w[k], k == count))
                     fail(path, line, std::string(what) + " needs " + std::to_string(count) + " numbers, found " + (k < w.size() ? quoted(w[k]) : "the end of the line"));
         };
         if (w[0] == "v") {
