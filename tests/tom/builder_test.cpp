@@ -180,6 +180,32 @@ TEST_CASE("two coincident copies that are each other's border neighbours build a
     CHECK(tom::active_triangle_count(f.mesh(0), f.mesh(0).min_vertex_count) <= 2);
 }
 
+TEST_CASE("pairs are found at coordinates far past the pair threshold's grid", "[builder][edge][hostile]") {
+    // the builder fuzzer's finding: a cell coordinate of 1e30 / 0.1 overflowed its conversion to
+    // a 64-bit integer (UBSan). Two grids, one on each side of x = 0, scaled far out or given a
+    // tiny threshold, whose facing borders are `gap` apart: those borders still pair up.
+    struct Case {
+        float scale, gap, threshold;
+    };
+    for (const Case c : {Case{1e30f, 0.05f, 0.1f}, Case{3e38f, 1e-3f, 1e-2f}, Case{1.0f, 1e-31f, 1e-30f}}) {
+        INFO(c.scale << " " << c.threshold);
+        tom::Mesh a = tom::make_grid(8, 8, 0.0f);
+        const tom::Mesh b = tom::make_grid(8, 8, 0.0f);
+        const uint32_t base = a.vertex_count();
+        for (size_t i = 0; i < a.positions.size(); i += 3) a.positions[i] = (a.positions[i] - 1.0f) * c.scale;
+        for (size_t i = 0; i < b.positions.size(); i += 3) a.positions.insert(a.positions.end(), {b.positions[i] * c.scale + c.gap, b.positions[i + 1], b.positions[i + 2]});
+        for (uint32_t i : b.indices) a.indices.push_back(i + base);
+        tom::clean_mesh(a);
+        tom::BuildParams params;
+        params.pair_threshold = c.threshold;
+        tom::BuildStats stats;
+        const tom::TomMesh t = tom::build(a, params, &stats);
+        CHECK(stats.pair_candidates >= 2 * 8);  // each border vertex and its neighbour across, both ways
+        const std::vector<uint8_t> bytes = tom::serialize({t});
+        CHECK_NOTHROW(tom::File::from_bytes(bytes.data(), bytes.size(), "far.tom"));
+    }
+}
+
 TEST_CASE("the writer never produces a file the reader rejects", "[builder][format][hostile]") {
     tom::Mesh m = test::generated_meshes()[0].mesh;
     tom::TomMesh t = tom::build(m);

@@ -464,6 +464,7 @@ TEST_CASE("hostile files from the first fuzzing run are errors naming the file a
         {"B-extra-token.ply", ":12: vertex 2: 1 value past its 3 properties, from '-1'"},
         {"C-property-word.ply", ":3: a header line starting with 'l' has the keyword 'property' after it"},
         {"D-element-word.ply", ":3: a header line starting with 'x' has the keyword 'element' after it"},
+        {"K-off-counts-on-keyword-line.off", ":1: '0' after 'NOFF': the vertex, face and edge counts must start the next line"},  // OpenMesh read -1 vertices
         {"J-header-format-words.ply", ":2: a header line starting with 'fmat' has the keyword 'binary_little_endian' after it"},  // a hang
         {"F-draco-no-buffer-views.gltf", ": $.meshes[0].primitives[0].extensions.KHR_draco_mesh_compression.bufferView: names bufferView 0, the file has 0"},
         {"F-draco-no-buffers.gltf", ": $.bufferViews[0].buffer: names buffer 0, the file has 0"},

@@ -233,8 +233,18 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
         uint32_t v;
     };
     std::vector<Cell> cells(b.n);
-    auto cell_key = [&](int64_t x, int64_t y, int64_t z) { return (x * 73856093LL) ^ (y * 19349663LL) ^ (z * 83492791LL); };
-    auto coord = [&](float x) { return int64_t(std::floor(x / t)); };
+    // The hash wraps in unsigned arithmetic; cell coordinates are clamped so that a
+    // far-away or tiny-threshold vertex cannot overflow the conversion to integer.
+    // Clamped vertices share edge cells, which costs candidates, never correctness:
+    // every candidate is checked against t by distance.
+    auto cell_key = [&](int64_t x, int64_t y, int64_t z) {
+        return int64_t((uint64_t(x) * 73856093ULL) ^ (uint64_t(y) * 19349663ULL) ^ (uint64_t(z) * 83492791ULL));
+    };
+    auto coord = [&](float x) {
+        constexpr double kLimit = double(int64_t(1) << 40);
+        const double c = double(std::floor(x / t));
+        return int64_t(c > -kLimit ? (c < kLimit ? c : kLimit) : -kLimit);
+    };
     for (uint32_t v = 0; v < b.n; ++v)
         cells[v] = {cell_key(coord(b.pos[v].x), coord(b.pos[v].y), coord(b.pos[v].z)), v};
     std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& c) { return a.key < c.key || (a.key == c.key && a.v < c.v); });

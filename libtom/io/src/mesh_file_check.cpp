@@ -187,6 +187,10 @@ void check_off(const std::string& path, std::string_view text) {
     if (!parse_off_keyword(words[0], h, other_dimension)) fail(path, in.last_line(), "expected an OFF header keyword, found " + quoted(words[0]));
     if (other_dimension) fail(path, in.last_line(), quoted(words[0]) + ": only three-dimensional vertices are supported");
     h.binary = words.size() > 1 && words[1] == "BINARY";
+    // OpenMesh reads the counts from the line after the keyword's and ignores the rest of the
+    // keyword's line: counts there would be checked here and never read there
+    if (words.size() > (h.binary ? 2u : 1u))
+        fail(path, in.last_line(), quoted(words[h.binary ? 2 : 1]) + " after " + quoted(words[0]) + ": the vertex, face and edge counts must start the next line");
     if (h.binary) {
         // 32-bit little-endian counts and values after the header line
         size_t at = in.offset();
@@ -213,9 +217,8 @@ void check_off(const std::string& path, std::string_view text) {
         }
         return;
     }
-    // the counts may follow the keyword on its line or come on the next one
-    std::vector<std::string_view> counts(words.begin() + 1, words.end());
-    if (counts.empty() && !in.line(counts)) fail(path, in.line_number(), "the file ends before the vertex, face and edge counts");
+    std::vector<std::string_view> counts;
+    if (!in.line(counts)) fail(path, in.line_number(), "the file ends before the vertex, face and edge counts");
     const size_t count_line = in.last_line();
     long long nv = 0, nf = 0;
     if (counts.size() < 2 || !parse_integer(counts[0], nv) || !parse_integer(counts[1], nf) || nv < 0 || nf < 0)
