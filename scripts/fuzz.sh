@@ -5,6 +5,7 @@
 # Usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]
 #        scripts/fuzz.sh list
 # A finding ends the run with a non-zero exit and leaves the input in build-fuzz/findings/.
+# TOM_FUZZ_BUILD=DIR builds and fuzzes in DIR instead (two runs at once need two folders).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 targets=(reader_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
@@ -12,7 +13,7 @@ targets=(reader_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_
 if [ "${1:-}" = "list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 [ $# -ge 2 ] || { echo "usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]" >&2; exit 2; }
 target="$1"; seconds="$2"; shift 2
-build="$root/build-fuzz"
+build="${TOM_FUZZ_BUILD:-$root/build-fuzz}"
 
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DTOM_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build "$build" -j "$(nproc)" >/dev/null
@@ -78,7 +79,7 @@ run() {
     -artifact_prefix="$build/findings/$t/" "$@" > "$build/findings/$t.log" 2>&1
   local status=$?
   grep -E '^(#[0-9]+.*DONE|Done [0-9]+ runs|stat::number_of_executed_units|stat::peak_rss_mb|==[0-9]+==ERROR|SUMMARY|artifact_prefix|Test unit written)' "$build/findings/$t.log" || true
-  [ $status -eq 0 ] || echo "fuzz: $t found something (exit $status): build-fuzz/findings/$t.log"
+  [ $status -eq 0 ] || echo "fuzz: $t found something (exit $status): $build/findings/$t.log"
   return $status
 }
 
