@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# cmake --install puts headers, libraries, tools and a CMake package in a prefix, and the
-# minimal consumer in samples/consumer builds against it with find_package and runs.
+# cmake --install puts headers, libraries, tools, a CMake package and a pkg-config file in a
+# prefix. The consumers of samples/consumer build against it: with find_package (one on the
+# runtime, one C program on tom::c, one linking every component) and with a plain C compiler
+# and pkg-config; each extracts the same level as tomextract, index for index.
 set -euo pipefail
 src="$1"; build="$2"; data="$3"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
 for f in include/tom/extract.h include/tom/format.h include/tom/builder/builder.h include/tom/builder/writer.h \
-         include/tom/io/import.h include/tom/metrics/report.h include/tcr/model.h bin/tombuild bin/tominfo; do
+         include/tom/io/import.h include/tom/metrics/report.h include/tcr/model.h include/tom/tom.h bin/tombuild bin/tominfo; do
   [ -e "$work/prefix/$f" ] || { echo "not installed: $f"; exit 1; }
 done
 # the private headers stay private, and the runtime's headers include nothing of the other libraries
@@ -14,9 +16,31 @@ if find "$work/prefix/include" -name parallel.h -o -name format_layout.h | grep 
 if grep -l '#include "tom/\(builder\|io\|metrics\)/' "$work/prefix"/include/tom/*.h; then echo "a runtime header includes another library's"; exit 1; fi
 ls "$work/prefix"/lib*/cmake/tom/tomConfig.cmake >/dev/null
 cmake -S "$src/samples/consumer" -B "$work/consumer" -DCMAKE_PREFIX_PATH="$work/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$work/consumer" >/dev/null
+cmake --build "$work/consumer" -j 2 >/dev/null
 "$work/prefix/bin/tombuild" "$data/meshes/fandisk.off" -o "$work/out" -q
 out="$("$work/consumer/tom_consumer" "$work/out/fandisk.tom")"
 echo "$out"
 echo "$out" | grep -q "fandisk: 6475 vertices, 12946 triangles; at 10%: .* vertices, 129[0-9] triangles, 38[0-9][0-9] indices"
-echo "1 passed, 0 failed"
+[ "$("$work/consumer/tom_c_consumer" "$work/out/fandisk.tom")" = "$out" ] || { echo "the C consumer's counts differ"; exit 1; }
+
+# a plain C compiler and pkg-config, nothing else
+pc="$(ls -d "$work"/prefix/lib*/pkgconfig | head -1)"
+PKG_CONFIG_PATH="$pc" cc -std=c99 -Wall -Wextra -pedantic -Werror "$src/samples/consumer/consumer.c" -o "$work/c_consumer" \
+  $(PKG_CONFIG_PATH="$pc" pkg-config --cflags --libs tom)
+[ "$("$work/c_consumer" "$work/out/fandisk.tom")" = "$out" ] || { echo "the pkg-config C consumer's counts differ"; exit 1; }
+
+# the same indices as tomextract at 10% and 1%, from each consumer
+for fraction in 0.1 0.01; do
+  "$work/prefix/bin/tomextract" "$work/out/fandisk.tom" --fraction "$fraction" -o "$work/level.obj" >/dev/null
+  grep '^f ' "$work/level.obj" > "$work/level.faces"
+  [ -s "$work/level.faces" ] || { echo "tomextract wrote no faces"; exit 1; }
+  for consumer in "$work/consumer/tom_consumer" "$work/consumer/tom_c_consumer" "$work/c_consumer"; do
+    "$consumer" "$work/out/fandisk.tom" "$fraction" | cmp -s - "$work/level.faces" || { echo "$(basename "$consumer") at $fraction: not tomextract's faces"; exit 1; }
+  done
+done
+
+# every component: import, build, write, map, measure, select
+pipeline="$("$work/consumer/tom_pipeline" "$data/meshes/fandisk.off" "$work/pipeline.tom")"
+echo "$pipeline"
+echo "$pipeline" | grep -Eq "^fandisk: 6475 vertices, 12946 triangles; at 10%: [0-9]+ vertices, 129[0-9] triangles, Hausdorff 0\.[0-9]+% of the diagonal; a 1 ms budget draws [0-9]+ \+ [0-9]+ triangles"
+echo "4 passed, 0 failed"

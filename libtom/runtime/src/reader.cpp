@@ -31,7 +31,7 @@ FormatError::FormatError(std::string path, uint64_t offset, std::string field, i
 
 struct File::Impl {
     std::string path;
-    // either a mapping or an owned copy
+    // a mapping, an owned copy, or the caller's bytes (borrow)
     void* map = nullptr;
     size_t map_bytes = 0;
     std::vector<uint8_t> owned;
@@ -355,6 +355,15 @@ File File::from_bytes(const void* bytes, size_t size, const std::string& name, c
     impl->owned.assign(static_cast<const uint8_t*>(bytes), static_cast<const uint8_t*>(bytes) + size);
     impl->owned.reserve(size + 1);  // non-null data pointer even for size 0
     impl->data = impl->owned.data();
+    impl->size = size;
+    impl->validate(options);
+    return File(std::move(impl));
+}
+
+File File::borrow(const void* bytes, size_t size, const std::string& name, const OpenOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    impl->path = name;
+    impl->data = size > 0 ? static_cast<const uint8_t*>(bytes) : reinterpret_cast<const uint8_t*>("");
     impl->size = size;
     impl->validate(options);
     return File(std::move(impl));

@@ -39,6 +39,9 @@ public:
     static File open(const std::string& path, const OpenOptions& options = {});
     /// Validates a copy of `bytes`; `name` stands for the path in messages. \throw FormatError.
     static File from_bytes(const void* bytes, size_t size, const std::string& name = "<memory>", const OpenOptions& options = {});
+    /// Validates `bytes` and uses them in place, without a copy: the caller keeps them alive
+    /// and unchanged while the File lives. \throw FormatError.
+    static File borrow(const void* bytes, size_t size, const std::string& name = "<memory>", const OpenOptions& options = {});
 
     File(File&&) noexcept;
     File& operator=(File&&) noexcept;

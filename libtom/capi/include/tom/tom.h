@@ -1,0 +1,230 @@
+/* libtom's C API (C99): open a .tom file, read its meshes and scene, extract index buffers at
+ * any resolution, and build .tom files from plain arrays. For engines in C or in any language
+ * that binds a C ABI (Rust, C#, Zig, Odin, ...).
+ *
+ * Contracts that hold for every function:
+ *  - No C++ type or exception crosses this header. A function that can fail returns a
+ *    tom_status; TOM_OK is success. On failure tom_last_error() gives the library's one-line
+ *    message (naming the file, the byte offset and the FORMAT.md rule for a bad .tom file) and
+ *    the out-parameters are left as they were.
+ *  - tom_last_error() is per thread: a failure on one thread never changes another's message.
+ *  - Every pointer a tom_file hands out (views, streams, names, materials) stays valid until
+ *    tom_file_close(); the file is read-only and may be used from several threads at once.
+ *  - Extraction allocates nothing and writes only into the caller's buffer.
+ *
+ * The file format is specified in docs/FORMAT.md; the C++ API is tom/format.h and tom/extract.h.
+ */
+#ifndef TOM_TOM_H
+#define TOM_TOM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define TOM_C_API_VERSION 1
+
+typedef enum tom_status {
+    TOM_OK = 0,
+    TOM_ERROR_FORMAT = 1,   /* a .tom file or buffer breaks docs/FORMAT.md */
+    TOM_ERROR_IO = 2,       /* a file cannot be opened, mapped or written */
+    TOM_ERROR_ARGUMENT = 3, /* a null pointer, an index out of range, a parameter out of its range */
+    TOM_ERROR_MESH = 4,     /* a mesh handed to the builder cannot be used (index past its vertices, non-finite position) */
+    TOM_ERROR_CAPACITY = 5, /* the caller's buffer is smaller than the result */
+    TOM_ERROR_MEMORY = 6,   /* an allocation failed */
+    TOM_ERROR_INTERNAL = 7  /* anything else; the message says what */
+} tom_status;
+
+/* The message of this thread's last failure, or "" when there was none. Valid until this
+ * thread's next failing call. */
+const char* tom_last_error(void);
+/* A constant name for a status: "TOM_OK", "TOM_ERROR_FORMAT", ... */
+const char* tom_status_name(tom_status status);
+/* The library's version, "MAJOR.MINOR.PATCH", and the newest .tom format version it reads. */
+const char* tom_version(void);
+uint32_t tom_format_version_major(void);
+uint32_t tom_format_version_minor(void);
+
+/* ---- files ---------------------------------------------------------------------------- */
+
+typedef struct tom_file tom_file;
+
+/* Maps `path` read-only and validates it against every rule of FORMAT.md (checksums included). */
+tom_status tom_file_open(const char* path, tom_file** out);
+/* Validates `size` bytes at `bytes` and uses them in place, without a copy: the caller keeps
+ * them alive and unchanged until tom_file_close(). `name` (may be NULL: "<memory>") stands for
+ * the path in messages. */
+tom_status tom_file_open_memory(const void* bytes, size_t size, const char* name, tom_file** out);
+/* Releases the file and everything it handed out. NULL is ignored. */
+void tom_file_close(tom_file* file);
+
+uint32_t tom_file_mesh_count(const tom_file* file);
+
+/* One mesh of a file: counts and pointers into its streams, in resolution order (vertex i is
+ * the (i+1)-th to appear; the first n vertices are the mesh at resolution n). Optional streams
+ * are NULL when absent. Filled by tom_file_mesh(); the extraction functions take it. */
+typedef struct tom_mesh_view {
+    const char* name; /* UTF-8, `name_length` bytes, not terminated */
+    size_t name_length;
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    uint32_t min_vertex_count; /* the coarsest resolution */
+    uint32_t index_size;       /* bytes per stored index: 2 or 4 */
+    int32_t material;          /* index into the file's materials, or -1 */
+    uint32_t reserved0;
+    const float* positions;  /* xyz per vertex */
+    const float* normals;    /* xyz per vertex, or NULL */
+    const float* texcoords;  /* uv per vertex (TEXCOORD_0), or NULL */
+    const float* colors;     /* rgba per vertex, or NULL */
+    const float* texcoords1; /* uv per vertex (TEXCOORD_1), or NULL */
+    const float* tangents;   /* xyzw per vertex (w = +1 or -1), or NULL */
+    const void* substitute;  /* index_size bytes per vertex: its substitute */
+    const void* triangles;   /* index_size bytes * 3 per triangle, in death order */
+    float bounds_min[3];
+    float bounds_max[3];
+    const void* internal; /* the library's view of this mesh: do not change */
+} tom_mesh_view;
+
+/* Fills `out` for mesh `index` (< tom_file_mesh_count). */
+tom_status tom_file_mesh(const tom_file* file, uint32_t index, tom_mesh_view* out);
+
+/* ---- resolutions and extraction ------------------------------------------------------- */
+
+/* The resolution (vertex count) whose triangle count is the given fraction in [0, 1] of the
+ * mesh's, or at least the given number of triangles; and the triangles alive at a resolution.
+ * A NULL or unfilled view gives 0. */
+uint32_t tom_vertex_count_for_fraction(const tom_mesh_view* mesh, double fraction);
+uint32_t tom_vertex_count_for_triangles(const tom_mesh_view* mesh, uint32_t triangle_count);
+uint32_t tom_active_triangle_count(const tom_mesh_view* mesh, uint32_t vertex_count);
+
+typedef struct tom_extracted {
+    uint32_t vertex_count;   /* n: draw vertices [0, n) of the streams */
+    uint32_t triangle_count; /* triangles written, 3 indices each */
+} tom_extracted;
+
+/* Writes the index buffer at resolution `vertex_count` (clamped to [min_vertex_count,
+ * vertex_count]) into `out`, which holds `capacity` indices. 3 * triangle_count indices always
+ * suffice; a smaller buffer that cannot hold the level gives TOM_ERROR_CAPACITY and writes
+ * nothing useful. The u16 form needs a resolution of at most 65536 vertices. Allocates nothing. */
+tom_status tom_extract_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uint32_t* out, size_t capacity, tom_extracted* result);
+tom_status tom_extract_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_extracted* result);
+
+/* Vertex n at the fractional resolution n + a (a in [0, 1]): a geomorph between n and n + 1
+ * (tom::geomorph in tom/extract.h). Streams the mesh lacks are zero. */
+typedef struct tom_morphed_vertex {
+    uint32_t index;
+    float position[3];
+    float normal[3];
+    float texcoord[2];
+    float color[4];
+    float texcoord1[2];
+    float tangent[4];
+} tom_morphed_vertex;
+tom_status tom_geomorph(const tom_mesh_view* mesh, uint32_t n, float a, tom_morphed_vertex* out);
+
+/* ---- the scene: materials and instances ----------------------------------------------- */
+
+typedef enum tom_texture_role {
+    TOM_TEXTURE_BASE_COLOR = 0,
+    TOM_TEXTURE_METALLIC_ROUGHNESS = 1,
+    TOM_TEXTURE_NORMAL = 2,
+    TOM_TEXTURE_OCCLUSION = 3,
+    TOM_TEXTURE_EMISSIVE = 4
+} tom_texture_role;
+
+typedef struct tom_texture {
+    uint32_t role;      /* a tom_texture_role */
+    uint32_t texcoord;  /* the TEXCOORD_n set it samples */
+    const char* uri;    /* as written in the source asset, relative to it; "" for an embedded image */
+    const char* mime_type; /* or "" */
+} tom_texture;
+
+typedef enum tom_alpha_mode { TOM_ALPHA_OPAQUE = 0, TOM_ALPHA_MASK = 1, TOM_ALPHA_BLEND = 2 } tom_alpha_mode;
+
+typedef struct tom_material {
+    const char* name; /* terminated, possibly "" */
+    float base_color[4];
+    float metallic;
+    float roughness;
+    float emissive[3];
+    uint32_t alpha_mode; /* a tom_alpha_mode */
+    float alpha_cutoff;
+    int double_sided;
+    const tom_texture* textures;
+    uint32_t texture_count;
+} tom_material;
+
+typedef struct tom_instance {
+    uint32_t mesh;      /* the mesh drawn */
+    uint32_t node;      /* the source node */
+    const char* name;   /* the node's name, terminated, possibly "" */
+    float transform[16]; /* object to world, column-major */
+} tom_instance;
+
+uint32_t tom_file_material_count(const tom_file* file);
+tom_status tom_file_material(const tom_file* file, uint32_t index, tom_material* out);
+/* What to draw: the file's instances, or, when it stores none, every mesh once with the
+ * identity transform (tom::draw_list). */
+uint32_t tom_file_instance_count(const tom_file* file);
+tom_status tom_file_instance(const tom_file* file, uint32_t index, tom_instance* out);
+
+/* ---- building ------------------------------------------------------------------------- */
+
+/* Memory the library hands to the caller (tom_build_memory's bytes). NULL functions mean
+ * malloc and free. The library's working memory while it builds is its own. */
+typedef struct tom_allocator {
+    void* (*allocate)(void* user, size_t bytes);
+    void (*release)(void* user, void* pointer);
+    void* user;
+} tom_allocator;
+
+/* A mesh to build, from strided arrays. A stride of 0 means tightly packed. Optional streams
+ * are NULL. Triangles are counter-clockwise. */
+typedef struct tom_build_mesh {
+    const char* name; /* may be NULL */
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    const float* positions; size_t position_stride;   /* 3 floats per vertex */
+    const float* normals; size_t normal_stride;       /* 3, or NULL: computed */
+    const float* texcoords; size_t texcoord_stride;   /* 2 */
+    const float* colors; size_t color_stride;         /* 4 */
+    const float* texcoords1; size_t texcoord1_stride; /* 2 */
+    const float* tangents; size_t tangent_stride;     /* 4 */
+    const void* indices;   /* 3 per triangle */
+    uint32_t index_size;   /* bytes per index: 2 or 4 */
+    int32_t material;      /* -1 for none */
+} tom_build_mesh;
+
+typedef enum tom_predicate { TOM_PREDICATE_QUADRIC = 0, TOM_PREDICATE_MEMORYLESS = 1 } tom_predicate;
+typedef enum tom_strategy { TOM_STRATEGY_PASSES = 0, TOM_STRATEGY_HEAP = 1 } tom_strategy;
+
+/* tombuild's options (docs/TOOLS.md); tom_build_params_default() gives its defaults. */
+typedef struct tom_build_params {
+    uint32_t predicate; /* a tom_predicate */
+    uint32_t strategy;  /* a tom_strategy */
+    float pair_threshold;
+    float pass_fraction;
+    float attribute_weight;
+    float max_rotation_degrees;
+    uint32_t threads;   /* 0: all cores; the output is the same for any count */
+    int foresight;
+    uint32_t index_size; /* stored index width: 0 automatic, 16 or 32 */
+} tom_build_params;
+
+void tom_build_params_default(tom_build_params* params);
+
+/* Builds `mesh_count` meshes into one .tom file image, allocated with `allocator` (NULL:
+ * malloc); the caller owns *out_bytes and releases it with the allocator's release (or free).
+ * `params` may be NULL (the defaults). Deterministic: the same input gives the same bytes. */
+tom_status tom_build_memory(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params,
+                            const tom_allocator* allocator, void** out_bytes, size_t* out_size);
+/* The same, written to `path` atomically (a temporary renamed into place). */
+tom_status tom_build_file(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, const char* path);
+
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+
+#endif /* TOM_TOM_H */

@@ -1,0 +1,365 @@
+// The C API (tom/tom.h) over the C++ libraries: every entry point catches what the C++ side
+// throws and turns it into a tom_status and this thread's message.
+
+#include "tom/tom.h"
+
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "tom/builder/builder.h"
+#include "tom/builder/mesh.h"
+#include "tom/builder/writer.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/scene.h"
+
+#ifndef TOM_VERSION_STRING
+#define TOM_VERSION_STRING "0.0.0"
+#endif
+
+// A file and the C forms of its scene, made once at open so that lookups allocate nothing.
+struct tom_file {
+    explicit tom_file(tom::File f) : file(std::move(f)) {}
+    tom::File file;
+    std::vector<std::vector<tom_texture>> textures;  // per material
+    std::vector<tom::Instance> draw;                 // tom::draw_list
+};
+
+namespace {
+
+thread_local std::string last_error;
+
+tom_status fail(tom_status status, const std::string& message) {
+    last_error = message;
+    return status;
+}
+
+// Runs `body`, which returns a tom_status, turning each exception into its status.
+template <class Body>
+tom_status guarded(Body&& body) noexcept {
+    try {
+        return body();
+    } catch (const tom::FormatError& e) {
+        return fail(TOM_ERROR_FORMAT, e.what());
+    } catch (const tom::IoError& e) {
+        return fail(TOM_ERROR_IO, e.what());
+    } catch (const tom::ImportError& e) {
+        return fail(TOM_ERROR_MESH, e.what());
+    } catch (const tom::ArgumentError& e) {
+        return fail(TOM_ERROR_ARGUMENT, e.what());
+    } catch (const std::bad_alloc&) {
+        return fail(TOM_ERROR_MEMORY, "out of memory");
+    } catch (const std::exception& e) {
+        return fail(TOM_ERROR_INTERNAL, e.what());
+    } catch (...) {
+        return fail(TOM_ERROR_INTERNAL, "unknown error");
+    }
+}
+
+tom_status null_argument(const char* function, const char* argument) {
+    return fail(TOM_ERROR_ARGUMENT, std::string(function) + ": " + argument + " is NULL");
+}
+
+const tom::MeshView* view_of(const tom_mesh_view* mesh) { return mesh ? static_cast<const tom::MeshView*>(mesh->internal) : nullptr; }
+
+tom_file* make_file(tom::File f) {
+    auto* out = new tom_file(std::move(f));
+    const tom::Scene& scene = out->file.scene();
+    for (const tom::Material& m : scene.materials) {
+        std::vector<tom_texture> c;
+        for (const tom::TextureRef& t : m.textures) c.push_back({uint32_t(t.role), t.texcoord, t.uri.c_str(), t.mime_type.c_str()});
+        out->textures.push_back(std::move(c));
+    }
+    out->draw = tom::draw_list(scene, out->file.mesh_count());
+    return out;
+}
+
+template <class Index>
+tom_status extract_into(const char* function, const tom_mesh_view* mesh, uint32_t vertex_count, Index* out, size_t capacity, tom_extracted* result) {
+    const tom::MeshView* v = view_of(mesh);
+    if (!v) return null_argument(function, "mesh");
+    if (!out && capacity > 0) return null_argument(function, "out");
+    if (!result) return null_argument(function, "result");
+    // a buffer of 3 T always suffices; a smaller one must hold this level's triangles
+    if (capacity / 3 < v->triangle_count) {
+        const uint32_t needed = tom::active_triangle_count(*v, vertex_count);
+        if (capacity / 3 < needed)
+            return fail(TOM_ERROR_CAPACITY, std::string(function) + ": the level has " + std::to_string(needed) + " triangles (" + std::to_string(3 * uint64_t(needed)) +
+                                                " indices), the buffer holds " + std::to_string(capacity) + " indices");
+    }
+    if (sizeof(Index) == 2) {
+        const uint32_t n = std::min(std::max(vertex_count, v->min_vertex_count), v->vertex_count);
+        if (n > 65536) return fail(TOM_ERROR_ARGUMENT, std::string(function) + ": resolution " + std::to_string(n) + " has more vertices than 16-bit indices address");
+    }
+    const tom::Extracted e = tom::extract(*v, vertex_count, out, capacity);
+    result->vertex_count = e.vertex_count;
+    result->triangle_count = e.triangle_count;
+    return TOM_OK;
+}
+
+// A strided stream of `components` floats per vertex into a packed vector (empty for NULL).
+tom_status gather(const float* data, size_t stride, uint32_t components, uint32_t vertices, std::vector<float>& out, const char* what) {
+    if (!data) return TOM_OK;
+    const size_t step = stride ? stride : components * sizeof(float);
+    if (step < components * sizeof(float))
+        return fail(TOM_ERROR_ARGUMENT, std::string("tom_build: the ") + what + " stride of " + std::to_string(stride) + " bytes is less than a vertex's " +
+                                            std::to_string(components * sizeof(float)));
+    out.resize(size_t(vertices) * components);
+    const auto* bytes = reinterpret_cast<const unsigned char*>(data);
+    for (uint32_t v = 0; v < vertices; ++v) std::memcpy(&out[size_t(v) * components], bytes + size_t(v) * step, components * sizeof(float));
+    return TOM_OK;
+}
+
+tom_status to_mesh(const tom_build_mesh& in, uint32_t which, tom::Mesh& m) {
+    const std::string where = "tom_build: mesh " + std::to_string(which);
+    if (!in.positions) return fail(TOM_ERROR_ARGUMENT, where + ": positions is NULL");
+    if (!in.indices && in.triangle_count > 0) return fail(TOM_ERROR_ARGUMENT, where + ": indices is NULL");
+    if (in.index_size != 2 && in.index_size != 4) return fail(TOM_ERROR_ARGUMENT, where + ": index_size is " + std::to_string(in.index_size) + ", not 2 or 4");
+    m.name = in.name ? in.name : "mesh" + std::to_string(which);
+    m.material = in.material;
+    const uint32_t n = in.vertex_count;
+    tom_status s;
+    if ((s = gather(in.positions, in.position_stride, 3, n, m.positions, "position")) != TOM_OK) return s;
+    if ((s = gather(in.normals, in.normal_stride, 3, n, m.normals, "normal")) != TOM_OK) return s;
+    if ((s = gather(in.texcoords, in.texcoord_stride, 2, n, m.texcoords, "texcoord")) != TOM_OK) return s;
+    if ((s = gather(in.colors, in.color_stride, 4, n, m.colors, "color")) != TOM_OK) return s;
+    if ((s = gather(in.texcoords1, in.texcoord1_stride, 2, n, m.texcoords1, "texcoord1")) != TOM_OK) return s;
+    if ((s = gather(in.tangents, in.tangent_stride, 4, n, m.tangents, "tangent")) != TOM_OK) return s;
+    m.indices.resize(size_t(in.triangle_count) * 3);
+    for (size_t c = 0; c < m.indices.size(); ++c)
+        m.indices[c] = in.index_size == 2 ? static_cast<const uint16_t*>(in.indices)[c] : static_cast<const uint32_t*>(in.indices)[c];
+    tom::clean_mesh(m);  // throws ImportError naming the mesh for an index past its vertices
+    return TOM_OK;
+}
+
+tom_status build_image(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, std::vector<uint8_t>& image) {
+    if (!meshes && mesh_count > 0) return null_argument("tom_build", "meshes");
+    tom_build_params p;
+    tom_build_params_default(&p);
+    if (params) p = *params;
+    if (p.predicate > 1 || p.strategy > 1) return fail(TOM_ERROR_ARGUMENT, "tom_build: predicate or strategy out of range");
+    if (p.index_size != 0 && p.index_size != 16 && p.index_size != 32)
+        return fail(TOM_ERROR_ARGUMENT, "tom_build: index_size is " + std::to_string(p.index_size) + ", not 0, 16 or 32");
+    tom::BuildParams bp;
+    bp.predicate = p.predicate == TOM_PREDICATE_MEMORYLESS ? tom::Predicate::memoryless : tom::Predicate::quadric;
+    bp.strategy = p.strategy == TOM_STRATEGY_HEAP ? tom::Strategy::heap : tom::Strategy::passes;
+    bp.pair_threshold = p.pair_threshold;
+    bp.pass_fraction = p.pass_fraction;
+    bp.attribute_weight = p.attribute_weight;
+    bp.max_rotation_degrees = p.max_rotation_degrees;
+    bp.threads = p.threads;
+    bp.foresight = p.foresight != 0;
+    std::vector<tom::TomMesh> built;
+    for (uint32_t i = 0; i < mesh_count; ++i) {
+        tom::Mesh m;
+        const tom_status s = to_mesh(meshes[i], i, m);
+        if (s != TOM_OK) return s;
+        built.push_back(tom::build(m, bp));
+    }
+    tom::WriteOptions wo;
+    wo.index_size = p.index_size == 16 ? tom::IndexSize::bits16 : p.index_size == 32 ? tom::IndexSize::bits32 : tom::IndexSize::automatic;
+    image = tom::serialize(built, wo);
+    return TOM_OK;
+}
+
+} // namespace
+
+extern "C" {
+
+const char* tom_last_error(void) { return last_error.c_str(); }
+
+const char* tom_status_name(tom_status status) {
+    switch (status) {
+    case TOM_OK: return "TOM_OK";
+    case TOM_ERROR_FORMAT: return "TOM_ERROR_FORMAT";
+    case TOM_ERROR_IO: return "TOM_ERROR_IO";
+    case TOM_ERROR_ARGUMENT: return "TOM_ERROR_ARGUMENT";
+    case TOM_ERROR_MESH: return "TOM_ERROR_MESH";
+    case TOM_ERROR_CAPACITY: return "TOM_ERROR_CAPACITY";
+    case TOM_ERROR_MEMORY: return "TOM_ERROR_MEMORY";
+    case TOM_ERROR_INTERNAL: return "TOM_ERROR_INTERNAL";
+    }
+    return "TOM_ERROR_UNKNOWN";
+}
+
+const char* tom_version(void) { return TOM_VERSION_STRING; }
+uint32_t tom_format_version_major(void) { return tom::format_version_major; }
+uint32_t tom_format_version_minor(void) { return tom::format_version_minor; }
+
+tom_status tom_file_open(const char* path, tom_file** out) {
+    if (!path) return null_argument("tom_file_open", "path");
+    if (!out) return null_argument("tom_file_open", "out");
+    return guarded([&] {
+        *out = make_file(tom::File::open(path));
+        return TOM_OK;
+    });
+}
+
+tom_status tom_file_open_memory(const void* bytes, size_t size, const char* name, tom_file** out) {
+    if (!bytes && size > 0) return null_argument("tom_file_open_memory", "bytes");
+    if (!out) return null_argument("tom_file_open_memory", "out");
+    return guarded([&] {
+        *out = make_file(tom::File::borrow(bytes, size, name ? name : "<memory>"));
+        return TOM_OK;
+    });
+}
+
+void tom_file_close(tom_file* file) { delete file; }
+
+uint32_t tom_file_mesh_count(const tom_file* file) { return file ? file->file.mesh_count() : 0; }
+
+tom_status tom_file_mesh(const tom_file* file, uint32_t index, tom_mesh_view* out) {
+    if (!file) return null_argument("tom_file_mesh", "file");
+    if (!out) return null_argument("tom_file_mesh", "out");
+    if (index >= file->file.mesh_count())
+        return fail(TOM_ERROR_ARGUMENT, "tom_file_mesh: mesh " + std::to_string(index) + " of a file with " + std::to_string(file->file.mesh_count()));
+    const tom::MeshView& v = file->file.mesh(index);
+    tom_mesh_view c{};
+    c.name = v.name.data();
+    c.name_length = v.name.size();
+    c.vertex_count = v.vertex_count;
+    c.triangle_count = v.triangle_count;
+    c.min_vertex_count = v.min_vertex_count;
+    c.index_size = v.index_size;
+    c.material = v.material;
+    c.positions = v.positions;
+    c.normals = v.normals;
+    c.texcoords = v.texcoords;
+    c.colors = v.colors;
+    c.texcoords1 = v.texcoords1;
+    c.tangents = v.tangents;
+    c.substitute = v.substitute;
+    c.triangles = v.triangles;
+    std::memcpy(c.bounds_min, v.bounds_min, sizeof c.bounds_min);
+    std::memcpy(c.bounds_max, v.bounds_max, sizeof c.bounds_max);
+    c.internal = &v;
+    *out = c;
+    return TOM_OK;
+}
+
+uint32_t tom_vertex_count_for_fraction(const tom_mesh_view* mesh, double fraction) {
+    const tom::MeshView* v = view_of(mesh);
+    return v ? tom::vertex_count_for_fraction(*v, fraction) : 0;
+}
+
+uint32_t tom_vertex_count_for_triangles(const tom_mesh_view* mesh, uint32_t triangle_count) {
+    const tom::MeshView* v = view_of(mesh);
+    return v ? tom::vertex_count_for_triangles(*v, triangle_count) : 0;
+}
+
+uint32_t tom_active_triangle_count(const tom_mesh_view* mesh, uint32_t vertex_count) {
+    const tom::MeshView* v = view_of(mesh);
+    return v ? tom::active_triangle_count(*v, vertex_count) : 0;
+}
+
+tom_status tom_extract_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uint32_t* out, size_t capacity, tom_extracted* result) {
+    return extract_into("tom_extract_u32", mesh, vertex_count, out, capacity, result);
+}
+
+tom_status tom_extract_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_extracted* result) {
+    return extract_into("tom_extract_u16", mesh, vertex_count, out, capacity, result);
+}
+
+tom_status tom_geomorph(const tom_mesh_view* mesh, uint32_t n, float a, tom_morphed_vertex* out) {
+    const tom::MeshView* v = view_of(mesh);
+    if (!v) return null_argument("tom_geomorph", "mesh");
+    if (!out) return null_argument("tom_geomorph", "out");
+    if (n < v->min_vertex_count || n >= v->vertex_count)
+        return fail(TOM_ERROR_ARGUMENT, "tom_geomorph: n = " + std::to_string(n) + " is outside [" + std::to_string(v->min_vertex_count) + ", " + std::to_string(v->vertex_count) + ")");
+    const tom::MorphedVertex m = tom::geomorph(*v, n, a);
+    out->index = m.index;
+    std::memcpy(out->position, m.position, sizeof out->position);
+    std::memcpy(out->normal, m.normal, sizeof out->normal);
+    std::memcpy(out->texcoord, m.texcoord, sizeof out->texcoord);
+    std::memcpy(out->color, m.color, sizeof out->color);
+    std::memcpy(out->texcoord1, m.texcoord1, sizeof out->texcoord1);
+    std::memcpy(out->tangent, m.tangent, sizeof out->tangent);
+    return TOM_OK;
+}
+
+uint32_t tom_file_material_count(const tom_file* file) { return file ? uint32_t(file->file.scene().materials.size()) : 0; }
+
+tom_status tom_file_material(const tom_file* file, uint32_t index, tom_material* out) {
+    if (!file) return null_argument("tom_file_material", "file");
+    if (!out) return null_argument("tom_file_material", "out");
+    const std::vector<tom::Material>& materials = file->file.scene().materials;
+    if (index >= materials.size())
+        return fail(TOM_ERROR_ARGUMENT, "tom_file_material: material " + std::to_string(index) + " of a file with " + std::to_string(materials.size()));
+    const tom::Material& m = materials[index];
+    tom_material c{};
+    c.name = m.name.c_str();
+    std::memcpy(c.base_color, m.base_color, sizeof c.base_color);
+    c.metallic = m.metallic;
+    c.roughness = m.roughness;
+    std::memcpy(c.emissive, m.emissive, sizeof c.emissive);
+    c.alpha_mode = uint32_t(m.alpha_mode);
+    c.alpha_cutoff = m.alpha_cutoff;
+    c.double_sided = m.double_sided ? 1 : 0;
+    c.textures = file->textures[index].empty() ? nullptr : file->textures[index].data();
+    c.texture_count = uint32_t(file->textures[index].size());
+    *out = c;
+    return TOM_OK;
+}
+
+uint32_t tom_file_instance_count(const tom_file* file) { return file ? uint32_t(file->draw.size()) : 0; }
+
+tom_status tom_file_instance(const tom_file* file, uint32_t index, tom_instance* out) {
+    if (!file) return null_argument("tom_file_instance", "file");
+    if (!out) return null_argument("tom_file_instance", "out");
+    if (index >= file->draw.size())
+        return fail(TOM_ERROR_ARGUMENT, "tom_file_instance: instance " + std::to_string(index) + " of " + std::to_string(file->draw.size()));
+    const tom::Instance& i = file->draw[index];
+    out->mesh = i.mesh;
+    out->node = i.node;
+    out->name = i.name.c_str();
+    std::memcpy(out->transform, i.transform, sizeof out->transform);
+    return TOM_OK;
+}
+
+void tom_build_params_default(tom_build_params* params) {
+    if (!params) return;
+    const tom::BuildParams d;
+    params->predicate = TOM_PREDICATE_QUADRIC;
+    params->strategy = TOM_STRATEGY_PASSES;
+    params->pair_threshold = d.pair_threshold;
+    params->pass_fraction = d.pass_fraction;
+    params->attribute_weight = d.attribute_weight;
+    params->max_rotation_degrees = d.max_rotation_degrees;
+    params->threads = d.threads;
+    params->foresight = d.foresight ? 1 : 0;
+    params->index_size = 0;
+}
+
+tom_status tom_build_memory(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, const tom_allocator* allocator, void** out_bytes,
+                            size_t* out_size) {
+    if (!out_bytes) return null_argument("tom_build_memory", "out_bytes");
+    if (!out_size) return null_argument("tom_build_memory", "out_size");
+    return guarded([&] {
+        std::vector<uint8_t> image;
+        const tom_status s = build_image(meshes, mesh_count, params, image);
+        if (s != TOM_OK) return s;
+        void* bytes = allocator && allocator->allocate ? allocator->allocate(allocator->user, image.size()) : std::malloc(image.size());
+        if (!bytes) return fail(TOM_ERROR_MEMORY, "tom_build_memory: the allocator gave no block of " + std::to_string(image.size()) + " bytes");
+        std::memcpy(bytes, image.data(), image.size());
+        *out_bytes = bytes;
+        *out_size = image.size();
+        return TOM_OK;
+    });
+}
+
+tom_status tom_build_file(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, const char* path) {
+    if (!path) return null_argument("tom_build_file", "path");
+    return guarded([&] {
+        std::vector<uint8_t> image;
+        const tom_status s = build_image(meshes, mesh_count, params, image);
+        if (s != TOM_OK) return s;
+        tom::write_bytes_atomically(path, image.data(), image.size());
+        return TOM_OK;
+    });
+}
+
+} // extern "C"

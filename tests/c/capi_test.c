@@ -1,0 +1,269 @@
+/* The C API (tom/tom.h), compiled as C99 with -Wall -Wextra -pedantic -Werror: builds a mesh
+ * from strided arrays through a counting allocator, opens the image in place and from a file,
+ * extracts every level the report uses with both index widths, and checks the failures' statuses
+ * and messages. With a .tom path argument (a real mesh built by tombuild), runs the extraction
+ * checks on each of its meshes too.
+ * Usage: capi_test WORK_DIR [FILE.tom] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "tom/tom.h"
+
+static int failures = 0, checks = 0;
+
+#define CHECK(condition)                                                             \
+    do {                                                                             \
+        ++checks;                                                                    \
+        if (!(condition)) {                                                          \
+            ++failures;                                                              \
+            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #condition); \
+        }                                                                            \
+    } while (0)
+
+/* An allocator that counts what it hands out. */
+typedef struct counting {
+    size_t allocations, releases, bytes;
+} counting;
+
+static void* counting_allocate(void* user, size_t bytes) {
+    counting* c = (counting*)user;
+    ++c->allocations;
+    c->bytes += bytes;
+    return malloc(bytes);
+}
+
+static void counting_release(void* user, void* pointer) {
+    ++((counting*)user)->releases;
+    free(pointer);
+}
+
+/* A height field of n x n vertices, positions and normals interleaved (a stride of 6 floats). */
+typedef struct grid {
+    uint32_t n, vertex_count, triangle_count;
+    float* vertices;
+    uint16_t* indices;
+} grid;
+
+static grid make_grid(uint32_t n) {
+    grid g;
+    uint32_t i, j, t = 0;
+    g.n = n;
+    g.vertex_count = n * n;
+    g.triangle_count = 2 * (n - 1) * (n - 1);
+    g.vertices = malloc(sizeof(float) * 6 * g.vertex_count);
+    g.indices = malloc(sizeof(uint16_t) * 3 * g.triangle_count);
+    for (j = 0; j < n; ++j)
+        for (i = 0; i < n; ++i) {
+            float* v = g.vertices + 6 * (j * n + i);
+            v[0] = (float)i / (float)(n - 1);
+            v[1] = (float)j / (float)(n - 1);
+            v[2] = 0.1f * (float)sin(6.0 * v[0]) * (float)cos(4.0 * v[1]);
+            v[3] = 0.0f, v[4] = 0.0f, v[5] = 1.0f;
+        }
+    for (j = 0; j + 1 < n; ++j)
+        for (i = 0; i + 1 < n; ++i) {
+            const uint16_t a = (uint16_t)(j * n + i);
+            const uint16_t quad[6] = {a, (uint16_t)(a + 1), (uint16_t)(a + n + 1), a, (uint16_t)(a + n + 1), (uint16_t)(a + n)};
+            memcpy(g.indices + 6 * t++, quad, sizeof quad);
+        }
+    return g;
+}
+
+static tom_build_mesh build_input(const grid* g) {
+    tom_build_mesh m;
+    memset(&m, 0, sizeof m);
+    m.name = "grid";
+    m.vertex_count = g->vertex_count;
+    m.triangle_count = g->triangle_count;
+    m.positions = g->vertices;
+    m.position_stride = 6 * sizeof(float);
+    m.normals = g->vertices + 3;
+    m.normal_stride = 6 * sizeof(float);
+    m.indices = g->indices;
+    m.index_size = 2;
+    m.material = -1;
+    return m;
+}
+
+/* Every level of the report's fractions: counts as the queries say, indices in range, no
+ * degenerate triangle, fewer triangles at each coarser level, the same indices in both widths. */
+static void check_levels(const tom_mesh_view* mesh) {
+    static const double fractions[] = {1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01};
+    const size_t capacity = 3 * (size_t)mesh->triangle_count;
+    uint32_t* out32 = malloc(sizeof(uint32_t) * (capacity + 3));
+    uint16_t* out16 = malloc(sizeof(uint16_t) * (capacity + 3));
+    uint32_t previous = mesh->triangle_count + 1;
+    size_t f, c;
+    for (f = 0; f < sizeof fractions / sizeof fractions[0]; ++f) {
+        tom_extracted e, e16;
+        const uint32_t n = tom_vertex_count_for_fraction(mesh, fractions[f]);
+        int in_range = 1, distinct = 1, same = 1;
+        CHECK(n >= mesh->min_vertex_count && n <= mesh->vertex_count);
+        CHECK(tom_extract_u32(mesh, n, out32, capacity, &e) == TOM_OK);
+        CHECK(e.triangle_count == tom_active_triangle_count(mesh, n));
+        CHECK(e.triangle_count <= previous);
+        CHECK(e.triangle_count >= fractions[f] * mesh->triangle_count - 0.5 || n == mesh->min_vertex_count);
+        previous = e.triangle_count;
+        for (c = 0; c < 3 * (size_t)e.triangle_count; ++c) in_range &= out32[c] < e.vertex_count;
+        for (c = 0; c < e.triangle_count; ++c)
+            distinct &= out32[3 * c] != out32[3 * c + 1] && out32[3 * c + 1] != out32[3 * c + 2] && out32[3 * c] != out32[3 * c + 2];
+        CHECK(in_range);
+        CHECK(distinct);
+        if (e.vertex_count <= 65536) {
+            CHECK(tom_extract_u16(mesh, n, out16, capacity, &e16) == TOM_OK);
+            CHECK(e16.vertex_count == e.vertex_count && e16.triangle_count == e.triangle_count);
+            for (c = 0; c < 3 * (size_t)e.triangle_count; ++c) same &= out16[c] == out32[c];
+            CHECK(same);
+        }
+        /* a buffer one triangle too small for this level is refused; an exact one is enough */
+        if (e.triangle_count > 0 && e.triangle_count < mesh->triangle_count) {
+            tom_extracted small;
+            CHECK(tom_extract_u32(mesh, n, out32, 3 * (size_t)e.triangle_count - 3, &small) == TOM_ERROR_CAPACITY);
+            CHECK(strstr(tom_last_error(), "indices") != NULL);
+            CHECK(tom_extract_u32(mesh, n, out32, 3 * (size_t)e.triangle_count, &small) == TOM_OK);
+            CHECK(small.triangle_count == e.triangle_count);
+        }
+    }
+    free(out32);
+    free(out16);
+}
+
+static void check_real_file(const char* path) {
+    tom_file* file = NULL;
+    uint32_t i;
+    CHECK(tom_file_open(path, &file) == TOM_OK);
+    if (!file) {
+        fprintf(stderr, "%s\n", tom_last_error());
+        return;
+    }
+    CHECK(tom_file_mesh_count(file) >= 1);
+    for (i = 0; i < tom_file_mesh_count(file); ++i) {
+        tom_mesh_view mesh;
+        CHECK(tom_file_mesh(file, i, &mesh) == TOM_OK);
+        CHECK(mesh.positions != NULL && mesh.normals != NULL);
+        CHECK(mesh.min_vertex_count < mesh.vertex_count / 10);
+        check_levels(&mesh);
+    }
+    tom_file_close(file);
+}
+
+int main(int argc, char** argv) {
+    char path[4096];
+    grid g = make_grid(40);
+    tom_build_mesh input = build_input(&g);
+    tom_build_params params;
+    counting count = {0, 0, 0};
+    tom_allocator allocator;
+    void* bytes = NULL;
+    size_t size = 0;
+    tom_file *memory = NULL, *mapped = NULL;
+    tom_mesh_view mesh, mesh_mapped;
+    tom_instance instance;
+    tom_morphed_vertex morph;
+    if (argc < 2) {
+        fprintf(stderr, "usage: capi_test WORK_DIR [FILE.tom]\n");
+        return 2;
+    }
+    allocator.allocate = counting_allocate;
+    allocator.release = counting_release;
+    allocator.user = &count;
+    tom_build_params_default(&params);
+    params.threads = 2;
+    CHECK(strcmp(tom_status_name(TOM_ERROR_CAPACITY), "TOM_ERROR_CAPACITY") == 0);
+    CHECK(tom_format_version_major() == 1);
+
+    /* building: the image comes from the caller's allocator, once */
+    CHECK(tom_build_memory(&input, 1, &params, &allocator, &bytes, &size) == TOM_OK);
+    CHECK(count.allocations == 1 && count.bytes == size && bytes != NULL);
+
+    /* in place: the streams point into the caller's bytes */
+    CHECK(tom_file_open_memory(bytes, size, "grid-image", &memory) == TOM_OK);
+    CHECK(tom_file_mesh_count(memory) == 1);
+    CHECK(tom_file_mesh(memory, 0, &mesh) == TOM_OK);
+    CHECK(mesh.vertex_count == g.vertex_count && mesh.triangle_count == g.triangle_count);
+    CHECK(mesh.name_length == 4 && memcmp(mesh.name, "grid", 4) == 0);
+    CHECK((const char*)mesh.positions > (const char*)bytes && (const char*)mesh.positions < (const char*)bytes + size);
+    CHECK(mesh.index_size == 2 && mesh.normals != NULL && mesh.texcoords == NULL);
+    CHECK(mesh.min_vertex_count < mesh.vertex_count / 10);
+    check_levels(&mesh);
+    CHECK(tom_file_mesh(memory, 1, &mesh_mapped) == TOM_ERROR_ARGUMENT);
+    CHECK(strstr(tom_last_error(), "mesh 1 of a file with 1") != NULL);
+
+    /* the scene of a file without one: each mesh once, untransformed */
+    CHECK(tom_file_material_count(memory) == 0);
+    CHECK(tom_file_instance_count(memory) == 1);
+    CHECK(tom_file_instance(memory, 0, &instance) == TOM_OK);
+    CHECK(instance.mesh == 0 && instance.transform[0] == 1.0f && instance.transform[12] == 0.0f);
+
+    /* a geomorph ends at the vertex's own position and starts at its substitute's */
+    {
+        const uint32_t n = mesh.min_vertex_count + 1;
+        const uint32_t s = mesh.index_size == 2 ? ((const uint16_t*)mesh.substitute)[n] : ((const uint32_t*)mesh.substitute)[n];
+        CHECK(tom_geomorph(&mesh, n, 1.0f, &morph) == TOM_OK);
+        CHECK(morph.index == n && morph.position[0] == mesh.positions[3 * n] && morph.position[2] == mesh.positions[3 * n + 2]);
+        CHECK(tom_geomorph(&mesh, n, 0.0f, &morph) == TOM_OK);
+        CHECK(morph.position[0] == mesh.positions[3 * s] && morph.position[1] == mesh.positions[3 * s + 1]);
+        CHECK(tom_geomorph(&mesh, mesh.vertex_count, 0.5f, &morph) == TOM_ERROR_ARGUMENT);
+    }
+
+    /* the same mesh written to a file and mapped gives the same bytes and the same levels */
+    snprintf(path, sizeof path, "%s/capi-grid.tom", argv[1]);
+    CHECK(tom_build_file(&input, 1, &params, path) == TOM_OK);
+    CHECK(tom_file_open(path, &mapped) == TOM_OK);
+    if (mapped) {
+        uint32_t* a = malloc(sizeof(uint32_t) * 3 * mesh.triangle_count);
+        uint32_t* b = malloc(sizeof(uint32_t) * 3 * mesh.triangle_count);
+        tom_extracted ea, eb;
+        const uint32_t n = tom_vertex_count_for_fraction(&mesh, 0.3);
+        CHECK(tom_file_mesh(mapped, 0, &mesh_mapped) == TOM_OK);
+        CHECK(memcmp(mesh_mapped.positions, mesh.positions, sizeof(float) * 3 * mesh.vertex_count) == 0);
+        CHECK(tom_extract_u32(&mesh, n, a, 3 * (size_t)mesh.triangle_count, &ea) == TOM_OK);
+        CHECK(tom_extract_u32(&mesh_mapped, n, b, 3 * (size_t)mesh.triangle_count, &eb) == TOM_OK);
+        CHECK(ea.triangle_count == eb.triangle_count && memcmp(a, b, sizeof(uint32_t) * 3 * ea.triangle_count) == 0);
+        free(a);
+        free(b);
+        tom_file_close(mapped);
+    }
+
+    /* a changed byte is a format error naming the buffer and the rule; the file stays unopened */
+    {
+        unsigned char* copy = malloc(size);
+        tom_file* broken = NULL;
+        memcpy(copy, bytes, size);
+        copy[size / 2] ^= 0x40;
+        CHECK(tom_file_open_memory(copy, size, "flipped", &broken) == TOM_ERROR_FORMAT);
+        CHECK(broken == NULL);
+        CHECK(strncmp(tom_last_error(), "flipped: byte ", 14) == 0 && strstr(tom_last_error(), "rule") != NULL);
+        free(copy);
+    }
+    snprintf(path, sizeof path, "%s/no-such-file.tom", argv[1]);
+    CHECK(tom_file_open(path, &mapped) == TOM_ERROR_IO);
+    CHECK(strstr(tom_last_error(), "no-such-file.tom") != NULL);
+
+    /* a mesh whose index passes its vertices is refused, naming it; nothing is allocated */
+    {
+        const size_t before = count.allocations;
+        void* none = NULL;
+        size_t none_size = 0;
+        g.indices[5] = (uint16_t)g.vertex_count;
+        CHECK(tom_build_memory(&input, 1, &params, &allocator, &none, &none_size) == TOM_ERROR_MESH);
+        CHECK(strstr(tom_last_error(), "grid") != NULL);
+        CHECK(none == NULL && count.allocations == before);
+        input.position_stride = 8; /* less than a position */
+        CHECK(tom_build_memory(&input, 1, &params, &allocator, &none, &none_size) == TOM_ERROR_ARGUMENT);
+        CHECK(strstr(tom_last_error(), "position stride") != NULL);
+    }
+    CHECK(tom_file_open(NULL, &mapped) == TOM_ERROR_ARGUMENT);
+
+    if (argc > 2) check_real_file(argv[2]);
+
+    tom_file_close(memory);
+    allocator.release(allocator.user, bytes);
+    CHECK(count.releases == 1);
+    free(g.vertices);
+    free(g.indices);
+    printf("%d of %d checks passed\n", checks - failures, checks);
+    return failures == 0 ? 0 : 1;
+}
