@@ -29,6 +29,11 @@ PKG_CONFIG_PATH="$pc" cc -std=c99 -Wall -Wextra -pedantic -Werror "$src/samples/
   $(PKG_CONFIG_PATH="$pc" pkg-config --cflags --libs tom)
 [ "$("$work/c_consumer" "$work/out/fandisk.tom")" = "$out" ] || { echo "the pkg-config C consumer's counts differ"; exit 1; }
 
+# Python from the installed package, nothing else on its path
+site="$work/prefix/lib/python3/dist-packages"
+[ -f "$site/tom/__init__.py" ] && ls "$site"/tom/_tom*.so >/dev/null || { echo "the Python package is not installed under $site"; exit 1; }
+[ "$(PYTHONPATH="$site" /usr/bin/python3 "$src/samples/consumer/consumer.py" "$work/out/fandisk.tom")" = "$out" ] || { echo "the Python consumer's counts differ"; exit 1; }
+
 # the same indices as tomextract at 10% and 1%, from each consumer
 for fraction in 0.1 0.01; do
   "$work/prefix/bin/tomextract" "$work/out/fandisk.tom" --fraction "$fraction" -o "$work/level.obj" >/dev/null
@@ -37,10 +42,12 @@ for fraction in 0.1 0.01; do
   for consumer in "$work/consumer/tom_consumer" "$work/consumer/tom_c_consumer" "$work/c_consumer"; do
     "$consumer" "$work/out/fandisk.tom" "$fraction" | cmp -s - "$work/level.faces" || { echo "$(basename "$consumer") at $fraction: not tomextract's faces"; exit 1; }
   done
+  PYTHONPATH="$site" /usr/bin/python3 "$src/samples/consumer/consumer.py" "$work/out/fandisk.tom" "$fraction" | cmp -s - "$work/level.faces" ||
+    { echo "consumer.py at $fraction: not tomextract's faces"; exit 1; }
 done
 
 # every component: import, build, write, map, measure, select
 pipeline="$("$work/consumer/tom_pipeline" "$data/meshes/fandisk.off" "$work/pipeline.tom")"
 echo "$pipeline"
 echo "$pipeline" | grep -Eq "^fandisk: 6475 vertices, 12946 triangles; at 10%: [0-9]+ vertices, 129[0-9] triangles, Hausdorff 0\.[0-9]+% of the diagonal; a 1 ms budget draws [0-9]+ \+ [0-9]+ triangles"
-echo "4 passed, 0 failed"
+echo "5 passed, 0 failed"

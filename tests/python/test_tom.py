@@ -1,0 +1,186 @@
+"""The Python package on real meshes: zero-copy views that keep their file alive, levels equal to
+tomextract's, extraction into caller arrays, building and writing from numpy, every importer,
+reports equal to tombuild's JSON report, errors as tom.Error subclasses, the GIL released.
+
+Run by ctest with PYTHONPATH=build/python, TOM_TOOLS (tombuild, tomextract) and TOM_DATA_DIR."""
+import json
+import os
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import tom
+
+TOOLS = os.environ["TOM_TOOLS"]
+DATA = os.environ["TOM_DATA_DIR"]
+
+
+def tombuild(tmp_path, source, *options):
+    subprocess.run([f"{TOOLS}/tombuild", source, "-o", str(tmp_path), "-q", *options], check=True)
+    return tmp_path / (os.path.splitext(os.path.basename(source))[0] + ".tom")
+
+
+def tomextract_faces(path, fraction, tmp_path):
+    obj = tmp_path / "level.obj"
+    subprocess.run([f"{TOOLS}/tomextract", str(path), "--fraction", str(fraction), "-o", str(obj)], check=True, capture_output=True)
+    faces = [line.split()[1:] for line in obj.read_text().splitlines() if line.startswith("f ")]
+    return np.array([[int(c.split("//")[0]) - 1 for c in f] for f in faces], dtype=np.int64)
+
+
+def grid(n, bump=0.1):
+    i, j = np.meshgrid(np.arange(n), np.arange(n))
+    x, y = i.ravel() / (n - 1), j.ravel() / (n - 1)
+    positions = np.stack([x, y, bump * np.sin(6 * x) * np.cos(4 * y)], axis=1).astype(np.float32)
+    a = (j[:-1, :-1] * n + i[:-1, :-1]).ravel()
+    triangles = np.concatenate([np.stack([a, a + 1, a + n + 1], 1), np.stack([a, a + n + 1, a + n], 1)]).astype(np.uint32)
+    return positions, triangles
+
+
+@pytest.fixture(scope="module")
+def bunny(tmp_path_factory):
+    return tombuild(tmp_path_factory.mktemp("bunny"), f"{DATA}/meshes/bunny00.off")
+
+
+def test_views_are_zero_copy_read_only_and_keep_the_file_alive(bunny):
+    f = tom.open(str(bunny))
+    mesh = f.meshes[0]
+    assert (mesh.vertex_count, len(f)) == (mesh.positions.shape[0], 1)
+    a, b = mesh.positions, mesh.positions
+    assert np.shares_memory(a, b)  # both views of the mapping, not copies
+    assert a.dtype == np.float32 and a.shape == (mesh.vertex_count, 3) and mesh.normals.shape == a.shape
+    assert mesh.triangles.shape == (mesh.triangle_count, 3) and mesh.triangles.dtype == np.uint16
+    with pytest.raises(ValueError):
+        a[0, 0] = 1.0
+    first = a[:4].copy()
+    del f, mesh, b
+    import gc
+    gc.collect()
+    assert np.array_equal(a[:4], first)  # the array keeps the mapping alive
+    # the stored order: every removed vertex's substitute comes before it
+    mesh = tom.open(str(bunny)).meshes[0]
+    s = mesh.substitute.astype(np.int64)
+    k = np.arange(mesh.vertex_count)
+    assert np.all(s[mesh.min_vertex_count:] < k[mesh.min_vertex_count:]) and np.all(s[:mesh.min_vertex_count] == k[:mesh.min_vertex_count])
+
+
+@pytest.mark.parametrize("fraction", [1.0, 0.1, 0.01])
+def test_levels_are_tomextracts_index_for_index(bunny, tmp_path, fraction):
+    mesh = tom.open(str(bunny)).meshes[0]
+    indices, n = mesh.extract(fraction=fraction)
+    expected = tomextract_faces(bunny, fraction, tmp_path)
+    assert indices.shape == expected.shape and np.array_equal(indices.astype(np.int64), expected)
+    assert indices.max() < n and len(indices) == mesh.active_triangles(n)
+
+
+def test_extract_into_out_allocates_nothing_and_checks_its_arguments(bunny):
+    mesh = tom.open(str(bunny)).meshes[0]
+    out32 = np.zeros(3 * mesh.triangle_count, np.uint32)
+    out16 = np.zeros(3 * mesh.triangle_count, np.uint16)
+    i32, n32 = mesh.extract(vertices=5000, out=out32)
+    i16, n16 = mesh.extract(vertices=5000, out=out16)
+    assert np.shares_memory(i32, out32) and np.shares_memory(i16, out16)
+    assert n32 == n16 == 5000 and np.array_equal(i32, i16)
+    t = mesh.active_triangles(5000)
+    assert mesh.extract(triangles=t)[1] == mesh.vertex_count_for(triangles=t)
+    with pytest.raises(tom.ArgumentError, match="out holds 3 indices"):
+        mesh.extract(vertices=5000, out=np.zeros(3, np.uint32))
+    with pytest.raises(tom.ArgumentError, match="one of fraction, vertices and triangles"):
+        mesh.extract(fraction=0.5, vertices=10)
+    with pytest.raises(tom.ArgumentError, match="uint32 or uint16"):
+        mesh.extract(out=np.zeros(3 * mesh.triangle_count, np.float32))
+    with pytest.raises(tom.ArgumentError, match="outside"):
+        mesh.extract(fraction=1.5)
+
+
+def test_build_from_numpy_is_deterministic_and_round_trips(tmp_path):
+    positions, triangles = grid(60)
+    one = tom.build(positions, triangles, threads=1, name="grid")
+    two = tom.build(positions, triangles, threads=2, name="grid")
+    assert tom.serialize([one]) == tom.serialize([two])
+    assert one.min_vertex_count < one.vertex_count // 20
+    assert tom.serialize([tom.build(tom.Mesh(positions, triangles, name="grid"), threads=2)]) == tom.serialize([one])
+    path = tmp_path / "grid.tom"
+    tom.write(str(path), [one])
+    f = tom.open(str(path))
+    assert path.read_bytes() == tom.serialize([one])
+    assert np.array_equal(f.meshes[0].positions, one.positions)
+    for fraction in (0.5, 0.05):
+        assert np.array_equal(f.meshes[0].extract(fraction=fraction)[0], one.extract(fraction=fraction)[0])
+    # in place from a bytes object, which the file keeps alive
+    image = bytearray(tom.serialize([one], index_size="32"))
+    g = tom.open_bytes(image, "image")
+    assert g.meshes[0].triangles.dtype == np.uint32 and g.meshes[0].name == "grid"
+    # every built position is one of the input's, in resolution order
+    assert set(map(tuple, one.positions.tolist())) == set(map(tuple, positions.tolist()))
+
+
+def test_bad_input_raises_the_librarys_message(tmp_path, bunny):
+    data = bytearray(bunny.read_bytes())
+    data[len(data) // 2] ^= 0x10
+    with pytest.raises(tom.FormatError, match=r"^flipped: byte \d+, .*rule \d+"):
+        tom.open_bytes(bytes(data), "flipped")
+    with pytest.raises(tom.IoError, match="no-such.tom"):
+        tom.open(str(tmp_path / "no-such.tom"))
+    with pytest.raises(tom.MeshFileError, match="IndexOutOfRange.gltf"):
+        tom.import_file(f"{DATA}/assimp/glTF2/IndexOutOfRange/IndexOutOfRange.gltf")
+    positions, triangles = grid(4)
+    with pytest.raises(tom.ArgumentError, match="not one of the 16 vertices"):
+        tom.build(positions, np.array([[0, 1, 99]]))
+    with pytest.raises(tom.ArgumentError, match="neither 'quadric' nor 'memoryless'"):
+        tom.build(positions, triangles, predicate="volume")
+    assert issubclass(tom.FormatError, tom.Error) and issubclass(tom.MeshFileError, tom.Error)
+
+
+@pytest.mark.parametrize("source,triangles", [
+    ("meshes/fandisk.off", 12946),
+    ("assimp/OBJ/spider.obj", None),
+    ("assimp/PLY/cube.ply", None),
+    ("assimp/STL/Spider_ascii.stl", None),
+    ("assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf", 12),
+    ("assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", 12),
+    ("assimp/glTF2/draco/2CylinderEngine.gltf", None),
+])
+def test_import_file_reads_every_format_tombuild_reads(source, triangles):
+    meshes = tom.import_file(f"{DATA}/{source}")
+    assert meshes and all(m.positions.shape == (m.vertex_count, 3) and m.triangles.shape == (m.triangle_count, 3) for m in meshes)
+    assert all(int(m.triangles.max()) < m.vertex_count for m in meshes)
+    if triangles is not None:
+        assert sum(m.triangle_count for m in meshes) == triangles
+
+
+def test_report_has_the_json_reports_figures(tmp_path):
+    source = f"{DATA}/meshes/fandisk.off"
+    subprocess.run([f"{TOOLS}/tombuild", source, "-o", str(tmp_path), "-q", "--report-json", str(tmp_path)], check=True)
+    expected = json.loads((tmp_path / "fandisk.json").read_text())
+    expected = expected["meshes"][0] if "meshes" in expected else expected
+    mesh = tom.import_file(source)[0]
+    r = tom.report(mesh, tom.build(mesh))
+    assert r.keys() == expected.keys()
+    assert (r["vertices"], r["triangles"], r["bbox_diagonal"]) == (expected["vertices"], expected["triangles"], expected["bbox_diagonal"])
+    assert len(r["levels"]) == len(expected["levels"])
+    for got, want in zip(r["levels"], expected["levels"]):
+        assert (got["vertices"], got["triangles"]) == (want["vertices"], want["triangles"])
+        assert got["error"]["hausdorff"] == want["error"]["hausdorff"]
+    assert r["memory"] == expected["memory"]
+
+
+def test_the_gil_is_released_while_building():
+    positions, triangles = grid(300)
+    start = time.perf_counter()
+    tom.build(positions, triangles, threads=1)
+    alone = time.perf_counter() - start
+    gaps, last = [], None
+    worker = threading.Thread(target=lambda: tom.build(positions, triangles, threads=1))
+    worker.start()
+    while worker.is_alive():
+        now = time.perf_counter()
+        if last is not None:
+            gaps.append(now - last)
+        last = now
+        time.sleep(0.001)
+    worker.join()
+    # with the GIL held, this loop would stall for the whole build
+    assert alone > 0.05 and max(gaps) < alone / 2
