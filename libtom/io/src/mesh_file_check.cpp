@@ -1,12 +1,17 @@
-// Structural checks of OFF, PLY, OBJ and STL files before OpenMesh reads them.
+// Structural checks of OFF, PLY, OBJ and STL files before OpenMesh reads them, and the canonical
+// text it reads in place of a text file.
 //
 // OpenMesh's readers trust their input: a PLY header with an unknown type or a broken line makes
 // its format detection loop forever or crash, a face announcing a billion corners is read corner
 // by corner past the end of the file, an OBJ face naming a vertex the file does not have is
 // written out of bounds. One pass here finds those (counts against what the file can hold,
-// indices against what it defines, every announced number present) and names the line, so
-// OpenMesh only ever sees files it can read. It checks no more than the readers rely on:
-// values themselves (non-finite coordinates, degenerate faces) are cleaned later.
+// indices against what it defines, every announced number present) and names the line.
+// Checking alone is not enough: wherever OpenMesh's tokenizing differs from this one (a '#'
+// inside a line, a comment before the counts, a value past a face's corners) the two would read
+// different files. So a text file is rewritten as what was checked, one token per value with
+// single spaces, comments and unused lines dropped, OBJ indices made absolute, and OpenMesh
+// reads that. Binary files, whose layout was walked byte by byte, are read as they are.
+// Values themselves (non-finite coordinates, degenerate faces) are cleaned later.
 
 #include "mesh_file_check.h"
 
@@ -94,7 +99,7 @@ bool parse_integer(std::string_view s, long long& value) {
 // and OpenMesh's readers then read every later value from a failed stream). With `prefix`, only
 // the start of `s` must be such a number: the stream stops where it ends and leaves the rest, so
 // "3.1+e2" reads 3.1 but "%0" reads nothing (OpenMesh's OBJ reader then adds no vertex).
-bool parse_number(std::string_view s, bool prefix = false) {
+bool parse_number(std::string_view s, bool prefix = false, size_t* used = nullptr) {
     size_t i = 0;
     auto digits = [&] {
         const size_t start = i;
@@ -132,6 +137,7 @@ bool parse_number(std::string_view s, bool prefix = false) {
     }
     if (prefix) s = s.substr(0, i);
     if (i != s.size() || s.size() > 64) return false;
+    if (used) *used = i;
     // the decimal magnitude of the first non-zero digit: within 1e-30..1e30 the value is a
     // finite, normal float, and strtof (what the range check below asks) cannot fail
     long magnitude = 0;
@@ -156,6 +162,27 @@ bool parse_number(std::string_view s, bool prefix = false) {
 
 std::string quoted(std::string_view s) { return "'" + std::string(s.substr(0, 40)) + (s.size() > 40 ? "...'" : "'"); }
 
+// The canonical text: tokens separated by one space, lines by '\n'.
+struct Canonical {
+    std::string text;
+    void line(std::initializer_list<std::string_view> tokens) {
+        bool first = true;
+        for (std::string_view t : tokens) {
+            if (!first) text += ' ';
+            text.append(t.data(), t.size());
+            first = false;
+        }
+        text += '\n';
+    }
+    void line(const std::vector<std::string_view>& tokens, size_t begin, size_t end) {
+        for (size_t k = begin; k < end; ++k) {
+            if (k > begin) text += ' ';
+            text.append(tokens[k].data(), tokens[k].size());
+        }
+        text += '\n';
+    }
+};
+
 // ---- OFF --------------------------------------------------------------------------------------
 
 // [ST][C][N]OFF [BINARY]: the variants OpenMesh reads (it refuses 4OFF and nOFF)
@@ -178,7 +205,8 @@ bool parse_off_keyword(std::string_view k, OffHeader& h, bool& other_dimension) 
     return take("OFF") && i == k.size();
 }
 
-void check_off(const std::string& path, std::string_view text) {
+// Checks an OFF file; for ASCII, writes the canonical text into `out` (left empty for BINARY).
+void check_off(const std::string& path, std::string_view text, Canonical& out) {
     Tokens in(text);
     std::vector<std::string_view> words;
     if (!in.line(words)) fail(path, 1, "no OFF header");
@@ -226,12 +254,20 @@ void check_off(const std::string& path, std::string_view text) {
     // every vertex and face takes at least a few bytes of text
     if (uint64_t(nv) > text.size() / 4 || uint64_t(nf) > text.size() / 4)
         fail(path, count_line, std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces cannot fit in a file of " + std::to_string(text.size()) + " bytes");
+    const std::string nv_text = std::to_string(nv), nf_text = std::to_string(nf);
+    out.line({words[0]});
+    out.line({nv_text, nf_text, "0"});
     const size_t per_vertex = 3 + (h.normals ? 3 : 0) + (h.texcoords ? 2 : 0);
     for (long long v = 0; v < nv; ++v) {
         if (!in.line(words)) fail(path, in.line_number(), "the file ends after " + std::to_string(v) + " of " + std::to_string(nv) + " vertices");
         if (words.size() < per_vertex) fail(path, in.last_line(), "vertex " + std::to_string(v) + " has " + std::to_string(words.size()) + " numbers, expected at least " + std::to_string(per_vertex));
         for (std::string_view w : words)
             if (!parse_number(w)) fail(path, in.last_line(), "vertex " + std::to_string(v) + ": " + quoted(w) + " is not a number");
+        // a colour (3 or 4 values) only where the keyword announces one; other values are dropped
+        const size_t extra = words.size() - per_vertex;
+        if (h.colors && extra != 3 && extra != 4)
+            fail(path, in.last_line(), "vertex " + std::to_string(v) + ": " + std::to_string(extra) + " values after its " + std::to_string(per_vertex) + ", expected a colour of 3 or 4");
+        out.line(words, 0, h.colors ? words.size() : per_vertex);
     }
     for (long long f = 0; f < nf; ++f) {
         std::string_view t;
@@ -239,13 +275,16 @@ void check_off(const std::string& path, std::string_view text) {
         const size_t line = in.line_number();
         long long n = 0;
         if (!parse_integer(t, n) || n < 1 || n > nv) fail(path, line, "face " + std::to_string(f) + " announces " + quoted(t) + " corners, the file has " + std::to_string(nv) + " vertices");
+        std::vector<std::string_view> face{t};
         for (long long k = 0; k < n; ++k) {
             long long index = 0;
             if (!in.next(t)) fail(path, in.line_number(), "the file ends inside face " + std::to_string(f));
             if (!parse_integer(t, index) || index < 0 || index >= nv)
                 fail(path, in.line_number(), "face " + std::to_string(f) + " refers to vertex " + quoted(t) + ", the file has " + std::to_string(nv));
+            face.push_back(t);
         }
-        if (in.line_number() == line) in.rest_of_line(words);  // a colour may follow the corners
+        if (in.line_number() == line) in.rest_of_line(words);  // a face colour may follow the corners: dropped
+        out.line(face, 0, face.size());
     }
 }
 
@@ -269,6 +308,7 @@ PlyType ply_type(std::string_view t) {
 
 struct PlyProperty {
     std::string name;
+    std::string declaration;  // the header line, canonical
     PlyType type;           // scalar type, or the list's item type
     PlyType count;          // size 0 for a scalar
     bool indices = false;   // the face element's vertex_indices list
@@ -280,7 +320,9 @@ struct PlyElement {
     size_t line = 0;
 };
 
-void check_ply(const std::string& path, std::string_view text) {
+// Checks a PLY file and writes the canonical header into `out`, then the canonical body (ASCII)
+// or the body's bytes as they are (binary).
+void check_ply(const std::string& path, std::string_view text, Canonical& out) {
     Tokens in(text);
     std::vector<std::string_view> w;
     if (!in.line(w) || w.size() != 1 || w[0] != "ply") fail(path, 1, "expected 'ply' on the first line");
@@ -305,10 +347,10 @@ void check_ply(const std::string& path, std::string_view text) {
             if (elements.empty()) fail(path, line, "a property before any element");
             PlyElement& e = elements.back();
             if (w.size() == 3 && ply_type(w[1]).size > 0) {
-                e.properties.push_back({std::string(w[2]), ply_type(w[1]), {}, false});
+                e.properties.push_back({std::string(w[2]), "property " + std::string(w[1]) + " " + std::string(w[2]), ply_type(w[1]), {}, false});
             } else if (w.size() == 5 && w[1] == "list" && ply_type(w[2]).size > 0 && ply_type(w[2]).integer && ply_type(w[3]).size > 0) {
                 const bool indices = e.name == "face" && (w[4] == "vertex_indices" || w[4] == "vertex_index");
-                e.properties.push_back({std::string(w[4]), ply_type(w[3]), ply_type(w[2]), indices});
+                e.properties.push_back({std::string(w[4]), "property list " + std::string(w[2]) + " " + std::string(w[3]) + " " + std::string(w[4]), ply_type(w[3]), ply_type(w[2]), indices});
             } else {
                 fail(path, line, "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' with known types, found " + quoted(w.size() > 1 ? w[1] : w[0]));
             }
@@ -323,6 +365,13 @@ void check_ply(const std::string& path, std::string_view text) {
         }
     }
     if (format.empty()) fail(path, in.line_number(), "the header has no format line");
+    out.line({"ply"});
+    out.line({"format", format, "1.0"});
+    for (const PlyElement& e : elements) {
+        out.line({"element", e.name, std::to_string(e.count)});
+        for (const PlyProperty& p : e.properties) out.line({p.declaration});
+    }
+    out.line({"end_header"});
     uint64_t vertices = 0;
     for (const PlyElement& e : elements)
         if (e.name == "vertex") vertices = e.count;
@@ -359,6 +408,7 @@ void check_ply(const std::string& path, std::string_view text) {
                 if (k < w.size())
                     fail(path, line, e.name + " " + std::to_string(i) + ": " + std::to_string(w.size() - k) + " value" + (w.size() - k > 1 ? "s" : "") +
                                          " past its " + std::to_string(e.properties.size()) + " propert" + (e.properties.size() > 1 ? "ies" : "y") + ", from " + quoted(w[k]));
+                out.line(w, 0, w.size());
             }
         }
         return;
@@ -366,6 +416,7 @@ void check_ply(const std::string& path, std::string_view text) {
     // binary: walk the elements by their sizes, reading list counts (and face indices)
     const bool little = format == "binary_little_endian";
     size_t at = in.offset();
+    out.text.append(text.substr(at));  // after the canonical header, the body as it is
     auto read = [&](PlyType type, double& value) {  // an integer's value (a float's is not needed)
         if (at + size_t(type.size) > text.size()) return false;
         uint8_t b[8];
@@ -419,7 +470,9 @@ void check_ply(const std::string& path, std::string_view text) {
 
 // ---- OBJ --------------------------------------------------------------------------------------
 
-void check_obj(const std::string& path, std::string_view text) {
+// Checks an OBJ file and writes the canonical text into `out`: v, vt, vn and f lines only, the
+// values as OpenMesh's stream would read them, the indices absolute.
+void check_obj(const std::string& path, std::string_view text, Canonical& out) {
     // totals first: OpenMesh reads every v, vt and vn before the faces
     uint64_t v = 0, vt = 0, vn = 0;
     {
@@ -435,10 +488,12 @@ void check_obj(const std::string& path, std::string_view text) {
     std::vector<std::string_view> w;
     // an OBJ index: 1-based, or negative from the end of what is defined so far
     uint64_t seen_v = 0, seen_vt = 0, seen_vn = 0;
+    // the index as an absolute, 1-based number
     auto check_index = [&](std::string_view s, uint64_t total, uint64_t seen, const char* what, size_t line) {
         long long i = 0;
         if (!parse_integer(s, i) || i == 0 || (i > 0 && uint64_t(i) > total) || (i < 0 && uint64_t(-i) > seen))
             fail(path, line, std::string("a face refers to ") + what + " " + quoted(s) + ", the file has " + std::to_string(total));
+        return std::to_string(i > 0 ? uint64_t(i) : seen + 1 - uint64_t(-i));
     };
     while (in.line(w)) {
         const size_t line = in.last_line();
@@ -449,13 +504,23 @@ void check_obj(const std::string& path, std::string_view text) {
         // (the stream reads the line's values one after another: only the last may carry a
         // suffix, which the stream leaves unread, as "3.1+e2" reads 3.1; "1o" before another
         // value makes that value's read fail)
+        // the line's first `count` numbers, the last as far as it reads
         auto numbers = [&](size_t count, const char* what) {
-            for (size_t k = 1; k <= count; ++k)
-                if (k >= w.size() || !parse_number(w[k], k == count))
+            std::vector<std::string_view> values{w[0]};
+            for (size_t k = 1; k <= count; ++k) {
+                size_t used = 0;
+                if (k >= w.size() || !parse_number(w[k], k == count, &used))
                     fail(path, line, std::string(what) + " needs " + std::to_string(count) + " numbers, found " + (k < w.size() ? quoted(w[k]) : "the end of the line"));
+                values.push_back(w[k].substr(0, used));
+            }
+            out.line(values, 0, values.size());
         };
         if (w[0] == "v") {
-            numbers(3, "a vertex");
+            // a colour after the position (v x y z r g b) when all six are numbers
+            bool colour = w.size() == 7;
+            for (size_t k = 1; k < w.size() && colour; ++k) colour = parse_number(w[k]);
+            if (colour) out.line(w, 0, w.size());
+            else numbers(3, "a vertex");
             ++seen_v;
         } else if (w[0] == "vt") {
             numbers(2, "a texture coordinate");
@@ -464,16 +529,19 @@ void check_obj(const std::string& path, std::string_view text) {
             numbers(3, "a normal");
             ++seen_vn;
         } else if (w[0] == "f") {
+            std::string face = "f";
             for (size_t k = 1; k < w.size(); ++k) {
                 const std::string_view c = w[k];
                 const size_t s1 = c.find('/');
-                check_index(c.substr(0, s1), v, seen_v, "vertex", line);
+                face += " " + check_index(c.substr(0, s1), v, seen_v, "vertex", line);
                 if (s1 == std::string_view::npos) continue;
                 const size_t s2 = c.find('/', s1 + 1);
                 const std::string_view t = c.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
-                if (!t.empty()) check_index(t, vt, seen_vt, "texture coordinate", line);
-                if (s2 != std::string_view::npos) check_index(c.substr(s2 + 1), vn, seen_vn, "normal", line);
+                face += "/";
+                if (!t.empty()) face += check_index(t, vt, seen_vt, "texture coordinate", line);
+                if (s2 != std::string_view::npos) face += "/" + check_index(c.substr(s2 + 1), vn, seen_vn, "normal", line);
             }
+            if (w.size() >= 4) out.line({face});  // fewer than three corners make no face
         }
     }
 }
@@ -484,7 +552,7 @@ void check_obj(const std::string& path, std::string_view text) {
 // when its size is 84 + 50 x the triangle count. In ASCII, every line with "outer" is followed
 // by three vertex lines it reads as a word and three numbers, and a "facet normal" line gives
 // three numbers: a line that is missing or does not parse leaves values uninitialised.
-void check_stl(const std::string& path, std::string_view text) {
+void check_stl(const std::string& path, std::string_view text, Canonical& out) {
     // OpenMesh looks at the first non-empty line for "solid" past its spaces and tabs, and reads
     // out of bounds when there is nothing else on it
     size_t start = 0, first_line = 1;
@@ -506,31 +574,45 @@ void check_stl(const std::string& path, std::string_view text) {
     }
     Tokens in(text);
     std::vector<std::string_view> w;
+    out.line({"solid", "tom"});
+    std::vector<std::string_view> normal{"facet", "normal", "0", "0", "0"};
+    std::string normal_text;
     while (in.line(w)) {
-        if (w.size() >= 2 && w[0] == "facet" && w[1] == "normal" && (w.size() < 5 || !parse_number(w[2]) || !parse_number(w[3]) || !parse_number(w[4])))
-            fail(path, in.last_line(), "expected 'facet normal X Y Z'");
+        if (w.size() >= 2 && w[0] == "facet" && w[1] == "normal") {
+            if (w.size() < 5 || !parse_number(w[2]) || !parse_number(w[3]) || !parse_number(w[4])) fail(path, in.last_line(), "expected 'facet normal X Y Z'");
+            normal_text = std::string(w[2]) + " " + std::string(w[3]) + " " + std::string(w[4]);
+        }
         bool outer = false;
         for (std::string_view t : w) outer |= t.find("outer") != std::string_view::npos || t.find("OUTER") != std::string_view::npos;
         if (!outer) continue;
         const size_t line = in.last_line();
+        out.line({"facet normal", normal_text.empty() ? "0 0 0" : normal_text});
+        out.line({"outer loop"});
         for (int k = 0; k < 3; ++k) {
             in.rest_of_line(w);
             if (w.size() < 4 || !parse_number(w[1]) || !parse_number(w[2]) || !parse_number(w[3]))
                 fail(path, line + 1 + size_t(k), "expected 'vertex X Y Z' (corner " + std::to_string(k + 1) + " of the facet opened on line " + std::to_string(line) + ")");
+            out.line({"vertex", w[1], w[2], w[3]});
         }
+        out.line({"endloop"});
+        out.line({"endfacet"});
+        normal_text.clear();
     }
+    out.line({"endsolid", "tom"});
 }
 
 } // namespace
 
-void check_mesh_file(const std::string& path, const std::string& extension) {
-    if (extension != "off" && extension != "ply" && extension != "obj" && extension != "stl") return;
+std::string check_mesh_file(const std::string& path, const std::string& extension) {
+    if (extension != "off" && extension != "ply" && extension != "obj" && extension != "stl") return {};
     const std::vector<uint8_t> bytes = read_whole_file(path);
     const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (extension == "off") check_off(path, text);
-    else if (extension == "ply") check_ply(path, text);
-    else if (extension == "stl") check_stl(path, text);
-    else check_obj(path, text);
+    Canonical out;
+    if (extension == "off") check_off(path, text, out);
+    else if (extension == "ply") check_ply(path, text, out);
+    else if (extension == "stl") check_stl(path, text, out);
+    else check_obj(path, text, out);
+    return std::move(out.text);
 }
 
 } // namespace tom::detail

@@ -118,7 +118,8 @@ std::string file_stem(const std::string& path) {
 }
 
 ImportResult import_openmesh(const std::string& path, const std::string& extension) {
-    check_mesh_file(path, extension);  // OpenMesh's readers trust what the file announces
+    // OpenMesh's readers trust what the file announces: they read the checked, canonical form
+    const std::string canonical = check_mesh_file(path, extension);
     OmMesh om;
     om.request_vertex_normals();
     om.request_vertex_texcoords2D();
@@ -144,7 +145,12 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         (void)connected;
         sink.str("");
         sink.clear();
-        ok = OpenMesh::IO::IOManager().read(path, importer, opt);
+        if (canonical.empty()) {
+            ok = OpenMesh::IO::IOManager().read(path, importer, opt);
+        } else {
+            std::istringstream stream(canonical, std::ios::in | std::ios::binary);
+            ok = OpenMesh::IO::IOManager().read(stream, extension, importer, opt);
+        }
         ::omerr().flush();
         messages = sink.str();
     }
