@@ -17,7 +17,7 @@ packages=(
   valgrind                             # instruction counts in benchmarks
   clang libclang-rt-14-dev             # libFuzzer and the sanitizers' runtime (scripts/fuzz.sh, CI's sanitizer run)
   python3-dev python3-numpy python3-pybind11 python3-pytest   # the Python package (python/) and its tests
-  g++-mingw-w64-x86-64-posix wine64    # the Windows build of the runtime and its tests under wine (scripts/windows.sh)
+  g++-mingw-w64-x86-64-posix wine64    # the Windows build of the runtime and its tests under wine (scripts/portable.sh)
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
 )
 

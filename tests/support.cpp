@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -12,7 +13,11 @@
 
 #include "tom/extract.h"
 #include "tom/builder/generate.h"
+#ifdef TOM_TEST_NO_IMPORT
+#include "tom/format.h"
+#else
 #include "tom/io/import.h"
+#endif
 
 namespace test {
 
@@ -124,18 +129,52 @@ std::vector<NamedMesh> generated_meshes() {
     return out;
 }
 
+#ifdef TOM_TEST_NO_IMPORT
+namespace {
+// Where the importers are not built (the Windows build), the real meshes come from .tom files
+// that tombuild made of the same samples, in TOM_REAL_TOM_DIR (scripts/portable.sh): each
+// mesh at full resolution, its vertices in resolution order.
+std::vector<tom::Mesh> import_from_tom(const std::string& relative) {
+    const char* dir = std::getenv("TOM_REAL_TOM_DIR");
+    INFO("TOM_REAL_TOM_DIR must name the folder of the samples' .tom files (scripts/portable.sh makes it)");
+    REQUIRE(dir != nullptr);
+    std::string stem = relative.substr(relative.find_last_of('/') + 1);
+    stem = stem.substr(0, stem.find_last_of('.'));
+    const std::string path = std::string(dir) + "/" + stem + ".tom";
+    INFO("missing " << path);
+    REQUIRE(std::filesystem::exists(path));
+    const tom::File file = tom::File::open(path);
+    std::vector<tom::Mesh> meshes;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+        const tom::MeshView& v = file.mesh(i);
+        tom::Mesh m;
+        m.name = std::string(v.name);
+        m.positions.assign(v.positions, v.positions + 3 * size_t(v.vertex_count));
+        if (v.normals) m.normals.assign(v.normals, v.normals + 3 * size_t(v.vertex_count));
+        if (v.texcoords) m.texcoords.assign(v.texcoords, v.texcoords + 2 * size_t(v.vertex_count));
+        m.indices.resize(3 * size_t(v.triangle_count));
+        tom::extract(v, v.vertex_count, m.indices.data(), m.indices.size());
+        meshes.push_back(std::move(m));
+    }
+    return meshes;
+}
+} // namespace
+#endif
+
 std::vector<NamedMesh> real_meshes() {
     std::vector<NamedMesh> out;
     auto load = [&](const std::string& rel, bool closed, int euler, int primitive = -1) {
-        tom::ImportResult r = tom::import_file(sample(rel));
-        REQUIRE(!r.meshes.empty());
+#ifdef TOM_TEST_NO_IMPORT
+        std::vector<tom::Mesh> meshes = import_from_tom(rel);
+#else
+        std::vector<tom::Mesh> meshes = tom::import_file(sample(rel)).meshes;
+#endif
+        REQUIRE(!meshes.empty());
         size_t pick = 0;
-        if (primitive < 0)
-            pick = 0;
-        else
-            for (size_t i = 0; i < r.meshes.size(); ++i)
-                if (r.meshes[i].triangle_count() > r.meshes[pick].triangle_count()) pick = i;
-        out.push_back(named(rel, std::move(r.meshes[pick]), closed, euler));
+        if (primitive >= 0)
+            for (size_t i = 0; i < meshes.size(); ++i)
+                if (meshes[i].triangle_count() > meshes[pick].triangle_count()) pick = i;
+        out.push_back(named(rel, std::move(meshes[pick]), closed, euler));
     };
     load("meshes/bunny00.off", true, 2);
     load("meshes/fandisk.off", true, 2);

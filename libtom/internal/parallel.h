@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "platform.h"
+
 namespace tom::detail {
 
 /// An allocator that leaves trivial elements uninitialized where std::allocator value-initializes
@@ -129,9 +131,7 @@ private:
         for (;;) {
             for (int i = 0; i < 64; ++i) {
                 if (ready()) return true;
-#if defined(__x86_64__) || defined(__i386__)
-                __builtin_ia32_pause();
-#endif
+                cpu_relax();
             }
             const auto waited = std::chrono::steady_clock::now() - start;
             if (waited > kSpin) return false;

@@ -15,6 +15,7 @@
 
 #include "parallel.h"
 #include "tom/builder/mesh.h"
+#include "platform.h"
 
 namespace tom::detail {
 
@@ -46,7 +47,7 @@ public:
     void prefetch(uint32_t v) const noexcept {
         if (quadric_.empty()) return;
         const char* q = reinterpret_cast<const char*>(&quadric_[size_t(v) * stride_]);
-        for (size_t byte = 0; byte < stride_ * sizeof(double); byte += 64) __builtin_prefetch(q + byte);
+        for (size_t byte = 0; byte < stride_ * sizeof(double); byte += 64) tom::detail::prefetch(q + byte);
     }
     /// v's quadric merges into u's (v -> u).
     void merge(uint32_t u, uint32_t v) noexcept;

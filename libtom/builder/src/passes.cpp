@@ -21,6 +21,7 @@
 
 #include "radix_sort.h"
 #include "substitution.h"
+#include "platform.h"
 
 namespace tom::build_detail {
 
@@ -501,19 +502,19 @@ private:
         }
         for (uint32_t i = 0; i < next->fan; ++i) {
             const size_t t = next->triangle[i];
-            __builtin_prefetch(&topo_.idx[3 * t], 1);
-            __builtin_prefetch(&topo_.dead[t], 1);
-            __builtin_prefetch(&topo_.death_step[t], 1);
+            tom::detail::prefetch_write(&topo_.idx[3 * t]);
+            tom::detail::prefetch_write(&topo_.dead[t]);
+            tom::detail::prefetch_write(&topo_.death_step[t]);
         }
         if (next->ring == kRingUnknown) return;
         for (uint32_t i = 0; i < next->ring; ++i) {
             const uint32_t w = next->w[i];
-            __builtin_prefetch(&s_.best[w], 1);
-            __builtin_prefetch(&s_.dirty[w], 1);
-            __builtin_prefetch(&s_.has[w]);
-            __builtin_prefetch(&b_.classes.kind[w]);
-            __builtin_prefetch(&b_.classes.wedge[w]);
-            __builtin_prefetch(&ahead_.touched[w], 1);  // (its class's mark: w's own but for coincident copies)
+            tom::detail::prefetch_write(&s_.best[w]);
+            tom::detail::prefetch_write(&s_.dirty[w]);
+            tom::detail::prefetch(&s_.has[w]);
+            tom::detail::prefetch(&b_.classes.kind[w]);
+            tom::detail::prefetch(&b_.classes.wedge[w]);
+            tom::detail::prefetch_write(&ahead_.touched[w]);  // (its class's mark: w's own but for coincident copies)
         }
     }
 

@@ -15,6 +15,7 @@
 #include "parallel.h"
 #include "tom/builder/builder.h"
 #include "vec3.h"
+#include "platform.h"
 
 namespace tom::build_detail {
 
@@ -135,19 +136,19 @@ struct Topology {
         const uint32_t k = uint32_t(c[1] == v) + 2u * uint32_t(c[2] == v);  // v's corner
         a = c[after[k]], b = c[before[k]];
     }
-    void prefetch(uint32_t v) const { __builtin_prefetch(&first[v]); }
+    void prefetch(uint32_t v) const { tom::detail::prefetch(&first[v]); }
     // what splice(v, u) reads
     void prefetch_splice(uint32_t v, uint32_t u) const {
-        __builtin_prefetch(&last[v]);
-        __builtin_prefetch(&first[u], 1);
-        __builtin_prefetch(&last[u], 1);
+        tom::detail::prefetch(&last[v]);
+        tom::detail::prefetch_write(&first[u]);
+        tom::detail::prefetch_write(&last[u]);
     }
     // the second step, once first[v] is in: v's first corner's triangle and link
     void prefetch_fan(uint32_t v) const {
         const uint32_t c = first[v];
         if (c == kNone) return;
-        __builtin_prefetch(&idx[c - c % 3]);
-        __builtin_prefetch(&next[c]);
+        tom::detail::prefetch(&idx[c - c % 3]);
+        tom::detail::prefetch(&next[c]);
     }
     // drops the corners of dead triangles from v's list
     void compact(uint32_t v) {
@@ -328,7 +329,7 @@ struct Builder {
 
     // starts loading what evaluating v's substitutions reads first
     void prefetch(uint32_t v) const {
-        if (!quadric.empty()) __builtin_prefetch(&quadric[v]);
+        if (!quadric.empty()) tom::detail::prefetch(&quadric[v]);
         attributes.prefetch(v);
         topo.prefetch(v);
     }
@@ -471,7 +472,7 @@ struct Builder {
     void merge_quadrics(const std::vector<std::pair<uint32_t, uint32_t>>& merges, size_t i) {
         if (i + 4 < merges.size())
             for (const uint32_t x : {merges[i + 4].first, merges[i + 4].second}) {
-                __builtin_prefetch(&quadric[x]);
+                tom::detail::prefetch(&quadric[x]);
                 attributes.prefetch(x);
             }
         merge_quadrics(merges[i].first, merges[i].second);

@@ -7,10 +7,10 @@
 #include <stdexcept>
 #include <string>
 
-#include <unistd.h>
 
 #include "coarse.h"
 #include "format_layout.h"
+#include "platform.h"
 #include "scene_codec.h"
 #include "tom/errors.h"
 #include "tom/builder/writer.h"
@@ -178,7 +178,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
 
 void write_bytes_atomically(const std::string& path, const void* data, size_t bytes) {
     static std::atomic<unsigned> counter{0};
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+    const std::string tmp = path + ".tmp." + std::to_string(detail::process_id()) + "." + std::to_string(counter++);
     FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) throw IoError("cannot create '" + tmp + "': " + std::strerror(errno));
     const bool ok = std::fwrite(data, 1, bytes, f) == bytes && std::fflush(f) == 0;
@@ -187,10 +187,10 @@ void write_bytes_atomically(const std::string& path, const void* data, size_t by
         std::remove(tmp.c_str());
         throw IoError("cannot write '" + tmp + "': " + std::strerror(write_errno));
     }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        const int e = errno;
+    const std::string failure = detail::replace_file(tmp, path);
+    if (!failure.empty()) {
         std::remove(tmp.c_str());
-        throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + std::strerror(e));
+        throw IoError("cannot rename '" + tmp + "' to '" + path + "': " + failure);
     }
 }
 

@@ -7,13 +7,14 @@
 #include "tom/extract.h"
 
 #include "coarse.h"
+#include "platform.h"
 #include "simd.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 
-#if defined(__x86_64__) || defined(__i386__)
+#if TOM_X86_SIMD
 #include <immintrin.h>
 #endif
 
@@ -116,19 +117,19 @@ void map_corners_scalar(const I* sub, const C* in, O* out, size_t count, uint32_
     for (size_t i = 0; i < count; ++i) out[i] = O(walk(sub, uint32_t(in[i]), n));
 }
 
-#if defined(__x86_64__) || defined(__i386__)
+#if TOM_X86_SIMD
 #define TOM_HAVE_AVX2_PATH 1
 // AVX2: 8 corners at a time; each round gathers substitute[v] for the lanes still >= n, until
 // no lane is. One unpredictable branch per 8 corners instead of one per corner, and the
 // gathers of independent lanes overlap their cache misses.
 template <class I>
-__attribute__((target("avx2"))) inline __m256i load8(const I* in) noexcept {
+TOM_TARGET_AVX2 inline __m256i load8(const I* in) noexcept {
     if (sizeof(I) == 4) return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(in));
     return _mm256_cvtepu16_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(in)));
 }
 
 template <class O>
-__attribute__((target("avx2"))) inline void store8(O* out, __m256i v) noexcept {
+TOM_TARGET_AVX2 inline void store8(O* out, __m256i v) noexcept {
     if (sizeof(O) == 4) {
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), v);
     } else {
@@ -138,7 +139,7 @@ __attribute__((target("avx2"))) inline void store8(O* out, __m256i v) noexcept {
 }
 
 template <class I>
-__attribute__((target("avx2"))) inline __m256i gather_substitutes(const I* sub, __m256i v, __m256i mask) noexcept {
+TOM_TARGET_AVX2 inline __m256i gather_substitutes(const I* sub, __m256i v, __m256i mask) noexcept {
     if (sizeof(I) == 4) return _mm256_mask_i32gather_epi32(v, reinterpret_cast<const int*>(sub), v, mask, 4);
     // 16-bit: read the 32-bit word ending at substitute[v] (its high half) so nothing past the
     // array is touched; masked lanes have v >= n >= 1, so 2v - 2 >= 0
@@ -156,7 +157,7 @@ constexpr int kStragglers = 12;
 constexpr size_t kCacheResidentBytes = 256 * 1024;
 
 template <class I, class C, class O>
-__attribute__((target("avx2"))) void map_corners_avx2(const I* sub, size_t vertices, const C* in, O* out, size_t count, uint32_t n) noexcept {
+TOM_TARGET_AVX2 void map_corners_avx2(const I* sub, size_t vertices, const C* in, O* out, size_t count, uint32_t n) noexcept {
     const __m256i limit = _mm256_set1_epi32(int(n));
     const int alone = vertices * sizeof(I) <= kCacheResidentBytes ? kStragglers : -1;  // -1: never
     size_t i = 0;
@@ -172,14 +173,14 @@ __attribute__((target("avx2"))) void map_corners_avx2(const I* sub, size_t verti
             if (_mm256_testz_si256(any, any)) break;
             const uint32_t left = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(g0))) | uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(g1))) << 8 |
                                   uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(g2))) << 16 | uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(g3))) << 24;
-            if (__builtin_popcount(left) <= alone) {
+            if (detail::popcount32(left) <= alone) {
                 alignas(32) uint32_t lanes[32];
                 _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), v0);
                 _mm256_store_si256(reinterpret_cast<__m256i*>(lanes + 8), v1);
                 _mm256_store_si256(reinterpret_cast<__m256i*>(lanes + 16), v2);
                 _mm256_store_si256(reinterpret_cast<__m256i*>(lanes + 24), v3);
                 for (uint32_t m = left; m; m &= m - 1) {
-                    const int k = __builtin_ctz(m);
+                    const int k = detail::trailing_zeros32(m);
                     lanes[k] = walk(sub, lanes[k], n);
                 }
                 v0 = _mm256_load_si256(reinterpret_cast<const __m256i*>(lanes));
@@ -212,7 +213,7 @@ __attribute__((target("avx2"))) void map_corners_avx2(const I* sub, size_t verti
 
 // Full resolution from 16-bit corners into a 32-bit buffer: 16 corners widened per step (the
 // plain loop widens 8 with SSE2)
-__attribute__((target("avx2"))) void widen_avx2(const uint16_t* in, uint32_t* out, size_t count) noexcept {
+TOM_TARGET_AVX2 void widen_avx2(const uint16_t* in, uint32_t* out, size_t count) noexcept {
     size_t i = 0;
     for (; i + 16 <= count; i += 16) {
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + i), load8(in + i));
@@ -222,7 +223,7 @@ __attribute__((target("avx2"))) void widen_avx2(const uint16_t* in, uint32_t* ou
 }
 
 bool cpu_has_avx2() noexcept {
-    static const bool has = __builtin_cpu_supports("avx2") && detail::simd_enabled();
+    static const bool has = detail::cpu_has_avx2() && detail::simd_enabled();
     return has;
 }
 #endif

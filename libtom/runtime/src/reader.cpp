@@ -2,18 +2,13 @@
 // nothing is dereferenced before the rule that makes it safe has passed.
 
 #include <algorithm>
-#include <cerrno>
 #include <cstring>
 #include <string>
 #include <tuple>
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include "coarse.h"
 #include "format_layout.h"
+#include "platform.h"
 #include "scene_codec.h"
 #include "tom/errors.h"
 #include "tom/format.h"
@@ -32,8 +27,7 @@ FormatError::FormatError(std::string path, uint64_t offset, std::string field, i
 struct File::Impl {
     std::string path;
     // a mapping, an owned copy, or the caller's bytes (borrow)
-    void* map = nullptr;
-    size_t map_bytes = 0;
+    detail::MappedFile mapping;
     std::vector<uint8_t> owned;
     const uint8_t* data = nullptr;
     uint64_t size = 0;
@@ -41,10 +35,6 @@ struct File::Impl {
     std::vector<MeshView> meshes;
     std::vector<SectionInfo> sections;
     Scene scene;
-
-    ~Impl() {
-        if (map) ::munmap(map, map_bytes);
-    }
 
     [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
         throw FormatError(path, offset, field, rule, detail);
@@ -323,28 +313,9 @@ File::~File() = default;
 File File::open(const std::string& path, const OpenOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->path = path;
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw IoError("cannot open '" + path + "': " + std::strerror(errno));
-    struct stat st;
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        ::close(fd);
-        throw IoError("cannot read '" + path + "': not a regular file");
-    }
-    impl->size = uint64_t(st.st_size);
-    if (impl->size > 0) {
-        void* p = ::mmap(nullptr, size_t(impl->size), PROT_READ, MAP_PRIVATE, fd, 0);
-        if (p == MAP_FAILED) {
-            const int e = errno;
-            ::close(fd);
-            throw IoError("cannot map '" + path + "': " + std::strerror(e));
-        }
-        impl->map = p;
-        impl->map_bytes = size_t(impl->size);
-        impl->data = static_cast<const uint8_t*>(p);
-    } else {
-        impl->data = reinterpret_cast<const uint8_t*>("");
-    }
-    ::close(fd);
+    impl->mapping = detail::MappedFile::open(path);
+    impl->data = impl->mapping.data();
+    impl->size = impl->mapping.size();
     impl->validate(options);
     return File(std::move(impl));
 }

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Builds the portable part (runtime, builder, C API, libtcr) twice, warnings as errors, and runs
+# its tests (the C API, format, extraction, libtcr's models and selectors) each time:
+#   build-portable/clang    with clang++ on this machine;
+#   build-portable/windows  cross-compiled for 64-bit Windows with mingw-w64, tests under wine64
+#                           (a private wine prefix in build-portable/wine).
+# The tests' real meshes are the samples converted by the Linux tombuild (build/tools, made by
+# scripts/build.sh or scripts/test.sh) into build-portable/real.
+# Usage: scripts/portable.sh [clang|windows]   (both by default)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="$root/build-portable"
+tools="${TOM_TOOLS:-$root/build/tools}"
+which="${1:-both}"
+[ -x "$tools/tombuild" ] || { echo "portable.sh: $tools/tombuild is missing: run scripts/build.sh first" >&2; exit 1; }
+
+# the real meshes the tests load (tests/support.cpp), as .tom files
+real="$out/real"
+mkdir -p "$real"
+for f in meshes/bunny00.off meshes/fandisk.off meshes/cow.off meshes/elephant.off assimp/OBJ/WusonOBJ.obj assimp/OBJ/spider.obj \
+         assimp/STL/Spider_binary.stl assimp/PLY/cube_binary.ply assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb; do
+  [ -f "$root/data/$f" ] || { echo "portable.sh: data/$f is missing: run scripts/fetch-samples.sh" >&2; exit 1; }
+  name="$(basename "${f%.*}").tom"
+  [ -s "$real/$name" ] || "$tools/tombuild" "$root/data/$f" -o "$real" -q
+done
+
+build_and_test() {  # build_and_test FOLDER CMAKE_OPTIONS...
+  local dir="$out/$1"; shift
+  echo "portable.sh: $(basename "$dir")"
+  cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DTOM_RUNTIME_ONLY=ON -DTOM_WERROR=ON -DTOM_REAL_TOM_DIR="$real" "$@" >/dev/null
+  cmake --build "$dir" -j "$(nproc)" >/dev/null
+  (cd "$dir" && ctest --output-on-failure -j "$(nproc)" | tail -n 3)
+}
+
+if [ "$which" = both ] || [ "$which" = clang ]; then
+  build_and_test clang -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
+fi
+if [ "$which" = both ] || [ "$which" = windows ]; then
+  [ -x /usr/lib/wine/wine64 ] && command -v x86_64-w64-mingw32-g++-posix >/dev/null || {
+    echo "portable.sh: mingw-w64 or wine64 is missing: run scripts/install-deps.sh" >&2; exit 1; }
+  export WINEPREFIX="$out/wine" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml="
+  [ -d "$WINEPREFIX" ] || /usr/lib/wine/wine64 wineboot --init >/dev/null 2>&1 || true  # the prefix, made once, quietly
+  build_and_test windows -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake"
+fi
