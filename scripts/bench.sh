@@ -2,7 +2,8 @@
 # Measures the toolkit against its references in one run and writes docs/PERFORMANCE.md:
 # tombench (build against meshopt_simplify, extraction against memcpy) on the sample meshes and a
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
-# conversion and report times of tombuild. Stamped with the commit, the date and the CPU.
+# conversion and report times of tombuild, and one extraction through the C++, C and Python
+# APIs (scripts/bench-bindings.py). Stamped with the commit, the date and the CPU.
 # Usage: scripts/bench.sh [--quick] [--walk] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
 #   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test
@@ -37,6 +38,10 @@ echo "bench: tcrbench" >&2
 objects="100 1000 10000 100000"; [ $quick = 1 ] && objects="100 1000 10000"
 # shellcheck disable=SC2086
 "$tools/tcrbench" --objects $objects --json > "$work/tcrbench.jsonl"
+
+echo "bench: bindings" >&2
+"$tools/tombuild" "$root/data/meshes/bunny00.off" -o "$work/bindings" -q
+/usr/bin/python3 "$root/scripts/bench-bindings.py" "$work/bindings/bunny00.tom" --json > "$work/bindings.jsonl"
 
 echo "bench: tombuild" >&2
 for m in bunny00 fandisk; do
@@ -110,6 +115,17 @@ for name, m in reports.items():
     L.append('| %s | %.3f | %.3f | %.3f | %.1fx |' % (name, m['import_seconds'], m['build_seconds'], m['report_seconds'], m['report_seconds'] / max(m['build_seconds'], 1e-9)))
 L.append('')
 L.append('The sample folders (`tombuild data/assimp data/meshes -j 2`): %.2f s; with `--no-error-curve`: %.2f s.' % (float(folders_s), float(folders_nocurve_s)))
+L.append('')
+L.append('## The C API and the Python package')
+L.append('')
+L.append('`scripts/bench-bindings.py` (`tomapibench`, then Python\'s `mesh.extract(vertices=n, out=out)`): one')
+L.append('extraction of bunny00 into a preallocated buffer through each API, the same run, median ns per call.')
+L.append('')
+L.append('| fraction | vertices | triangles | C++ ns | C ns | Python ns | C / C++ | Python - C++ (us) |')
+L.append('|---:|---:|---:|---:|---:|---:|---:|---:|')
+for d in [json.loads(l) for l in open(os.path.join(work, 'bindings.jsonl')) if l.strip()]:
+    L.append('| %g | %d | %d | %.0f | %.0f | %.0f | %.3f | %.2f |' % (d['fraction'], d['vertices'], d['triangles'], d['cpp_ns'], d['c_ns'], d['python_ns'],
+             d['c_over_cpp'], d['python_minus_cpp_us']))
 L.append('')
 L.append('## Selectors')
 L.append('')
