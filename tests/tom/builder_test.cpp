@@ -4,6 +4,7 @@
 
 #include "support.h"
 #include "tom/builder/builder.h"
+#include "tom/io/import.h"
 #include "tom/errors.h"
 #include "tom/scene.h"
 #include "tom/extract.h"
@@ -204,6 +205,29 @@ TEST_CASE("pairs are found at coordinates far past the pair threshold's grid", "
         const std::vector<uint8_t> bytes = tom::serialize({t});
         CHECK_NOTHROW(tom::File::from_bytes(bytes.data(), bytes.size(), "far.tom"));
     }
+}
+
+TEST_CASE("coincident copies joined by an interior edge are locked, not a seam", "[builder][edge][hostile]") {
+    // the builder fuzzer's 10^6-run finding (tests/data/hostile/O-coincident-edge-neighbours.off):
+    // two triangles share the zero-length edge between two coincident copies; both copies'
+    // border neighbours coincide, so they were classed as a seam pair and each substituted onto
+    // the other (a cycle: tombuild looped forever measuring the error curve)
+    tom::Mesh m = tom::import_file(std::string(TOM_HOSTILE_DIR) + "/O-coincident-edge-neighbours.off").meshes.at(0);
+    tom::clean_mesh(m);
+    for (const tom::Predicate predicate : {tom::Predicate::quadric, tom::Predicate::memoryless})
+        for (const tom::Strategy strategy : {tom::Strategy::passes, tom::Strategy::heap}) {
+            INFO(tom::to_string(predicate) << " " << tom::to_string(strategy));
+            tom::BuildParams params;
+            params.predicate = predicate;
+            params.strategy = strategy;
+            tom::BuildStats stats;
+            const tom::TomMesh t = tom::build(m, params, &stats);
+            for (uint32_t i = t.min_vertex_count; i < t.vertex_count(); ++i) CHECK(t.substitute[i] < i);
+            CHECK(stats.seam_vertices == 0);
+            const std::vector<uint8_t> bytes = tom::serialize({t});
+            const tom::File f = tom::File::from_bytes(bytes.data(), bytes.size(), "coincident-edge.tom");
+            CHECK(tom::active_triangle_count(f.mesh(0), f.mesh(0).min_vertex_count) <= t.triangle_count());
+        }
 }
 
 TEST_CASE("the writer never produces a file the reader rejects", "[builder][format][hostile]") {

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <stdexcept>
 #include <cstring>
 #include <limits>
 
@@ -161,9 +162,11 @@ void group_coincident(Builder& b, bool allow_seams) {
             const uint32_t r = first[v];
             if (count[r] < 2) continue;
             const uint32_t a = r, c = second[r];
-            // two copies that are each other's border neighbours close a zero-length border edge:
-            // each would be the other's target, so they are locked, not a seam
-            const bool adjacent = cl.border_next[a] == c || cl.border_prev[a] == c;
+            // two copies joined by an edge (a zero-length border edge, or an interior one between
+            // two triangles with two coincident corners) would each be the other's target: they
+            // are locked, not a seam
+            bool adjacent = false;
+            b.topo.each(a, [&](uint32_t t) { adjacent |= b.topo.contains(t, c); });
             const bool seam = count[r] == 2 && cl.kind[a] == kBorder && cl.kind[c] == kBorder && !adjacent &&
                               ((pos_eq(cl.border_next[a], cl.border_prev[c]) && pos_eq(cl.border_prev[a], cl.border_next[c])) ||
                                (pos_eq(cl.border_next[a], cl.border_next[c]) && pos_eq(cl.border_prev[a], cl.border_prev[c])));
@@ -548,6 +551,16 @@ MeshView TomMesh::view() const noexcept {
 const char* to_string(Predicate p) noexcept { return p == Predicate::quadric ? "quadric" : "memoryless"; }
 const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "passes" : "heap"; }
 
+// The total order's one rule every later step relies on (each walk `while (v >= n) v = s[v]`
+// ends): a substitute comes before its vertex. Broken only by a defect here; a loop forever
+// would be worse than this error.
+static void check_order(const TomMesh& out) {
+    for (uint32_t i = out.min_vertex_count; i < out.vertex_count(); ++i)
+        if (out.substitute[i] >= i)
+            throw std::logic_error("tom::build: mesh '" + out.name + "': vertex " + std::to_string(i) + " has substitute " + std::to_string(out.substitute[i]) +
+                                   ", not an earlier vertex (a defect of the builder)");
+}
+
 TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
     BuildStats stats;
     detail::Team team(thread_count(params.threads));
@@ -574,6 +587,7 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     out.material = input.material;
     std::vector<uint32_t> new_index;
     order_vertices(b, out, new_index);
+    check_order(out);
     gather_vertex_streams(input, out, out.original_index, team);
     order_triangles(b, input, new_index, out, team);
     std::copy(local.bounds_min, local.bounds_min + 3, out.bounds_min);
