@@ -466,6 +466,7 @@ TEST_CASE("hostile files from the first fuzzing run are errors naming the file a
         {"D-element-word.ply", ":3: a header line starting with 'x' has the keyword 'element' after it"},
         {"K-off-counts-on-keyword-line.off", ":1: '0' after 'NOFF': the vertex, face and edge counts must start the next line"},  // OpenMesh read -1 vertices
         {"L-off-comment-before-counts.off", ": no triangles or polygons in the file"},  // the counts after the comment are 0 0 0
+        {"P-off-binary-after-tabs.off", ":1: a binary OFF file must start with the line 'COFF BINARY'"},
         {"J-header-format-words.ply", ":2: a header line starting with 'fmat' has the keyword 'binary_little_endian' after it"},  // a hang
         {"F-draco-no-buffer-views.gltf", ": $.meshes[0].primitives[0].extensions.KHR_draco_mesh_compression.bufferView: names bufferView 0, the file has 0"},
         {"F-draco-no-buffers.gltf", ": $.bufferViews[0].buffer: names buffer 0, the file has 0"},
@@ -496,6 +497,31 @@ TEST_CASE("files OpenMesh once tokenized differently convert as checked", "[impo
         CHECK(r.meshes[0].triangle_count() == c.triangles);
         for (uint32_t i : r.meshes[0].indices) CHECK(i < r.meshes[0].vertex_count());
     }
+}
+
+TEST_CASE("OFF BINARY reads as its ASCII form does and another header line is an error", "[import]") {
+    // a tetrahedron; OpenMesh takes a file as binary only for " BINARY" after the keyword: the
+    // tabs of the fuzzers' file P-off-binary-after-tabs.off made it read the body as text
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / "tom_off_binary";
+    fs::create_directories(dir);
+    const float p[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const uint32_t faces[4][4] = {{3, 0, 2, 1}, {3, 0, 1, 3}, {3, 1, 2, 3}, {3, 0, 3, 2}};
+    std::string body;
+    auto put = [&](const void* bytes, size_t n) { body.append(static_cast<const char*>(bytes), n); };
+    const uint32_t counts[3] = {4, 4, 0};
+    put(counts, sizeof counts);
+    put(p, sizeof p);
+    for (const auto& f : faces) put(f, sizeof f);  // as OpenMesh reads them: no colour count after the corners
+    std::ofstream(dir / "ascii.off") << "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n";
+    std::ofstream(dir / "binary.off", std::ios::binary) << "OFF BINARY\n" << body;
+    std::ofstream(dir / "tabs.off", std::ios::binary) << "OFF\t\t BINARY # a comment\n" << body;
+    const tom::Mesh ascii = tom::import_file((dir / "ascii.off").string()).meshes.at(0);
+    const tom::Mesh m = tom::import_file((dir / "binary.off").string()).meshes.at(0);
+    CHECK(m.positions == ascii.positions);
+    CHECK(m.indices == ascii.indices);
+    CHECK(import_error((dir / "tabs.off").string()) == (dir / "tabs.off").string() + ":1: a binary OFF file must start with the line 'OFF BINARY', found 'OFF\t\t BINARY # a comment'");
+    fs::remove_all(dir);
 }
 
 TEST_CASE("glTF: a Draco attribute id the Draco data does not have is an error naming it", "[import][gltf][draco][hostile]") {

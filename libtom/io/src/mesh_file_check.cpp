@@ -10,7 +10,9 @@
 // inside a line, a comment before the counts, a value past a face's corners) the two would read
 // different files. So a text file is rewritten as what was checked, one token per value with
 // single spaces, comments and unused lines dropped, OBJ indices made absolute, and OpenMesh
-// reads that. Binary files, whose layout was walked byte by byte, are read as they are.
+// reads that. A binary PLY body, whose layout was walked byte by byte, follows a canonical header
+// as it is; binary OFF (whose header line must be canonical already) and STL are read from the
+// file.
 // Values themselves (non-finite coordinates, degenerate faces) are cleaned later.
 
 #include "mesh_file_check.h"
@@ -205,7 +207,8 @@ bool parse_off_keyword(std::string_view k, OffHeader& h, bool& other_dimension) 
     return take("OFF") && i == k.size();
 }
 
-// Checks an OFF file; for ASCII, writes the canonical text into `out` (left empty for BINARY).
+// Checks an OFF file and writes the canonical text into `out` (nothing for BINARY, read from the
+// file).
 void check_off(const std::string& path, std::string_view text, Canonical& out) {
     Tokens in(text);
     std::vector<std::string_view> words;
@@ -220,7 +223,13 @@ void check_off(const std::string& path, std::string_view text, Canonical& out) {
     if (words.size() > (h.binary ? 2u : 1u))
         fail(path, in.last_line(), quoted(words[h.binary ? 2 : 1]) + " after " + quoted(words[0]) + ": the vertex, face and edge counts must start the next line");
     if (h.binary) {
-        // 32-bit little-endian counts and values after the header line
+        // 32-bit little-endian counts and values after the header line, read from the file (an
+        // OpenMesh stream cannot be told it is binary). OpenMesh takes the file as binary only
+        // when " BINARY" follows the keyword with one space on the first line; otherwise it
+        // would read the binary body as text
+        const std::string_view first = text.substr(0, text.find('\n'));
+        if (in.last_line() != 1 || first != std::string(words[0]) + " BINARY")
+            fail(path, in.last_line(), "a binary OFF file must start with the line '" + std::string(words[0]) + " BINARY', found " + quoted(first));
         size_t at = in.offset();
         auto word = [&](uint32_t& v) {
             if (at + 4 > text.size()) return false;

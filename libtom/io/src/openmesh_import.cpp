@@ -13,6 +13,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -20,6 +23,7 @@
 
 #include "import_backends.h"
 #include "mesh_file_check.h"
+#include "platform.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
@@ -108,6 +112,31 @@ std::vector<std::string> summarize(const std::string& text) {
     return out;
 }
 
+// The canonical text in a temporary file of the same extension, removed with this object.
+// OpenMesh reads files, not streams, here: its readers keep the options they sniffed from the
+// last file (an OFF stream read after a binary OFF file took its text for binary).
+struct CanonicalFile {
+    std::string path;
+    CanonicalFile(const std::string& text, const std::string& extension) {
+        static std::atomic<unsigned> counter{0};
+        path = (std::filesystem::temp_directory_path() /
+                ("tom-import-" + std::to_string(detail::process_id()) + "-" + std::to_string(counter++) + "." + extension)).string();
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(text.data(), std::streamsize(text.size()));
+        if (!out.flush()) {
+            std::error_code ignored;
+            std::filesystem::remove(path, ignored);
+            throw IoError("cannot write the temporary file '" + path + "' OpenMesh reads");
+        }
+    }
+    ~CanonicalFile() {
+        std::error_code ignored;
+        std::filesystem::remove(path, ignored);
+    }
+    CanonicalFile(const CanonicalFile&) = delete;
+    CanonicalFile& operator=(const CanonicalFile&) = delete;
+};
+
 } // namespace
 
 std::string file_stem(const std::string& path) {
@@ -119,6 +148,7 @@ std::string file_stem(const std::string& path) {
 
 ImportResult import_openmesh(const std::string& path, const std::string& extension) {
     // OpenMesh's readers trust what the file announces: they read the checked, canonical form
+    // (from a temporary file) or, for binary OFF and STL, the checked file itself
     const std::string canonical = check_mesh_file(path, extension);
     OmMesh om;
     om.request_vertex_normals();
@@ -148,8 +178,8 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         if (canonical.empty()) {
             ok = OpenMesh::IO::IOManager().read(path, importer, opt);
         } else {
-            std::istringstream stream(canonical, std::ios::in | std::ios::binary);
-            ok = OpenMesh::IO::IOManager().read(stream, extension, importer, opt);
+            const CanonicalFile file(canonical, extension);
+            ok = OpenMesh::IO::IOManager().read(file.path, importer, opt);
         }
         ::omerr().flush();
         messages = sink.str();
