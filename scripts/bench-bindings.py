@@ -1,18 +1,19 @@
 #!/usr/bin/python3
 """One extraction through the C++ API, the C API and the Python package, in the same run.
 
-tomapibench measures C++ and C (rounds alternating); this script then times the Python call
-mesh.extract(vertices=n, out=out) the same way (batches of about 2 ms, median over the rounds)
-and prints one table, or JSON with --json: per fraction, the median ns per call of each and the
-ratios C/C++ and Python - C++ (the binding's cost per call, in microseconds).
+In one process, rounds alternate between the three: a batch of Python calls
+mesh.extract(vertices=n, out=out), then the same batch through tom::extract and through
+tom_extract_u32 (looped inside the native module), each batch about 2 ms. Per fraction of
+bunny00's triangles it prints the median ns per call of each and the ratios C / C++ and
+Python - C++ (the binding's cost per call, in microseconds); JSON with --json.
+(tomapibench measures C++ against C without Python.)
 
 Usage: scripts/bench-bindings.py FILE.tom [--rounds R] [--json]
-Needs build/tools/tomapibench and build/python (scripts/build.sh)."""
+Needs build/python (scripts/build.sh)."""
 import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
 import time
 
@@ -21,21 +22,29 @@ sys.path.insert(0, os.path.join(root, "build", "python"))
 import numpy as np  # noqa: E402
 
 import tom  # noqa: E402
+from tom import _tom  # noqa: E402
 
 
-def python_ns(mesh, vertices, rounds):
+def measure(mesh, fraction, rounds):
+    n = mesh.vertex_count_for(fraction=fraction)
     out = np.empty(3 * mesh.triangle_count, np.uint32)
-    mesh.extract(vertices=vertices, out=out)
+    mesh.extract(vertices=n, out=out)
     start = time.perf_counter()
-    mesh.extract(vertices=vertices, out=out)
+    mesh.extract(vertices=n, out=out)
     batch = max(1, int(2e-3 / max(time.perf_counter() - start, 1e-9)))
-    times = []
+    py, cpp, c = [], [], []
     for _ in range(rounds):
         start = time.perf_counter_ns()
         for _ in range(batch):
-            mesh.extract(vertices=vertices, out=out)
-        times.append((time.perf_counter_ns() - start) / batch)
-    return statistics.median(times)
+            mesh.extract(vertices=n, out=out)
+        py.append((time.perf_counter_ns() - start) / batch)
+        cpp.append(_tom._bench_native(mesh, n, out, batch, "cpp") * 1e9)
+        c.append(_tom._bench_native(mesh, n, out, batch, "c") * 1e9)
+    row = {"mesh": mesh.name, "fraction": fraction, "vertices": n, "triangles": mesh.active_triangles(n),
+           "cpp_ns": statistics.median(cpp), "c_ns": statistics.median(c), "python_ns": statistics.median(py)}
+    row["c_over_cpp"] = row["c_ns"] / row["cpp_ns"]
+    row["python_minus_cpp_us"] = (row["python_ns"] - row["cpp_ns"]) / 1000
+    return row
 
 
 def main():
@@ -44,13 +53,8 @@ def main():
     parser.add_argument("--rounds", type=int, default=31)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    bench = os.path.join(root, "build", "tools", "tomapibench")
-    rows = [json.loads(line) for line in subprocess.run([bench, args.file, "--json", "-r", str(args.rounds)], check=True,
-                                                        capture_output=True, text=True).stdout.splitlines()]
     mesh = tom.open(args.file).meshes[0]
-    for row in rows:
-        row["python_ns"] = python_ns(mesh, row["vertices"], args.rounds)
-        row["python_minus_cpp_us"] = (row["python_ns"] - row["cpp_ns"]) / 1000
+    rows = [measure(mesh, f, args.rounds) for f in (1.0, 0.1, 0.01)]
     if args.json:
         for row in rows:
             print(json.dumps(row))

@@ -21,6 +21,7 @@
 #include "tom/format.h"
 #include "tom/io/import.h"
 #include "tom/metrics/report.h"
+#include "tom/tom.h"
 
 namespace py = pybind11;
 
@@ -392,6 +393,31 @@ PYBIND11_MODULE(_tom, m) {
         return report(*original.mesh, b, levels, error_curve);
     }, py::arg("original"), py::arg("built"), py::arg("levels") = std::vector<double>{0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005}, py::arg("error_curve") = true,
        "Metro-style report of a built mesh against the tom.Mesh it was built from, as a dict with the figures of tombuild's JSON report (docs/REPORT.md).");
+
+    // for scripts/bench-bindings.py: seconds per call of `batch` extractions through the C++ or
+    // the C API, in this process, so that its rounds interleave with the Python calls'
+    m.def("_bench_native", [](const FileMesh& mesh, uint32_t vertices, py::array_t<uint32_t, py::array::c_style> out, int batch, const std::string& api) {
+        const tom::MeshView& v = mesh.view();
+        tom_mesh_view c{};
+        c.vertex_count = v.vertex_count;
+        c.triangle_count = v.triangle_count;
+        c.min_vertex_count = v.min_vertex_count;
+        c.internal = &v;
+        uint32_t* data = out.mutable_data();
+        const size_t capacity = size_t(out.size());
+        volatile uint32_t sink = 0;
+        const auto start = std::chrono::steady_clock::now();
+        if (api == "c") {
+            for (int i = 0; i < batch; ++i) {
+                tom_extracted e;
+                tom_extract_u32(&c, vertices, data, capacity, &e);
+                sink = sink + e.triangle_count;
+            }
+        } else {
+            for (int i = 0; i < batch; ++i) sink = sink + tom::extract(v, vertices, data, capacity).triangle_count;
+        }
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / batch;
+    });
 
     m.attr("format_version") = py::make_tuple(tom::format_version_major, tom::format_version_minor);
 }
