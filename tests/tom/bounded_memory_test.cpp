@@ -68,6 +68,8 @@ std::vector<HostileFile> hostile_files() {
         {"binary.off", "OFF BINARY\n" + le32(2000000000) + le32(1) + le32(0) + std::string(40, '\0'), ":2: 2000000000 vertices and 1 faces cannot fit"},
         {"vertices.ply", ply("ascii", 2000000000, 1, "uchar") + tri + "3 0 1 2\n", ":3: 2000000000 vertex elements cannot fit"},
         {"faces.ply", ply("ascii", 3, 2000000000, "uchar") + tri + "3 0 1 2\n", ":7: 2000000000 face elements cannot fit"},
+        {"empty-elements.ply", "ply\nformat binary_little_endian 1.0\nelement note 2000000000\n" + ply("binary_little_endian", 3, 1, "uchar").substr(36) + tri_binary + "\3" + le32(0) + le32(1) + le32(2),
+         ":3: 2000000000 note elements without properties in a file of"},
         {"corners.ply", ply("ascii", 3, 1, "int") + tri + "-1 0 1 2\n", ":13: face 0: the list vertex_indices announces '-1' items"},
         {"corners-unsigned.ply", ply("ascii", 3, 1, "uint") + tri + "4000000000 0 1 2\n", ":13: face 0: the list vertex_indices announces '4000000000' items"},
         {"vertices-binary.ply", ply("binary_little_endian", 2000000000, 1, "uchar") + tri_binary + "\3" + le32(0) + le32(1) + le32(2),

@@ -466,6 +466,7 @@ TEST_CASE("hostile files from the first fuzzing run are errors naming the file a
         {"D-element-word.ply", ":3: a header line starting with 'x' has the keyword 'element' after it"},
         {"K-off-counts-on-keyword-line.off", ":1: '0' after 'NOFF': the vertex, face and edge counts must start the next line"},  // OpenMesh read -1 vertices
         {"L-off-comment-before-counts.off", ": no triangles or polygons in the file"},  // the counts after the comment are 0 0 0
+        {"Q-ply-element-count-past-32-bits.ply", ":3: the element count 66666666666664 exceeds 4294967295"},  // OpenMesh's header loop grew without end
         {"P-off-binary-after-tabs.off", ":1: a binary OFF file must start with the line 'COFF BINARY'"},
         {"J-header-format-words.ply", ":2: a header line starting with 'fmat' has the keyword 'binary_little_endian' after it"},  // a hang
         {"F-draco-no-buffer-views.gltf", ": $.meshes[0].primitives[0].extensions.KHR_draco_mesh_compression.bufferView: names bufferView 0, the file has 0"},

@@ -351,6 +351,9 @@ void check_ply(const std::string& path, std::string_view text, Canonical& out) {
         } else if (w[0] == "element") {
             long long count = 0;
             if (w.size() != 3 || !parse_integer(w[2], count) || count < 0) fail(path, line, "expected 'element NAME COUNT'");
+            // OpenMesh reads the count as a 32-bit unsigned: a larger one fails its stream, and its
+            // header loop then never meets end_header (memory grows without end)
+            if (uint64_t(count) > 0xFFFFFFFFull) fail(path, line, "the element count " + std::string(w[2]) + " exceeds 4294967295");
             elements.push_back({std::string(w[1]), uint64_t(count), {}, line});
         } else if (w[0] == "property") {
             if (elements.empty()) fail(path, line, "a property before any element");
@@ -447,6 +450,8 @@ void check_ply(const std::string& path, std::string_view text, Canonical& out) {
         }
         if (fixed > 0 && e.count > (text.size() - at) / fixed)
             fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements of at least " + std::to_string(fixed) + " bytes cannot fit in the " + std::to_string(text.size() - at) + " bytes left");
+        if (fixed == 0 && e.count > text.size())
+            fail(path, e.line, std::to_string(e.count) + " " + e.name + " elements without properties in a file of " + std::to_string(text.size()) + " bytes");
         if (scalars_only) {
             at += size_t(fixed * e.count);
             continue;
