@@ -217,8 +217,17 @@ Topology topology(const float* positions, const uint32_t* indices, size_t triang
 
 std::vector<uint32_t> brute_force_active(const tom::MeshView& m, uint32_t n) {
     std::vector<uint32_t> out;
+    for (uint32_t p = 0; p < tom::part_count(m); ++p) {
+        const tom::Part part = tom::part_at(m, p);
+        INFO("part " << p);
+        brute_force_part(m, n, part.first_triangle, part.first_triangle + part.triangle_count, out);
+    }
+    return out;
+}
+
+void brute_force_part(const tom::MeshView& m, uint32_t n, uint32_t begin, uint32_t end, std::vector<uint32_t>& out) {
     bool ended = false;
-    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+    for (uint32_t t = begin; t < end; ++t) {
         uint32_t c[3];
         for (int k = 0; k < 3; ++k) {
             uint32_t v = m.corner(3 * t + k);
@@ -234,7 +243,6 @@ std::vector<uint32_t> brute_force_active(const tom::MeshView& m, uint32_t n) {
             ended = true;
         }
     }
-    return out;
 }
 
 namespace {

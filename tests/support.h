@@ -33,6 +33,9 @@ std::vector<NamedMesh> real_meshes();
 /// Triangles alive at resolution n, found by walking every triangle's chains (no shortcut);
 /// also checks that they form a prefix of the triangle array. Returns the mapped triples.
 std::vector<uint32_t> brute_force_active(const tom::MeshView& m, uint32_t n);
+/// The triangles [begin, end) alive at resolution n, mapped, appended to `out`; REQUIREs that they
+/// are a prefix of the range (a part's range, or the whole mesh's).
+void brute_force_part(const tom::MeshView& m, uint32_t n, uint32_t begin, uint32_t end, std::vector<uint32_t>& out);
 
 /// Checks every invariant of a built hierarchy against its input (Catch2 assertions):
 /// counts, substitute[i] < i, the vertex permutation, full resolution = input triangles,

@@ -1,5 +1,6 @@
-// tomextract: writes a .tom file's meshes at one resolution as OBJ or PLY, or at one or more
-// resolutions as binary glTF with the file's materials and instances.
+// tomextract: writes a .tom file's meshes at one resolution as OBJ (with a .mtl and a usemtl
+// group per part) or PLY, or at one or more resolutions as binary glTF with the file's materials
+// and instances (a primitive per part).
 
 #include <cstdio>
 #include <filesystem>
@@ -33,7 +34,7 @@ int main(int argc, char** argv) {
     app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
     std::string texture_dir;
     app.add_option("--texture-dir", texture_dir,
-                   "For .glb: the folder the stored texture URIs are relative to (the source asset's); they are rewritten relative to the output");
+                   "For .glb and .obj: the folder the stored texture URIs are relative to (the source asset's); they are rewritten relative to the output");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
@@ -110,14 +111,15 @@ int main(int argc, char** argv) {
             tom::ExportPart part;
             part.mesh = &m;
             part.indices.resize(size_t(tom::active_triangle_count(m, n)) * 3);
-            const tom::Extracted r = tom::extract(m, n, part.indices.data(), part.indices.size());
+            part.draws.resize(tom::part_count(m));
+            const tom::Extracted r = tom::extract_parts(m, n, part.indices.data(), part.indices.size(), part.draws.data());
             part.vertex_count = r.vertex_count;
             part.indices.resize(size_t(r.triangle_count) * 3);
             out_tris += r.triangle_count;
             out_verts += r.vertex_count;
             parts.push_back(std::move(part));
         }
-        tom::export_meshes(output, parts);
+        tom::export_meshes(output, parts, file.scene(), texture_dir);
         std::printf("%s: %zu mesh%s, %llu vertices, %llu triangles (%.2f%% of %llu) -> %s\n", path.c_str(), parts.size(),
                     parts.size() == 1 ? "" : "es", static_cast<unsigned long long>(out_verts), static_cast<unsigned long long>(out_tris),
                     total_tris ? 100.0 * double(out_tris) / double(total_tris) : 0.0, static_cast<unsigned long long>(total_tris), output.c_str());

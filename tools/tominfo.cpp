@@ -51,6 +51,26 @@ int main(int argc, char** argv) {
             else
                 mj["coarse_corners"] = nullptr;
             mj["material"] = m.material;
+            if (m.parts) {  // FORMAT.md, PART: one draw per part, each with its material
+                mj["parts"] = nlohmann::json::array();
+                for (uint32_t p = 0; p < tom::part_count(m); ++p) {
+                    const tom::Part part = tom::part_at(m, p);
+                    nlohmann::ordered_json pj;
+                    pj["first_triangle"] = part.first_triangle;
+                    pj["triangles"] = part.triangle_count;
+                    pj["min_triangles"] = tom::active_part_triangle_count(m, p, m.min_vertex_count);
+                    pj["material"] = part.material;
+                    pj["material_name"] = part.material >= 0 && size_t(part.material) < file.scene().materials.size()
+                                              ? nlohmann::json(file.scene().materials[size_t(part.material)].name)
+                                              : nlohmann::json(nullptr);
+                    std::vector<std::string> own;
+                    const char* names[5] = {"normal", "texcoord0", "color0", "texcoord1", "tangent"};
+                    for (int k = 0; k < 5; ++k)
+                        if (part.attributes & (1u << k)) own.push_back(names[k]);
+                    pj["attributes"] = own;
+                    mj["parts"].push_back(pj);
+                }
+            }
             std::vector<std::string> attrs = {"position"};
             if (m.normals) attrs.push_back("normal");
             if (m.texcoords) attrs.push_back("texcoord0");
@@ -107,7 +127,7 @@ int main(int argc, char** argv) {
                                          {"offset", s.offset}, {"bytes", s.bytes}});
         }
         if (json) {
-            std::printf("%s\n", j.dump(2).c_str());
+            std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
             return tools::exit_ok;
         }
         std::printf("%s: TOM %s, %s, %u mesh%s, %.1f%% of face-vertex (positions+normals, 32-bit indices)\n", path.c_str(),
@@ -127,6 +147,17 @@ int main(int argc, char** argv) {
                         has_coarse ? std::to_string(mj["coarse_corners"]["resolution"].get<uint32_t>()).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_mean"].get<double>()).substr(0, 7).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_max"].get<double>()).substr(0, 7).c_str() : "-", attrs.c_str());
+        }
+        for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+            const auto& mj = j["meshes"][i];
+            if (!mj.contains("parts")) continue;
+            std::printf("  mesh %u: %zu parts\n", i, mj["parts"].size());
+            for (size_t p = 0; p < mj["parts"].size(); ++p) {
+                const auto& pj = mj["parts"][p];
+                std::printf("    part %zu: material %d%s%s%s, %u triangles (%u at the coarsest)\n", p, pj["material"].get<int>(),
+                            pj["material_name"].is_null() ? "" : " '", pj["material_name"].is_null() ? "" : pj["material_name"].get<std::string>().c_str(),
+                            pj["material_name"].is_null() ? "" : "'", pj["triangles"].get<uint32_t>(), pj["min_triangles"].get<uint32_t>());
+            }
         }
         std::printf("  scene: %zu material%s, %zu instance%s%s\n", scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
                     scene.instances.size(), scene.instances.size() == 1 ? "" : "s",

@@ -35,6 +35,10 @@ void BuildOptions::add_to(CLI::App& app, const std::string& group) {
                    "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
         ->check(CLI::Range(1.0f, 90.0f))
         ->group(group);
+    app.add_flag("--lock-borders", numbers.lock_borders,
+                 "Never move vertices on open borders (of the mesh welded by position), so tiles and modular pieces keep meeting their "
+                 "neighbours at every resolution (meshoptimizer's LockBorder, gltfpack -slb)")
+        ->group(group);
     app.add_option("--build-threads", numbers.threads,
                    "Threads that evaluate each mesh's substitutions (default 0: one per core, shared among -j jobs); "
                    "the output is the same for any count")
@@ -55,7 +59,8 @@ nlohmann::ordered_json build_params_json(const tom::BuildParams& params) {
             {"pair_threshold", params.pair_threshold},
             {"pass_fraction", params.pass_fraction},
             {"attribute_weight", params.attribute_weight},
-            {"max_rotation_degrees", params.max_rotation_degrees}};
+            {"max_rotation_degrees", params.max_rotation_degrees},
+            {"lock_borders", params.lock_borders}};
 }
 
 int parse(CLI::App& app, int argc, char** argv) {

@@ -28,8 +28,16 @@ constexpr uint32_t m_vertex_count = 0, m_triangle_count = 4, m_min_vertex_count 
 constexpr uint32_t coarse_header_bytes = 16;
 constexpr uint32_t c_resolution = 0, c_triangle_count = 4, c_index_size = 8;
 
+// PART header (since 1.4): u32 part_count, u32[3] reserved, then part_count records of 16 bytes
+constexpr uint32_t parts_header_bytes = 16, part_record_bytes = 16;
+
 enum Attribute : uint32_t { attr_normals = 1, attr_texcoords = 2, attr_colors = 4, attr_texcoords1 = 8, attr_tangents = 16 };
-constexpr uint32_t known_attributes = attr_normals | attr_texcoords | attr_colors | attr_texcoords1 | attr_tangents;
+constexpr uint32_t stream_attributes = attr_normals | attr_texcoords | attr_colors | attr_texcoords1 | attr_tangents;
+/// Bit 5 of a mesh's `attributes`: the mesh has parts (section PART, since 1.4). Not a stream:
+/// it is set so that readers before 1.4, which would draw only the first part's prefix, reject
+/// the mesh (rule 10) instead of misreading it.
+constexpr uint32_t attr_parts = 32;
+constexpr uint32_t known_attributes = stream_attributes | attr_parts;
 
 constexpr uint32_t fourcc(const char (&s)[5]) {
     return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 | uint32_t(uint8_t(s[3])) << 24;
@@ -38,7 +46,7 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
                    sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
                    sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
-                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR");
+                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR"), sec_parts = fourcc("PART");
 /// The `mesh` field of file-level sections (MATL, INST).
 constexpr uint32_t file_level = SectionInfo::file_level;
 

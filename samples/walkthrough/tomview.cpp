@@ -36,8 +36,10 @@ int main(int argc, char** argv) {
         const tom::File file = tom::File::open(path);
         const std::vector<tom::Instance> instances = tom::draw_list(file.scene(), file.mesh_count());
         walk::Renderer renderer(width, height);
-        // each mesh's level extracted once into the frame's index array; instances share it
+        // each mesh's level extracted once into the frame's index array, with a draw per part
+        // (material); instances share it
         std::vector<uint32_t> handles, first(file.mesh_count()), counts(file.mesh_count());
+        std::vector<std::vector<tom::PartDraw>> parts(file.mesh_count());
         std::vector<uint32_t> indices;
         uint64_t full = 0, drawn = 0;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
@@ -45,7 +47,9 @@ int main(int argc, char** argv) {
             handles.push_back(renderer.add_mesh(m));
             first[i] = uint32_t(indices.size());
             indices.resize(indices.size() + size_t(m.triangle_count) * 3);
-            const tom::Extracted e = tom::extract(m, tom::vertex_count_for_fraction(m, fraction), indices.data() + first[i], size_t(m.triangle_count) * 3);
+            parts[i].resize(tom::part_count(m));
+            const tom::Extracted e = tom::extract_parts(m, tom::vertex_count_for_fraction(m, fraction), indices.data() + first[i],
+                                                        size_t(m.triangle_count) * 3, parts[i].data());
             counts[i] = e.triangle_count * 3;
             indices.resize(first[i] + counts[i]);
         }
@@ -62,14 +66,16 @@ int main(int argc, char** argv) {
                     lo[k] = std::min(lo[k], w), hi[k] = std::max(hi[k], w);
                 }
             }
-            walk::Renderer::Draw d{handles[inst.mesh], inst.transform, first[inst.mesh], counts[inst.mesh], {0.7f, 0.7f, 0.7f}};
-            if (lod_colors) {
-                const float t = m.triangle_count ? float(counts[inst.mesh] / 3) / float(m.triangle_count) : 1.0f;  // red coarse .. blue fine
-                d.color[0] = 1.0f - t, d.color[1] = 0.3f, d.color[2] = t;
-            } else if (m.material >= 0 && size_t(m.material) < file.scene().materials.size()) {
-                for (int k = 0; k < 3; ++k) d.color[k] = file.scene().materials[size_t(m.material)].base_color[k];
+            for (const tom::PartDraw& part : parts[inst.mesh]) {
+                walk::Renderer::Draw d{handles[inst.mesh], inst.transform, first[inst.mesh] + part.first_index, part.index_count, {0.7f, 0.7f, 0.7f}};
+                if (lod_colors) {
+                    const float t = m.triangle_count ? float(counts[inst.mesh] / 3) / float(m.triangle_count) : 1.0f;  // red coarse .. blue fine
+                    d.color[0] = 1.0f - t, d.color[1] = 0.3f, d.color[2] = t;
+                } else if (part.material >= 0 && size_t(part.material) < file.scene().materials.size()) {
+                    for (int k = 0; k < 3; ++k) d.color[k] = file.scene().materials[size_t(part.material)].base_color[k];
+                }
+                draws.push_back(d);
             }
-            draws.push_back(d);
             full += m.triangle_count;
             drawn += counts[inst.mesh] / 3;
         }

@@ -417,6 +417,72 @@ TEST_CASE("rule 19: coarse corners are the active triangles' corners mapped to t
     CHECK(rule_of(b) == 19);
 }
 
+// two parts over one sphere's triangles (materials 0 and 1 of small_scene()), big enough for COAR
+tom::TomMesh two_part_mesh() {
+    tom::Mesh sphere = tom::make_sphere(64, 96, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    const uint32_t half = sphere.triangle_count() / 2;
+    sphere.parts = {{0, half, 0, 1}, {half, sphere.triangle_count() - half, 1, 1}};
+    return tom::build(sphere);
+}
+
+TEST_CASE("rule 20: parts tile the triangles, name streams the mesh has, and set attribute bit 5", "[format][corrupt][parts]") {
+    const tom::TomMesh mesh = two_part_mesh();
+    REQUIRE(mesh.parts.size() == 2);
+    const std::vector<uint8_t> good = tom::serialize({mesh}, small_scene(1));
+    const std::vector<Section> secs = sections_of(good);
+    const tom::File f = tom::File::from_bytes(good.data(), good.size());
+    CHECK(tom::part_count(f.mesh(0)) == 2);
+    CHECK(f.mesh(0).coarse_corners == nullptr);  // COAR holds one prefix: never with parts
+    const size_t part = find(secs, "PART").offset, mesh_header = find(secs, "MESH").offset;
+    CHECK((get32(good, mesh_header + 20) & 32u) != 0);  // attribute bit 5: a 1.3 reader rejects the mesh (rule 10) rather than misread it
+    auto corrupt = [&](size_t at, uint32_t value) {
+        std::vector<uint8_t> b = good;
+        put32(b, at, value);
+        fix_checksums(b);
+        return b;
+    };
+    // records at part + 16: first_triangle, triangle_count, material, attributes
+    const uint32_t first_count = get32(good, part + 16 + 4);
+    CHECK(rule_of(corrupt(part, 1)) == 20);                      // one part is no PART
+    CHECK(rule_of(corrupt(part + 16 + 16, first_count + 1)) == 20);  // part 1 does not start where part 0 ends
+    CHECK(message_of(corrupt(part + 16 + 16, first_count + 1)).find("not where the previous part ends") != std::string::npos);
+    CHECK(rule_of(corrupt(part + 16 + 4, 0)) == 20);             // an empty part
+    CHECK(rule_of(corrupt(part + 16 + 16 + 4, get32(good, part + 16 + 16 + 4) - 1)) == 20);  // the parts cover too little
+    CHECK(rule_of(corrupt(part + 16 + 16 + 4, get32(good, part + 16 + 16 + 4) + 1)) == 20);  // and too much
+    CHECK(rule_of(corrupt(part + 16 + 12, 2)) == 20);            // TEX0, which the mesh has not
+    CHECK(rule_of(corrupt(part + 16 + 8, 7)) == 17);             // material 7 of 2
+    CHECK(rule_of(corrupt(mesh_header + 20, get32(good, mesh_header + 20) & ~32u)) == 10);  // PART without bit 5
+    // and the parts extract as written
+    std::vector<uint32_t> buffer(size_t(f.mesh(0).triangle_count) * 3);
+    std::vector<tom::PartDraw> draws(2);
+    const tom::Extracted e = tom::extract_parts(f.mesh(0), tom::vertex_count_for_fraction(f.mesh(0), 0.1), buffer.data(), buffer.size(), draws.data());
+    CHECK(draws[0].index_count + draws[1].index_count == 3 * e.triangle_count);
+    CHECK(draws[1].material == 1);
+}
+
+TEST_CASE("version 1.3 files: read by this reader as meshes of one part", "[format][parts]") {
+    // a file without parts differs from a 1.3 file only in its minor version
+    std::vector<uint8_t> b = tom::serialize({coarse_sphere()});
+    put32(b, 12, 3);
+    fix_checksums(b);
+    const tom::File f = tom::File::from_bytes(b.data(), b.size(), "old.tom");
+    CHECK(f.version_minor() == 3);
+    const tom::MeshView& m = f.mesh(0);
+    REQUIRE(tom::part_count(m) == 1);
+    CHECK(tom::part_at(m, 0).triangle_count == m.triangle_count);
+    CHECK(tom::part_at(m, 0).material == m.material);
+    std::vector<uint32_t> a(size_t(m.triangle_count) * 3), c(a.size());
+    tom::PartDraw draw;
+    const uint32_t n = tom::vertex_count_for_fraction(m, 0.05);
+    const tom::Extracted x = tom::extract(m, n, a.data(), a.size());
+    const tom::Extracted y = tom::extract_parts(m, n, c.data(), c.size(), &draw);
+    CHECK(x.triangle_count == y.triangle_count);
+    CHECK(draw.first_index == 0);
+    CHECK(draw.index_count == 3 * x.triangle_count);
+    CHECK(a == c);
+}
+
 TEST_CASE("scenes: materials with texture references and instances survive the round trip (rules 17 and 18)", "[format][scene]") {
     tom::TomMesh a = small_mesh(), b = small_mesh();
     a.material = 1;

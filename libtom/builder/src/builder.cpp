@@ -183,9 +183,13 @@ void group_coincident(Builder& b, bool allow_seams) {
 // The vertex classes: kinds by edges, then coincident copies grouped. A border vertex whose loop
 // neighbour is locked keeps its pointers; pointers of locked vertices are never followed from a
 // locked vertex itself.
-void classify(Builder& b, BuildStats& stats, bool allow_seams, detail::Team& team) {
+void classify(Builder& b, BuildStats& stats, bool allow_seams, bool lock_borders, detail::Team& team) {
     classify_by_edges(b, team);
     group_coincident(b, allow_seams);
+    // what is still a border after the copies are grouped is open in the welded mesh
+    if (lock_borders)
+        for (uint8_t& kind : b.classes.kind)
+            if (kind == kBorder) kind = kLocked;
     for (const uint8_t kind : b.classes.kind) {
         stats.locked_vertices += kind == kLocked;
         stats.border_vertices += kind == kBorder;
@@ -495,7 +499,8 @@ void order_vertices(const Builder& b, TomMesh& out, std::vector<uint32_t>& new_i
 
 // The triangles by the resolution at which they die: triangle t is alive at resolution
 // r >= key(t), key = n - step for a triangle killed by substitution `step` (its removed vertex
-// gets index n-1-step), s for the survivors. Counting sort by key, stable in input order.
+// gets index n-1-step), s for the survivors. Counting sort by key, stable in input order; with
+// parts, then by part (stable), so each part's range is sorted by death on its own.
 void order_triangles(const Builder& b, const Mesh& input, const std::vector<uint32_t>& new_index, TomMesh& out, detail::Team& team) {
     const uint32_t n = b.n, m = b.m, s = out.min_vertex_count;
     const std::vector<uint32_t>& death = b.topo.death_step;
@@ -506,6 +511,18 @@ void order_triangles(const Builder& b, const Mesh& input, const std::vector<uint
     out.triangles.resize(size_t(m) * 3);
     out.original_triangle.resize(m);
     for (uint32_t t = 0; t < m; ++t) out.original_triangle[bucket[key_of(t)]++] = t;
+    if (!input.parts.empty()) {
+        std::vector<uint32_t> part_of(m), start(input.parts.size() + 1, 0), by_part(m);
+        for (uint32_t p = 0; p < input.parts.size(); ++p) {
+            const Part& part = input.parts[p];
+            for (uint32_t t = part.first_triangle; t < part.first_triangle + part.triangle_count; ++t) part_of[t] = p;
+            start[p + 1] = start[p] + part.triangle_count;
+        }
+        for (const uint32_t t : out.original_triangle) by_part[start[part_of[t]]++] = t;
+        out.original_triangle.swap(by_part);
+        out.parts = input.parts;  // same ranges: each part keeps its triangle count
+        for (Part& part : out.parts) part.attributes &= attribute_bits(input);  // a stream may have been dropped since import
+    }
     team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
         for (size_t slot = begin; slot < end; ++slot)
             for (size_t k = 0; k < 3; ++k) out.triangles[3 * slot + k] = new_index[input.indices[3 * size_t(out.original_triangle[slot]) + k]];
@@ -544,6 +561,8 @@ MeshView TomMesh::view() const noexcept {
     v.substitute = substitute.data();
     v.triangles = triangles.data();
     v.pair_bits = pair_bits.empty() ? nullptr : pair_bits.data();
+    v.parts = parts.empty() ? nullptr : parts.data();
+    v.part_count = uint32_t(parts.size());
     for (int k = 0; k < 3; ++k) v.bounds_min[k] = bounds_min[k], v.bounds_max[k] = bounds_max[k];
     return v;
 }
@@ -571,7 +590,7 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
 
     // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
     // keep coincident copies locked
-    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), team);
+    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders, team);
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
     b.attributes.init(local.mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
     find_pairs(b, params.pair_threshold, stats);

@@ -27,7 +27,91 @@ void compact_stream(std::vector<T>& stream, const std::vector<uint32_t>& remap, 
     stream.swap(out);
 }
 
+// Degenerate triangles removed: each part's range shrinks by those it lost; empty parts go.
+void recount_parts(Mesh& mesh, const std::vector<uint32_t>& kept_before) {
+    std::vector<Part> parts;
+    for (Part p : mesh.parts) {
+        const uint32_t first = kept_before[p.first_triangle], end = kept_before[p.first_triangle + p.triangle_count];
+        p.first_triangle = first;
+        p.triangle_count = end - first;
+        if (p.triangle_count > 0) parts.push_back(p);
+    }
+    if (parts.size() == 1) {
+        mesh.material = parts[0].material;
+        parts.clear();
+    }
+    mesh.parts.swap(parts);
+}
+
+void check_parts(const Mesh& mesh) {
+    uint64_t next = 0;
+    for (size_t k = 0; k < mesh.parts.size(); ++k) {
+        if (mesh.parts[k].first_triangle != next)
+            throw ImportError("mesh '" + mesh.name + "': part " + std::to_string(k) + " starts at triangle " + std::to_string(mesh.parts[k].first_triangle) +
+                              ", not where the previous part ends (" + std::to_string(next) + ")");
+        next += mesh.parts[k].triangle_count;
+    }
+    if (!mesh.parts.empty() && next != mesh.triangle_count())
+        throw ImportError("mesh '" + mesh.name + "': the parts cover " + std::to_string(next) + " of " + std::to_string(mesh.triangle_count()) + " triangles");
+}
+
 } // namespace
+
+uint32_t attribute_bits(const Mesh& mesh) noexcept {
+    uint32_t bits = 0, k = 0;
+    for_each_attribute_stream(mesh, [&](const std::vector<float>& stream, size_t, const char*) { bits |= (stream.empty() ? 0u : 1u) << k++; });
+    return bits;
+}
+
+Mesh join_parts(const std::vector<Mesh>& inputs, std::string name) {
+    Mesh out;
+    out.name = std::move(name);
+    if (inputs.size() == 1 && inputs[0].parts.empty()) {
+        out = inputs[0];
+        return out;
+    }
+    // which streams any input has: those the joined mesh has
+    std::vector<bool> present;
+    for (const Mesh& in : inputs) {
+        size_t k = 0;
+        for_each_attribute_stream(in, [&](const std::vector<float>& s, size_t, const char*) {
+            if (present.size() <= k) present.push_back(false);
+            present[k] = present[k] || !s.empty();
+            ++k;
+        });
+    }
+    static const float neutral[5][4] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {1, 1, 1, 1}, {0, 0, 0, 0}, {1, 0, 0, 1}};
+    for (const Mesh& in : inputs) {
+        const uint32_t base = out.vertex_count(), first_triangle = out.triangle_count(), n = in.vertex_count();
+        out.positions.insert(out.positions.end(), in.positions.begin(), in.positions.end());
+        std::vector<const std::vector<float>*> sources;
+        for_each_attribute_stream(in, [&](const std::vector<float>& s, size_t, const char*) { sources.push_back(&s); });
+        const uint32_t own = attribute_bits(in);
+        size_t k = 0;
+        for_each_attribute_stream(out, [&](std::vector<float>& dst, size_t width, const char*) {
+            const std::vector<float>& src = *sources[k];
+            if (present[k]) {
+                if (src.size() == size_t(n) * width)
+                    dst.insert(dst.end(), src.begin(), src.end());
+                else
+                    for (uint32_t v = 0; v < n; ++v) dst.insert(dst.end(), neutral[k], neutral[k] + width);
+            }
+            ++k;
+        });
+        for (const uint32_t i : in.indices) out.indices.push_back(base + i);
+        if (in.parts.empty()) {
+            out.parts.push_back({first_triangle, in.triangle_count(), in.material, own});
+        } else {
+            for (Part p : in.parts) {
+                p.first_triangle += first_triangle;
+                out.parts.push_back(p);
+            }
+        }
+    }
+    out.material = out.parts.empty() ? -1 : out.parts[0].material;
+    if (out.parts.size() == 1) out.parts.clear();
+    return out;
+}
 
 void compute_normals(Mesh& mesh) {
     const uint32_t n = mesh.vertex_count();
@@ -74,12 +158,15 @@ CleanStats clean_mesh(Mesh& mesh) {
         if (mesh.indices[i] >= n)
             throw ImportError("mesh '" + mesh.name + "': triangle " + std::to_string(i / 3) + " uses vertex " +
                               std::to_string(mesh.indices[i]) + " but the mesh has " + std::to_string(n) + " vertices");
+    check_parts(mesh);
     for (float& x : mesh.normals)
         if (!std::isfinite(x)) x = 0.0f;  // renormalised below
 
     // drop triangles with a repeated corner: they cover no area and can never be drawn
     size_t out = 0;
+    std::vector<uint32_t> kept_before(mesh.parts.empty() ? 0 : mesh.triangle_count() + size_t(1));  // triangles kept before t
     for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+        if (!kept_before.empty()) kept_before[t / 3] = uint32_t(out / 3);
         const uint32_t a = mesh.indices[t], b = mesh.indices[t + 1], c = mesh.indices[t + 2];
         if (a == b || b == c || a == c) {
             ++stats.degenerate_triangles;
@@ -87,7 +174,9 @@ CleanStats clean_mesh(Mesh& mesh) {
         }
         mesh.indices[out++] = a, mesh.indices[out++] = b, mesh.indices[out++] = c;
     }
+    if (!kept_before.empty()) kept_before.back() = uint32_t(out / 3);
     mesh.indices.resize(out);
+    if (!mesh.parts.empty()) recount_parts(mesh, kept_before);
 
     // drop unreferenced vertices, keeping the order of the rest
     std::vector<uint32_t> remap(n, UINT32_MAX);

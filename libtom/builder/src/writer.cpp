@@ -66,8 +66,25 @@ std::vector<uint8_t> metadata_bytes(const std::vector<MetadataEntry>& entries) {
     return out;
 }
 
-// COAR: the corners of the triangles active at a coarse resolution, mapped to it (empty: none)
+// PART: the header and one record per part (empty: a mesh of one part)
+std::vector<uint8_t> part_bytes(const TomMesh& mesh) {
+    if (mesh.parts.empty()) return {};
+    std::vector<uint8_t> out(parts_header_bytes + mesh.parts.size() * part_record_bytes, 0);
+    store_u32(out.data(), uint32_t(mesh.parts.size()));
+    for (size_t k = 0; k < mesh.parts.size(); ++k) {
+        uint8_t* r = &out[parts_header_bytes + k * part_record_bytes];
+        store_u32(r, mesh.parts[k].first_triangle);
+        store_u32(r + 4, mesh.parts[k].triangle_count);
+        store_u32(r + 8, uint32_t(mesh.parts[k].material));
+        store_u32(r + 12, mesh.parts[k].attributes);
+    }
+    return out;
+}
+
+// COAR: the corners of the triangles active at a coarse resolution, mapped to it (empty: none,
+// and always for a mesh with parts, whose live triangles are one prefix per part)
 std::vector<uint8_t> coarse_bytes(const TomMesh& mesh) {
+    if (!mesh.parts.empty()) return {};
     const MeshView view = mesh.view();
     const uint32_t resolution = detail::coarse_resolution(view);
     if (resolution == 0) return {};
@@ -120,6 +137,8 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
             attributes |= spec.flag;
             streams.push_back({spec.section, mi, float_bytes(values)});
         });
+        std::vector<uint8_t> parts = part_bytes(m);
+        if (!parts.empty()) attributes |= attr_parts;
         store_u32(&head[m_attributes], attributes);
         for (int k = 0; k < 3; ++k) {
             store_f32(&head[m_bounds_min + 4 * k], m.bounds_min[k]);
@@ -136,6 +155,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
         if (!coarse.empty()) sections.push_back({sec_coarse, mi, std::move(coarse)});
         if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});
         if (!m.pair_bits.empty()) sections.push_back({sec_pairs, mi, m.pair_bits});
+        if (!parts.empty()) sections.push_back({sec_parts, mi, std::move(parts)});
     }
     const uint64_t table_offset = header_bytes;
     uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cstdarg>
 #include <cstdio>
+#include <cctype>
 #include <cstring>
+#include <filesystem>
+#include <set>
 #include <string>
 
 #include "tom/errors.h"
@@ -50,11 +53,69 @@ Streams common_streams(const std::vector<ExportPart>& parts) {
     return s;
 }
 
-std::string obj_text(const std::vector<ExportPart>& parts) {
+// A mesh's groups of triangles in its `indices`: its parts' draws, or one of all with its material.
+std::vector<PartDraw> groups_of(const ExportPart& part) {
+    if (!part.draws.empty()) return part.draws;
+    return {PartDraw{0, uint32_t(part.indices.size()), part.mesh->material}};
+}
+
+int max_material(const std::vector<ExportPart>& parts) {
+    int top = -1;
+    for (const ExportPart& part : parts)
+        for (const PartDraw& d : groups_of(part)) top = std::max(top, d.material);
+    return top;
+}
+
+// OBJ material names: the stored names with white space replaced, unique; material_k for none.
+std::vector<std::string> material_names(const Scene& scene, int count) {
+    std::vector<std::string> names;
+    std::set<std::string> taken;
+    for (int k = 0; k < count; ++k) {
+        std::string name = size_t(k) < scene.materials.size() ? scene.materials[size_t(k)].name : std::string();
+        for (char& c : name)
+            if (std::isspace(static_cast<unsigned char>(c))) c = '_';
+        if (name.empty() || taken.count(name)) name = "material_" + std::to_string(k);
+        taken.insert(name);
+        names.push_back(name);
+    }
+    return names;
+}
+
+std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, const std::string& texture_dir, const std::string& obj_path) {
+    namespace fs = std::filesystem;
+    const fs::path out_dir = fs::absolute(fs::path(obj_path)).parent_path();
+    std::string out = "# written by libtom\n";
+    for (size_t k = 0; k < names.size(); ++k) {
+        append(out, "\nnewmtl %s\n", names[k].c_str());
+        if (k >= scene.materials.size()) {
+            out += "Kd 0.8 0.8 0.8\n";
+            continue;
+        }
+        const Material& m = scene.materials[k];
+        append(out, "Kd %.6g %.6g %.6g\nd %.6g\n", m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]);
+        if (m.emissive[0] != 0 || m.emissive[1] != 0 || m.emissive[2] != 0) append(out, "Ke %.6g %.6g %.6g\n", m.emissive[0], m.emissive[1], m.emissive[2]);
+        for (const TextureRef& t : m.textures) {
+            if (t.uri.empty()) continue;  // embedded in the source: not kept
+            std::string uri = t.uri;
+            if (!texture_dir.empty() && uri.find("://") == std::string::npos)
+                uri = fs::relative(fs::absolute(fs::path(texture_dir) / uri), out_dir).generic_string();
+            const char* key = t.role == TextureRole::base_color ? "map_Kd"
+                            : t.role == TextureRole::normal     ? "norm"
+                            : t.role == TextureRole::emissive   ? "map_Ke"
+                            : t.role == TextureRole::occlusion  ? "map_Ka"
+                                                                : "map_Pr";
+            append(out, "%s %s\n", key, uri.c_str());
+        }
+    }
+    return out;
+}
+
+std::string obj_text(const std::vector<ExportPart>& parts, const std::vector<std::string>& materials, const std::string& mtl_name) {
     const Streams s = common_streams(parts);
     std::string out;
     out.reserve(s.vertices * 100 + s.triangles * 30);
     append(out, "# %zu vertices, %zu triangles (written by libtom)\n", s.vertices, s.triangles);
+    if (!materials.empty()) append(out, "mtllib %s\n", mtl_name.c_str());
     for (const ExportPart& part : parts) {
         const MeshView& m = *part.mesh;
         for (uint32_t v = 0; v < part.vertex_count; ++v) {
@@ -80,20 +141,24 @@ std::string obj_text(const std::vector<ExportPart>& parts) {
     size_t base = 1;  // OBJ indices start at 1
     for (const ExportPart& part : parts) {
         append(out, "o %.*s\n", int(part.mesh->name.size()), part.mesh->name.data());
-        for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
-            out += 'f';
-            for (int k = 0; k < 3; ++k) {
-                const size_t i = part.indices[t + size_t(k)] + base;
-                if (s.texcoords && s.normals)
-                    append(out, " %zu/%zu/%zu", i, i, i);
-                else if (s.texcoords)
-                    append(out, " %zu/%zu", i, i);
-                else if (s.normals)
-                    append(out, " %zu//%zu", i, i);
-                else
-                    append(out, " %zu", i);
+        for (const PartDraw& group : groups_of(part)) {
+            if (group.index_count == 0) continue;
+            if (!materials.empty()) append(out, "usemtl %s\n", group.material >= 0 ? materials[size_t(group.material)].c_str() : "(null)");
+            for (size_t t = group.first_index; t + 2 < size_t(group.first_index) + group.index_count; t += 3) {
+                out += 'f';
+                for (int k = 0; k < 3; ++k) {
+                    const size_t i = part.indices[t + size_t(k)] + base;
+                    if (s.texcoords && s.normals)
+                        append(out, " %zu/%zu/%zu", i, i, i);
+                    else if (s.texcoords)
+                        append(out, " %zu/%zu", i, i);
+                    else if (s.normals)
+                        append(out, " %zu//%zu", i, i);
+                    else
+                        append(out, " %zu", i);
+                }
+                out += '\n';
             }
-            out += '\n';
         }
         base += part.vertex_count;
     }
@@ -102,12 +167,14 @@ std::string obj_text(const std::vector<ExportPart>& parts) {
 
 std::string ply_bytes(const std::vector<ExportPart>& parts) {
     const Streams s = common_streams(parts);
+    const bool with_materials = max_material(parts) >= 0;
     std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by libtom\n";
     append(out, "element vertex %zu\nproperty float x\nproperty float y\nproperty float z\n", s.vertices);
     if (s.normals) out += "property float nx\nproperty float ny\nproperty float nz\n";
     if (s.texcoords) out += "property float s\nproperty float t\n";
     if (s.colors) out += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
-    append(out, "element face %zu\nproperty list uchar uint vertex_indices\nend_header\n", s.triangles);
+    append(out, "element face %zu\nproperty list uchar uint vertex_indices\n%send_header\n", s.triangles,
+           with_materials ? "property int material_index\n" : "");
     auto put = [&](const void* p, size_t bytes) { out.append(static_cast<const char*>(p), bytes); };
     for (const ExportPart& part : parts) {
         const MeshView& m = *part.mesh;
@@ -125,14 +192,16 @@ std::string ply_bytes(const std::vector<ExportPart>& parts) {
     }
     uint32_t base = 0;
     for (const ExportPart& part : parts) {
-        for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
-            const uint8_t three = 3;
-            put(&three, 1);
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t i = part.indices[t + size_t(k)] + base;
-                put(&i, 4);
+        for (const PartDraw& group : groups_of(part))
+            for (size_t t = group.first_index; t + 2 < size_t(group.first_index) + group.index_count; t += 3) {
+                const uint8_t three = 3;
+                put(&three, 1);
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t i = part.indices[t + size_t(k)] + base;
+                    put(&i, 4);
+                }
+                if (with_materials) put(&group.material, 4);
             }
-        }
         base += part.vertex_count;
     }
     return out;
@@ -140,12 +209,18 @@ std::string ply_bytes(const std::vector<ExportPart>& parts) {
 
 } // namespace
 
-void export_meshes(const std::string& path, const std::vector<ExportPart>& parts) {
+void export_meshes(const std::string& path, const std::vector<ExportPart>& parts, const Scene& scene, const std::string& texture_dir) {
     const std::string ext = extension_of(path);
     std::string bytes;
-    if (ext == "obj")
-        bytes = obj_text(parts);
-    else if (ext == "ply")
+    if (ext == "obj") {
+        const std::vector<std::string> materials = material_names(scene, max_material(parts) + 1);
+        const std::filesystem::path mtl = std::filesystem::path(path).replace_extension(".mtl");
+        if (!materials.empty()) {
+            const std::string text = mtl_text(scene, materials, texture_dir, path);
+            write_bytes_atomically(mtl.string(), text.data(), text.size());
+        }
+        bytes = obj_text(parts, materials, mtl.filename().string());
+    } else if (ext == "ply")
         bytes = ply_bytes(parts);
     else
         throw IoError("cannot write '" + path + "': unsupported output type '." + ext + "' (use .obj or .ply)");

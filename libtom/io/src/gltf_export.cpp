@@ -150,28 +150,43 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
             attributes["TANGENT"] = w.accessor(w.view(tangents.data(), tangents.size() * 4, kArrayBuffer), kFloat, n_max, "VEC4");
         }
         std::vector<uint32_t> indices(size_t(m.triangle_count) * 3);
+        std::vector<PartDraw> draws(part_count(m));
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
-            const Extracted e = extract(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size());
+            const Extracted e = extract_parts(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size(), draws.data());
             if (e.triangle_count == 0) continue;
-            const size_t count = size_t(e.triangle_count) * 3;
-            int view_index;
-            int component;
-            if (e.vertex_count <= 65535) {  // 16-bit, 65535 itself being reserved by glTF for restart
-                std::vector<uint16_t> small(indices.begin(), indices.begin() + ptrdiff_t(count));
-                view_index = w.view(small.data(), count * 2, kElementArrayBuffer);
-                component = kUint16;
-            } else {
-                view_index = w.view(indices.data(), count * 4, kElementArrayBuffer);
-                component = kUint32;
-            }
-            json primitive = {{"attributes", attributes}, {"indices", w.accessor(view_index, component, count, "SCALAR")}, {"mode", 4}};
-            if (m.material >= 0) {
-                primitive["material"] = m.material;
-                max_material = std::max(max_material, m.material);
+            // one primitive per part that has triangles at this level, with the streams its source had
+            json primitives = json::array();
+            for (uint32_t p = 0; p < draws.size(); ++p) {
+                const PartDraw& d = draws[p];
+                if (d.index_count == 0) continue;
+                const uint32_t* part_indices = indices.data() + d.first_index;
+                int view_index;
+                int component;
+                if (e.vertex_count <= 65535) {  // 16-bit, 65535 itself being reserved by glTF for restart
+                    std::vector<uint16_t> small(part_indices, part_indices + d.index_count);
+                    view_index = w.view(small.data(), size_t(d.index_count) * 2, kElementArrayBuffer);
+                    component = kUint16;
+                } else {
+                    view_index = w.view(part_indices, size_t(d.index_count) * 4, kElementArrayBuffer);
+                    component = kUint32;
+                }
+                json own = attributes;
+                if (m.parts) {
+                    const uint32_t streams = part_at(m, p).attributes;
+                    const std::pair<const char*, uint32_t> optional[] = {{"TEXCOORD_0", 2}, {"COLOR_0", 4}, {"TEXCOORD_1", 8}, {"TANGENT", 16}};
+                    for (const auto& [key, bit] : optional)
+                        if (!(streams & bit)) own.erase(key);
+                }
+                json primitive = {{"attributes", own}, {"indices", w.accessor(view_index, component, d.index_count, "SCALAR")}, {"mode", 4}};
+                if (d.material >= 0) {
+                    primitive["material"] = d.material;
+                    max_material = std::max(max_material, d.material);
+                }
+                primitives.push_back(primitive);
             }
             level_mesh[mi][level] = int(gltf_meshes.size());
             const std::string name(m.name);
-            gltf_meshes.push_back({{"name", levels > 1 ? name + " level " + std::to_string(level) : name}, {"primitives", {primitive}}});
+            gltf_meshes.push_back({{"name", levels > 1 ? name + " level " + std::to_string(level) : name}, {"primitives", primitives}});
         }
     }
     json doc;

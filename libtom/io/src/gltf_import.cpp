@@ -217,6 +217,29 @@ const char* mode_name(int mode) {
     }
 }
 
+// A primitive's triangle list: its indices (or 0..n-1 without), strips and fans converted.
+std::vector<uint32_t> primitive_triangles(const PrimitiveReader& reader, const tinygltf::Primitive& prim, int mode, size_t n) {
+    std::vector<uint32_t> seq;
+    if (prim.indices >= 0) {
+        seq = reader.read_indices(prim.indices, n);
+    } else {
+        seq.resize(n);
+        for (size_t v = 0; v < n; ++v) seq[v] = uint32_t(v);
+    }
+    if (mode == TINYGLTF_MODE_TRIANGLES && seq.size() % 3 != 0)
+        reader.fail(std::string("mode TRIANGLES needs a multiple of 3 ") + (prim.indices >= 0 ? "indices" : "vertices") + ", found " +
+                    std::to_string(seq.size()));
+    std::vector<uint32_t> triangles = to_triangle_list(seq, mode);
+    if (triangles.empty()) reader.fail("has no complete triangle");
+    return triangles;
+}
+
+// Parts made of primitives that share vertices carry the streams of those vertices.
+void mark_own_attributes(std::vector<Mesh>& primitives) {
+    for (Mesh& m : primitives)
+        for (Part& part : m.parts) part.attributes = attribute_bits(m);
+}
+
 } // namespace
 
 ImportResult import_gltf(const std::string& path, bool binary) {
@@ -256,10 +279,14 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     const bool quantized = std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_mesh_quantization") != model.extensionsUsed.end();
 
     const std::string stem = file_stem(path);
-    std::vector<std::vector<uint32_t>> mesh_parts(model.meshes.size());  // glTF mesh -> imported meshes
+    std::vector<std::vector<uint32_t>> mesh_parts(model.meshes.size());  // glTF mesh -> imported meshes (one, or none)
     for (size_t mi = 0; mi < model.meshes.size(); ++mi) {
         const tinygltf::Mesh& gm = model.meshes[mi];
         const std::string mesh_name = gm.name.empty() ? "mesh" + std::to_string(mi) : gm.name;
+        // the mesh's triangle primitives, each a part; consecutive primitives reading the same
+        // vertex accessors share one copy of the vertices (one Mesh with several parts)
+        std::vector<Mesh> primitives;
+        const std::map<std::string, int>* previous_attributes = nullptr;
         for (size_t pi = 0; pi < gm.primitives.size(); ++pi) {
             const tinygltf::Primitive& prim = gm.primitives[pi];
             const std::string where = path + ": mesh " + std::to_string(mi) + " '" + mesh_name + "' primitive " + std::to_string(pi);
@@ -276,8 +303,21 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             };
             const int pos_index = attr("POSITION");
             if (pos_index < 0) reader.fail("has no POSITION attribute");
+            std::vector<uint32_t> seq;
+            const bool shares = previous_attributes && *previous_attributes == prim.attributes && !has_texture_transform(model, prim.material) &&
+                                !has_texture_transform(model, primitives.back().parts.empty() ? primitives.back().material : primitives.back().parts[0].material);
+            if (shares) {
+                // same vertices as the previous primitive: append its triangles as a part of that mesh
+                Mesh& shared = primitives.back();
+                if (shared.parts.empty()) shared.parts.push_back({0, shared.triangle_count(), shared.material, 0});
+                seq = primitive_triangles(reader, prim, mode, shared.vertex_count());
+                shared.parts.push_back({shared.triangle_count(), uint32_t(seq.size() / 3), prim.material, shared.parts[0].attributes});
+                shared.indices.insert(shared.indices.end(), seq.begin(), seq.end());
+                continue;
+            }
+            previous_attributes = &prim.attributes;
             Mesh mesh;
-            mesh.name = stem + "/" + mesh_name + (gm.primitives.size() > 1 ? "#" + std::to_string(pi) : std::string());
+            mesh.name = stem + "/" + mesh_name;
             mesh.material = prim.material;
             mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, PrimitiveReader::Kind::position, 0);
             const size_t n = mesh.positions.size() / 3;
@@ -299,23 +339,15 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             }
             if (const std::string w = bake_texture_transform(model, prim.material, mesh); !w.empty())
                 result.warnings.push_back(mesh.name + ": " + w);
-            std::vector<uint32_t> seq;
-            if (prim.indices >= 0) {
-                seq = reader.read_indices(prim.indices, n);
-            } else {
-                seq.resize(n);
-                for (size_t v = 0; v < n; ++v) seq[v] = uint32_t(v);
-            }
-            if (mode == TINYGLTF_MODE_TRIANGLES && seq.size() % 3 != 0)
-                reader.fail(std::string("mode TRIANGLES needs a multiple of 3 ") + (prim.indices >= 0 ? "indices" : "vertices") + ", found " +
-                            std::to_string(seq.size()));
-            mesh.indices = to_triangle_list(seq, mode);
-            if (mesh.indices.empty()) reader.fail("has no complete triangle");
+            mesh.indices = primitive_triangles(reader, prim, mode, n);
             for (size_t i = 0; i < mesh.positions.size(); ++i)
                 if (!std::isfinite(mesh.positions[i])) reader.fail("POSITION of vertex " + std::to_string(i / 3) + " is not finite");
-            mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
-            result.meshes.push_back(std::move(mesh));
+            primitives.push_back(std::move(mesh));
         }
+        if (primitives.empty()) continue;
+        mark_own_attributes(primitives);
+        mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
+        result.meshes.push_back(join_parts(primitives, stem + "/" + mesh_name));
     }
     result.scene = gltf_scene(model, mesh_parts, path);
     if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");

@@ -9,6 +9,7 @@
 #include <tiny_gltf.h>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -29,5 +30,9 @@ Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uin
 /// references without transforms (and gltfpack's quantized UVs rely on one). Returns a warning
 /// when textures of the material carry different transforms (only one can be baked), else "".
 std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh);
+
+/// True when a texture of material `material` carries KHR_texture_transform (so its primitive's
+/// texture coordinates change on import and cannot share vertices with another material's).
+bool has_texture_transform(const tinygltf::Model& model, int material);
 
 } // namespace tom::detail

@@ -136,6 +136,15 @@ struct Flattener {
 
 } // namespace
 
+bool has_texture_transform(const tinygltf::Model& model, int material) {
+    if (material < 0 || size_t(material) >= model.materials.size()) return false;
+    for (const TextureSlot& slot : texture_slots(model.materials[size_t(material)])) {
+        const auto it = slot.extensions->find("KHR_texture_transform");
+        if (it != slot.extensions->end() && it->second.IsObject()) return true;
+    }
+    return false;
+}
+
 std::string bake_texture_transform(const tinygltf::Model& model, int material, Mesh& mesh) {
     if (material < 0 || size_t(material) >= model.materials.size()) return "";
     const tinygltf::Value* chosen = nullptr;

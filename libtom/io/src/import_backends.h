@@ -14,5 +14,10 @@ ImportResult import_gltf(const std::string& path, bool binary);
 std::string file_stem(const std::string& path);
 /// The whole file; IoError when it cannot be read.
 std::vector<uint8_t> read_whole_file(const std::string& path);
+/// The materials named by an OBJ's `usemtl` lines (`names`, in that order) from its `mtllib`
+/// files (relative to the OBJ). A missing or unreadable library, or a name none defines, is a
+/// warning naming it; such materials get default values. Texture URIs are relative to the OBJ.
+std::vector<Material> read_obj_materials(const std::string& obj_path, const std::vector<std::string>& libraries,
+                                         const std::vector<std::string>& names, std::vector<std::string>& warnings);
 
 } // namespace tom::detail

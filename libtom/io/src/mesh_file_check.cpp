@@ -486,7 +486,7 @@ void check_ply(const std::string& path, std::string_view text, Canonical& out) {
 
 // Checks an OBJ file and writes the canonical text into `out`: v, vt, vn and f lines only, the
 // values as OpenMesh's stream would read them, the indices absolute.
-void check_obj(const std::string& path, std::string_view text, Canonical& out) {
+void check_obj(const std::string& path, std::string_view text, Canonical& out, ObjGroups* groups) {
     // totals first: OpenMesh reads every v, vt and vn before the faces
     uint64_t v = 0, vt = 0, vn = 0;
     {
@@ -502,6 +502,8 @@ void check_obj(const std::string& path, std::string_view text, Canonical& out) {
     std::vector<std::string_view> w;
     // an OBJ index: 1-based, or negative from the end of what is defined so far
     uint64_t seen_v = 0, seen_vt = 0, seen_vn = 0;
+    int32_t material = -1;
+    if (groups) groups->face_first.assign(1, 0);
     // the index as an absolute, 1-based number
     auto check_index = [&](std::string_view s, uint64_t total, uint64_t seen, const char* what, size_t line) {
         long long i = 0;
@@ -542,12 +544,26 @@ void check_obj(const std::string& path, std::string_view text, Canonical& out) {
         } else if (w[0] == "vn") {
             numbers(3, "a normal");
             ++seen_vn;
+        } else if (groups && (w[0] == "usemtl" || w[0] == "mtllib") && w.size() >= 2) {
+            // names may hold spaces: the rest of the line, its words joined by one space
+            std::string name(w[1]);
+            for (size_t k = 2; k < w.size(); ++k) name += " " + std::string(w[k]);
+            if (w[0] == "mtllib") {
+                groups->libraries.push_back(name);
+                continue;
+            }
+            const auto known = std::find(groups->materials.begin(), groups->materials.end(), name);
+            material = int32_t(known - groups->materials.begin());
+            if (known == groups->materials.end()) groups->materials.push_back(name);
         } else if (w[0] == "f") {
             std::string face = "f";
+            const size_t first_vertex = groups ? groups->face_vertices.size() : 0;
             for (size_t k = 1; k < w.size(); ++k) {
                 const std::string_view c = w[k];
                 const size_t s1 = c.find('/');
-                face += " " + check_index(c.substr(0, s1), v, seen_v, "vertex", line);
+                const std::string vertex = check_index(c.substr(0, s1), v, seen_v, "vertex", line);
+                face += " " + vertex;
+                if (groups) groups->face_vertices.push_back(uint32_t(std::stoull(vertex) - 1));
                 if (s1 == std::string_view::npos) continue;
                 const size_t s2 = c.find('/', s1 + 1);
                 const std::string_view t = c.substr(s1 + 1, s2 == std::string_view::npos ? std::string_view::npos : s2 - s1 - 1);
@@ -555,7 +571,15 @@ void check_obj(const std::string& path, std::string_view text, Canonical& out) {
                 if (!t.empty()) face += check_index(t, vt, seen_vt, "texture coordinate", line);
                 if (s2 != std::string_view::npos) face += "/" + check_index(c.substr(s2 + 1), vn, seen_vn, "normal", line);
             }
-            if (w.size() >= 4) out.line({face});  // fewer than three corners make no face
+            if (w.size() >= 4) {  // fewer than three corners make no face
+                out.line({face});
+                if (groups) {
+                    groups->face_first.push_back(uint32_t(groups->face_vertices.size()));
+                    groups->face_material.push_back(material);
+                }
+            } else if (groups) {
+                groups->face_vertices.resize(first_vertex);
+            }
         }
     }
 }
@@ -617,7 +641,7 @@ void check_stl(const std::string& path, std::string_view text, Canonical& out) {
 
 } // namespace
 
-std::string check_mesh_file(const std::string& path, const std::string& extension) {
+std::string check_mesh_file(const std::string& path, const std::string& extension, ObjGroups* groups) {
     if (extension != "off" && extension != "ply" && extension != "obj" && extension != "stl") return {};
     const std::vector<uint8_t> bytes = read_whole_file(path);
     const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
@@ -625,7 +649,7 @@ std::string check_mesh_file(const std::string& path, const std::string& extensio
     if (extension == "off") check_off(path, text, out);
     else if (extension == "ply") check_ply(path, text, out);
     else if (extension == "stl") check_stl(path, text, out);
-    else check_obj(path, text, out);
+    else check_obj(path, text, out, groups);
     return std::move(out.text);
 }
 

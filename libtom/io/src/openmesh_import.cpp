@@ -45,7 +45,7 @@ using OmMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
 class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
   public:
     using Base = OpenMesh::IO::ImporterT<OmMesh>;
-    explicit Importer(OmMesh& mesh) : Base(mesh), mesh_(mesh) {}
+    Importer(OmMesh& mesh, const ObjGroups* groups) : Base(mesh), mesh_(mesh), groups_(groups) {}
 
     OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override { return defined(Base::add_vertex(p)); }
     OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override { return defined(Base::add_vertex(p)); }
@@ -58,6 +58,7 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
         const OpenMesh::FaceHandle fh = Base::add_face(polygon);
         for (size_t v = first_copy_; v < mesh_.n_vertices(); ++v)  // copies of the corners, in order
             copies_.push_back({OpenMesh::VertexHandle(int(v)), polygon_[v - first_copy_]});
+        if (groups_) face_material_.resize(mesh_.n_faces(), material_of(polygon));
         for (size_t f = first_face_; f < mesh_.n_faces(); ++f)
             for (auto h : mesh_.fh_range(OpenMesh::FaceHandle(int(f)))) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(0, 0));
         return fh;
@@ -76,9 +77,31 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
     // the vertices OpenMesh made for faces it could only add with vertices of their own
     // (non-manifold input), each with the file's vertex it copies
     const std::vector<std::pair<OpenMesh::VertexHandle, OpenMesh::VertexHandle>>& copies() const { return copies_; }
+    /// OBJ: per OpenMesh face, the material group (ObjGroups::materials index) of its face line
+    const std::vector<int32_t>& face_material() const { return face_material_; }
 
   private:
+    // The face line a polygon came from: the next line, from the last one matched, whose vertices
+    // include all of the polygon's (OpenMesh may drop repeated corners or a line it cannot add).
+    int32_t material_of(const VHandles& polygon) {
+        const ObjGroups& g = *groups_;
+        for (size_t line = cursor_; line < g.face_material.size(); ++line) {
+            const uint32_t* begin = g.face_vertices.data() + g.face_first[line];
+            const uint32_t* end = g.face_vertices.data() + g.face_first[line + 1];
+            bool all = true;
+            for (const OpenMesh::VertexHandle& v : polygon) all = all && std::find(begin, end, uint32_t(v.idx())) != end;
+            if (all) {
+                cursor_ = line + 1;
+                return g.face_material[line];
+            }
+        }
+        return cursor_ > 0 ? g.face_material[cursor_ - 1] : -1;
+    }
+
     OmMesh& mesh_;
+    const ObjGroups* groups_;
+    size_t cursor_ = 0;
+    std::vector<int32_t> face_material_;
     size_t first_face_ = 0, first_copy_ = 0;
     VHandles polygon_;
     std::vector<std::pair<OpenMesh::VertexHandle, OpenMesh::VertexHandle>> copies_;
@@ -137,6 +160,26 @@ struct CanonicalFile {
     CanonicalFile& operator=(const CanonicalFile&) = delete;
 };
 
+// OBJ `usemtl` groups as parts: the triangles sorted by material (stable; faces before any usemtl
+// first), one part per material used; one material alone is the mesh's.
+void group_by_material(Mesh& mesh, const std::vector<int32_t>& face_material) {
+    const uint32_t m = mesh.triangle_count();
+    std::vector<uint32_t> order(m);
+    for (uint32_t t = 0; t < m; ++t) order[t] = t;
+    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return face_material[a] < face_material[b]; });
+    std::vector<uint32_t> indices(mesh.indices.size());
+    for (uint32_t t = 0; t < m; ++t) std::copy_n(&mesh.indices[3 * size_t(order[t])], 3, &indices[3 * size_t(t)]);
+    mesh.indices.swap(indices);
+    const uint32_t own = attribute_bits(mesh);
+    for (uint32_t t = 0; t < m; ++t) {
+        const int32_t material = face_material[order[t]];
+        if (mesh.parts.empty() || mesh.parts.back().material != material) mesh.parts.push_back({t, 0, material, own});
+        ++mesh.parts.back().triangle_count;
+    }
+    mesh.material = mesh.parts.empty() ? -1 : mesh.parts[0].material;
+    if (mesh.parts.size() == 1) mesh.parts.clear();
+}
+
 } // namespace
 
 std::string file_stem(const std::string& path) {
@@ -149,7 +192,8 @@ std::string file_stem(const std::string& path) {
 ImportResult import_openmesh(const std::string& path, const std::string& extension) {
     // OpenMesh's readers trust what the file announces: they read the checked, canonical form
     // (from a temporary file) or, for binary OFF and STL, the checked file itself
-    const std::string canonical = check_mesh_file(path, extension);
+    ObjGroups groups;
+    const std::string canonical = check_mesh_file(path, extension, extension == "obj" ? &groups : nullptr);
     OmMesh om;
     om.request_vertex_normals();
     om.request_vertex_texcoords2D();
@@ -158,7 +202,7 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     OpenMesh::IO::Options opt = OpenMesh::IO::Options::VertexNormal | OpenMesh::IO::Options::VertexTexCoord |
                                 OpenMesh::IO::Options::FaceTexCoord | OpenMesh::IO::Options::VertexColor | OpenMesh::IO::Options::ColorFloat;
     std::string messages;
-    Importer importer(om);
+    Importer importer(om, extension == "obj" && !groups.materials.empty() ? &groups : nullptr);
     bool ok;
     {
         std::lock_guard<std::mutex> lock(openmesh_mutex());
@@ -262,6 +306,9 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         }
     }
     mesh.indices = std::move(corners);
+    if (importer.face_material().size() == mesh.triangle_count()) group_by_material(mesh, importer.face_material());
+    if (extension == "obj" && (!groups.materials.empty() || !groups.libraries.empty()))
+        result.scene.materials = read_obj_materials(path, groups.libraries, groups.materials, result.warnings);
     result.meshes.push_back(std::move(mesh));
     return result;
 }

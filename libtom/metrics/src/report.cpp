@@ -103,6 +103,7 @@ MemoryReport memory_of(const TomMesh& built) {
     stripped.texcoords.clear();
     stripped.colors.clear();
     stripped.metadata.clear();
+    for (Part& part : stripped.parts) part.attributes &= ~(2u | 4u);  // the streams cleared above
     if (stripped.normals.empty()) stripped.normals.assign(stripped.positions.size(), 0.0f);
     WriteOptions o;
     o.index_size = IndexSize::bits32;

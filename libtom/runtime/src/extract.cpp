@@ -287,10 +287,70 @@ uint32_t active_count_at(const MeshView& m, uint32_t n) noexcept {
     return m.index_size == 2 ? active_count<uint16_t>(m, n) : active_count<uint32_t>(m, n);
 }
 
+// Part p as a mesh of its own: the same vertices, the part's range of triangles, no coarse
+// corners (COAR is only for meshes without parts). The single-part code runs on it unchanged.
+MeshView part_mesh(const MeshView& m, uint32_t p) noexcept {
+    const Part part = part_at(m, p);
+    if (!m.parts) return m;
+    MeshView v = m;
+    v.triangles = static_cast<const uint8_t*>(m.triangles) + size_t(part.first_triangle) * 3 * m.index_size;
+    v.triangle_count = part.triangle_count;
+    v.material = part.material;
+    v.coarse_corners = nullptr;
+    v.parts = nullptr;
+    v.part_count = 0;
+    return v;
+}
+
+template <class O>
+Extracted extract_any(const MeshView& m, uint32_t vertex_count, O* dst, size_t capacity) noexcept {
+    if (sizeof(O) == 2 && m.index_size == 4) vertex_count = std::min<uint32_t>(vertex_count, 65536u);  // the contract
+    return m.index_size == 2 ? extract_impl<uint16_t>(m, vertex_count, dst, capacity) : extract_impl<uint32_t>(m, vertex_count, dst, capacity);
+}
+
+// Each part's live triangles after the previous part's, until the buffer is full.
+template <class O>
+Extracted extract_all_parts(const MeshView& m, uint32_t vertex_count, O* dst, size_t capacity, PartDraw* draws) noexcept {
+    Extracted total;
+    total.vertex_count = clamp_resolution(m, vertex_count);
+    const uint32_t parts = part_count(m);
+    size_t written = 0;
+    for (uint32_t p = 0; p < parts; ++p) {
+        const MeshView part = part_mesh(m, p);
+        const Extracted e = extract_any(part, vertex_count, dst + written, capacity - written);
+        total.vertex_count = e.vertex_count;
+        total.triangle_count += e.triangle_count;
+        if (draws) draws[p] = {uint32_t(written), e.triangle_count * 3, part.material};
+        written += size_t(e.triangle_count) * 3;
+    }
+    return total;
+}
+
 } // namespace
 
+Part part_at(const MeshView& m, uint32_t p) noexcept {
+    if (m.parts) return m.parts[p];
+    Part whole;
+    whole.triangle_count = m.triangle_count;
+    whole.material = m.material;
+    for (int k = 0; k < 5; ++k) {
+        static constexpr const float* MeshView::*streams[5] = {&MeshView::normals, &MeshView::texcoords, &MeshView::colors,
+                                                               &MeshView::texcoords1, &MeshView::tangents};
+        if (m.*streams[k]) whole.attributes |= 1u << k;
+    }
+    return whole;
+}
+
+uint32_t active_part_triangle_count(const MeshView& m, uint32_t p, uint32_t vertex_count) noexcept {
+    return active_count_at(part_mesh(m, p), clamp_resolution(m, vertex_count));
+}
+
 uint32_t active_triangle_count(const MeshView& m, uint32_t vertex_count) noexcept {
-    return active_count_at(m, clamp_resolution(m, vertex_count));
+    const uint32_t n = clamp_resolution(m, vertex_count);
+    if (!m.parts) return active_count_at(m, n);
+    uint32_t total = 0;
+    for (uint32_t p = 0; p < m.part_count; ++p) total += active_count_at(part_mesh(m, p), n);
+    return total;
 }
 
 uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) noexcept {
@@ -314,14 +374,19 @@ uint32_t vertex_count_for_fraction(const MeshView& m, double fraction) noexcept 
 }
 
 Extracted extract(const MeshView& m, uint32_t vertex_count, uint32_t* dst, size_t capacity) noexcept {
-    return m.index_size == 2 ? extract_impl<uint16_t>(m, vertex_count, dst, capacity)
-                             : extract_impl<uint32_t>(m, vertex_count, dst, capacity);
+    return m.parts ? extract_all_parts(m, vertex_count, dst, capacity, nullptr) : extract_any(m, vertex_count, dst, capacity);
 }
 
 Extracted extract(const MeshView& m, uint32_t vertex_count, uint16_t* dst, size_t capacity) noexcept {
-    if (m.index_size == 2) return extract_impl<uint16_t>(m, vertex_count, dst, capacity);
-    // 32-bit storage into a 16-bit buffer: only valid for resolutions <= 65536 (contract)
-    return extract_impl<uint32_t>(m, std::min<uint32_t>(vertex_count, 65536u), dst, capacity);
+    return m.parts ? extract_all_parts(m, vertex_count, dst, capacity, nullptr) : extract_any(m, vertex_count, dst, capacity);
+}
+
+Extracted extract_parts(const MeshView& m, uint32_t vertex_count, uint32_t* dst, size_t capacity, PartDraw* draws) noexcept {
+    return extract_all_parts(m, vertex_count, dst, capacity, draws);
+}
+
+Extracted extract_parts(const MeshView& m, uint32_t vertex_count, uint16_t* dst, size_t capacity, PartDraw* draws) noexcept {
+    return extract_all_parts(m, vertex_count, dst, capacity, draws);
 }
 
 MorphedVertex geomorph(const MeshView& m, uint32_t n, float a) noexcept {
@@ -352,15 +417,18 @@ MorphedVertex geomorph(const MeshView& m, uint32_t n, float a) noexcept {
 ChainStats chain_stats(const MeshView& m, uint32_t vertex_count) noexcept {
     ChainStats s;
     const uint32_t n = clamp_resolution(m, vertex_count);
-    const uint32_t tris = active_triangle_count(m, n);
-    for (uint32_t c = 0; c < tris * 3; ++c) {
-        uint32_t v = m.corner(c), steps = 0;
-        while (v >= n) v = m.substitute_at(v), ++steps;
-        s.steps += steps;
-        s.max_steps = std::max(s.max_steps, steps);
-        ++s.histogram[std::min<uint32_t>(steps, ChainStats::histogram_bins - 1)];
+    for (uint32_t p = 0; p < part_count(m); ++p) {
+        const MeshView part = part_mesh(m, p);
+        const uint32_t tris = active_count_at(part, n);
+        for (uint32_t c = 0; c < tris * 3; ++c) {
+            uint32_t v = part.corner(c), steps = 0;
+            while (v >= n) v = part.substitute_at(v), ++steps;
+            s.steps += steps;
+            s.max_steps = std::max(s.max_steps, steps);
+            ++s.histogram[std::min<uint32_t>(steps, ChainStats::histogram_bins - 1)];
+        }
+        s.corners += uint64_t(tris) * 3;
     }
-    s.corners = uint64_t(tris) * 3;
     return s;
 }
 

@@ -41,7 +41,35 @@ struct File::Impl {
     }
 
     void validate(const OpenOptions& options);
+    void validate_parts(const SectionInfo& sec, uint32_t attributes, MeshView& v, const std::string& mesh_field) const;
 };
+
+// rule 20: the parts tile the triangles in order, each with at least one; two or more of them;
+// each part's streams are some of the mesh's
+void File::Impl::validate_parts(const SectionInfo& sec, uint32_t attributes, MeshView& v, const std::string& mesh_field) const {
+    const std::string field = mesh_field + " PART";
+    const uint8_t* p = data + sec.offset;
+    if (sec.bytes < parts_header_bytes) fail(sec.offset, field, 20, "shorter than its 16-byte header");
+    const uint32_t count = load_u32(p);
+    if (count < 2) fail(sec.offset, field + " part_count", 20, std::to_string(count) + " parts: a mesh of one part has no PART section");
+    if (sec.bytes != parts_header_bytes + uint64_t(count) * part_record_bytes)
+        fail(sec.offset, field, 20, std::to_string(sec.bytes) + " bytes where " + std::to_string(count) + " parts require " + std::to_string(parts_header_bytes + uint64_t(count) * part_record_bytes));
+    uint64_t next = 0;
+    for (uint32_t k = 0; k < count; ++k) {
+        const uint8_t* r = p + parts_header_bytes + uint64_t(k) * part_record_bytes;
+        const uint64_t at = sec.offset + parts_header_bytes + uint64_t(k) * part_record_bytes;
+        const std::string part = field + " part " + std::to_string(k);
+        const uint32_t first = load_u32(r), triangles = load_u32(r + 4), part_attributes = load_u32(r + 12);
+        if (first != next) fail(at, part + " first_triangle", 20, "starts at triangle " + std::to_string(first) + ", not where the previous part ends (" + std::to_string(next) + ")");
+        if (triangles == 0) fail(at + 4, part + " triangle_count", 20, "a part has at least one triangle");
+        next += triangles;
+        if (next > v.triangle_count) fail(at + 4, part + " triangle_count", 20, "ends at triangle " + std::to_string(next) + ", past the mesh's " + std::to_string(v.triangle_count));
+        if (part_attributes & ~(attributes & stream_attributes)) fail(at + 12, part + " attributes", 20, "names a stream the mesh does not have");
+    }
+    if (next != v.triangle_count) fail(sec.offset, field, 20, "the parts cover " + std::to_string(next) + " of the mesh's " + std::to_string(v.triangle_count) + " triangles");
+    v.parts = reinterpret_cast<const Part*>(p + parts_header_bytes);
+    v.part_count = count;
+}
 
 namespace {
 
@@ -63,6 +91,7 @@ struct MeshSections {
     const SectionInfo* metadata = nullptr;
     const SectionInfo* pairs = nullptr;
     const SectionInfo* coarse = nullptr;
+    const SectionInfo* parts = nullptr;
 };
 
 } // namespace
@@ -133,7 +162,7 @@ void File::Impl::validate(const OpenOptions& options) {
         for (int k = 0; k < attribute_stream_count; ++k)
             if (type == attribute_streams[k].section) stream = k;
         if (type == sec_mesh || type == sec_positions || stream >= 0 || type == sec_substitute || type == sec_triangles ||
-            type == sec_metadata || type == sec_pairs || type == sec_coarse) {
+            type == sec_metadata || type == sec_pairs || type == sec_coarse || type == sec_parts) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
             MeshSections& ms = per_mesh[s.mesh];
@@ -144,6 +173,7 @@ void File::Impl::validate(const OpenOptions& options) {
                  : type == sec_triangles ? &ms.triangles
                  : type == sec_pairs     ? &ms.pairs
                  : type == sec_coarse    ? &ms.coarse
+                 : type == sec_parts     ? &ms.parts
                                          : &ms.metadata;
             if (*slot) fail(e, field, 9, "mesh " + std::to_string(s.mesh) + " has this section twice");
             *slot = &s;
@@ -184,6 +214,8 @@ void File::Impl::validate(const OpenOptions& options) {
             if (bool(attributes & attribute_streams[k].flag) != (ms.streams[k] != nullptr))
                 fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10,
                      std::string("attribute flags and section ") + attribute_streams[k].name + " disagree");
+        if (bool(attributes & attr_parts) != (ms.parts != nullptr))
+            fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "attribute flags and section PART disagree");
         // rule 11: stream sizes
         auto check_size = [&](const SectionInfo* sec, uint64_t expected, const char* name) {
             if (sec && sec->bytes != expected)
@@ -255,14 +287,21 @@ void File::Impl::validate(const OpenOptions& options) {
             }
             v.pair_bits = bits;
         }
+        if (ms.parts) validate_parts(*ms.parts, attributes, v, mesh_field);
     }
     // rules 17 and 18: the scene
     if (materials_section) {
         scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
-        for (uint32_t mi = 0; mi < mesh_count; ++mi)
-            if (meshes[mi].material >= 0 && size_t(meshes[mi].material) >= scene.materials.size())
+        for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+            const MeshView& v = meshes[mi];
+            if (v.material >= 0 && size_t(v.material) >= scene.materials.size())
                 fail(per_mesh[mi].mesh->offset + m_material, "mesh " + std::to_string(mi) + " material", 17,
-                     "material " + std::to_string(meshes[mi].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
+                     "material " + std::to_string(v.material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
+            for (uint32_t p = 0; p < v.part_count && v.parts; ++p)
+                if (v.parts[p].material >= 0 && size_t(v.parts[p].material) >= scene.materials.size())
+                    fail(per_mesh[mi].parts->offset + parts_header_bytes + uint64_t(p) * part_record_bytes + 8, "mesh " + std::to_string(mi) + " part " + std::to_string(p) + " material", 17,
+                         "material " + std::to_string(v.parts[p].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
+        }
     }
     if (instances_section)
         scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
@@ -273,6 +312,7 @@ void File::Impl::validate(const OpenOptions& options) {
         MeshView& v = meshes[mi];
         const std::string field = "mesh " + std::to_string(mi) + " COAR";
         const uint8_t* p = data + sec->offset;
+        if (v.parts) fail(sec->offset, field, 19, "a mesh with parts has no coarse corners (they hold one prefix of TRIS)");
         if (sec->bytes < coarse_header_bytes) fail(sec->offset, field, 19, "shorter than its 16-byte header");
         const uint32_t resolution = load_u32(p + c_resolution), triangles = load_u32(p + c_triangle_count), index_size = load_u32(p + c_index_size);
         if (resolution < v.min_vertex_count || resolution > v.vertex_count || resolution == 0)

@@ -18,7 +18,7 @@ struct Extracted {
 
 /// Number of triangles alive at resolution `vertex_count` (clamped to
 /// [min_vertex_count, vertex_count], and one lower where it would split a seam pair: see
-/// MeshView::splits_pair). O(log T) chain walks; allocates nothing.
+/// MeshView::splits_pair), over all parts. O(P log T) chain walks; allocates nothing.
 uint32_t active_triangle_count(const MeshView& mesh, uint32_t vertex_count) noexcept;
 
 /// Smallest resolution n whose active triangle count is >= `triangle_count`
@@ -34,11 +34,32 @@ uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fractio
 /// At most `destination_capacity` indices (rounded down to whole triangles) are written: a
 /// buffer of 3 * mesh.triangle_count indices always suffices, and so does one of
 /// 3 * active_triangle_count(mesh, vertex_count). The walk stops at the first inactive
-/// triangle, so no count has to be computed first.
+/// triangle, so no count has to be computed first. A mesh with parts gives its parts' live
+/// triangles one after the other (extract_parts says where each part's are).
 /// Every written index is < the returned vertex_count; no triangle is degenerate.
 /// The uint16_t form requires vertex_count <= 65536. Allocates nothing.
 Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint32_t* destination, size_t destination_capacity) noexcept;
 Extracted extract(const MeshView& mesh, uint32_t vertex_count, uint16_t* destination, size_t destination_capacity) noexcept;
+
+/// One part's draw in a buffer written by extract_parts: indices
+/// [first_index, first_index + index_count) of the buffer, drawn with `material` over the
+/// shared vertex prefix [0, n) (a sub-mesh in Unity, a surface in Godot).
+struct PartDraw {
+    uint32_t first_index = 0;
+    uint32_t index_count = 0;   ///< 3 per live triangle of the part
+    int32_t material = -1;
+};
+
+/// extract() for a mesh of several parts, saying where each part's triangles went: the parts'
+/// live triangles are written one after the other, in part order, and draws[p] receives part p's
+/// range (part_count(mesh) entries). extract() writes the same buffer; on a mesh without parts
+/// this is extract() with one draw. A buffer too small ends the writing at a whole triangle; the
+/// parts it did not reach get empty draws. Allocates nothing.
+Extracted extract_parts(const MeshView& mesh, uint32_t vertex_count, uint32_t* destination, size_t destination_capacity, PartDraw* draws) noexcept;
+Extracted extract_parts(const MeshView& mesh, uint32_t vertex_count, uint16_t* destination, size_t destination_capacity, PartDraw* draws) noexcept;
+
+/// Live triangles of part p at resolution `vertex_count` (clamped as in active_triangle_count).
+uint32_t active_part_triangle_count(const MeshView& mesh, uint32_t p, uint32_t vertex_count) noexcept;
 
 /// The one vertex that moves in a geomorph between resolutions n and n + 1 (TOM paper: only
 /// vertex n changes between them). Streams the mesh lacks are left zero.

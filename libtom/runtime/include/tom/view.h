@@ -8,6 +8,17 @@
 
 namespace tom {
 
+/// One part of a mesh: a range of its triangles drawn with one material (a glTF primitive, an
+/// OBJ `usemtl` group). The 16-byte record of section PART (FORMAT.md), used in place.
+/// All parts share the mesh's vertex order; at any resolution the live triangles of a part are
+/// a prefix of its range.
+struct Part {
+    uint32_t first_triangle = 0;
+    uint32_t triangle_count = 0;
+    int32_t material = -1;     ///< index into the file's materials, -1 if none
+    uint32_t attributes = 0;   ///< the streams the part's source had (MESH attribute bits 0-4); the others hold neutral values
+};
+
 /// Pointers into sorted streams; nothing is owned. Optional streams are null.
 /// Invariants (checked by the reader for files, by construction for builds):
 ///   min_vertex_count <= vertex_count; for i >= min_vertex_count substitute[i] < i,
@@ -40,6 +51,10 @@ struct MeshView {
     uint32_t coarse_resolution = 0;
     uint32_t coarse_triangle_count = 0;
     uint32_t coarse_index_size = 2;
+    /// Parts (section PART), or null with part_count 0 for a mesh of one part: then the whole
+    /// triangle array is one prefix-sorted range, drawn with `material`.
+    const Part* parts = nullptr;
+    uint32_t part_count = 0;
 
     uint32_t substitute_at(uint32_t i) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];
@@ -52,6 +67,13 @@ struct MeshView {
         return index_size == 2 ? static_cast<const uint16_t*>(triangles)[c] : static_cast<const uint32_t*>(triangles)[c];
     }
 };
+
+/// The number of parts of a mesh: 1 for a mesh without section PART.
+inline uint32_t part_count(const MeshView& mesh) noexcept { return mesh.parts ? mesh.part_count : 1u; }
+
+/// Part p of a mesh (\pre p < part_count(mesh)); a mesh without parts is one part of all its
+/// triangles with the mesh's material and attributes.
+Part part_at(const MeshView& mesh, uint32_t p) noexcept;
 
 /// A value stored in a mesh's metadata area, found by key; empty data if absent.
 struct MetadataValue {

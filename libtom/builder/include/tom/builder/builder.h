@@ -47,6 +47,11 @@ struct BuildParams {
     /// passes with threads: the team foresees the sequential loop's oracle verdicts and costs
     /// (a speed-up only; the result is byte-identical with it off).
     bool foresight = true;
+    /// Vertices on open borders (of the mesh welded by position: not the borders between parts
+    /// or along attribute seams) are never removed, so a mesh meant to tile with its neighbours
+    /// (terrain tiles, modular kits) keeps its outline at every resolution (meshoptimizer's
+    /// LockBorder, gltfpack's -slb).
+    bool lock_borders = false;
 };
 
 /// What the builder did, for reports.
@@ -75,6 +80,9 @@ struct TomMesh {
     std::vector<uint32_t> original_index; ///< sorted vertex -> index in the cleaned input (not stored in files)
     std::vector<uint32_t> original_triangle; ///< sorted triangle -> index in the cleaned input (not stored in files)
     std::vector<uint8_t> pair_bits;       ///< bit i (LSB first): vertices i and i + 1 are a seam pair, removed together; empty if none
+    /// The input's parts, in its order, each a range of `triangles` sorted by death on its own
+    /// (FORMAT.md, section PART); empty for a mesh of one part.
+    std::vector<Part> parts;
     std::vector<MetadataEntry> metadata;
     float bounds_min[3] = {0, 0, 0};
     float bounds_max[3] = {0, 0, 0};
@@ -88,7 +96,8 @@ struct TomMesh {
 /// Builds the total order of a mesh.
 /// \pre `mesh` went through clean_mesh() (distinct corners, all vertices referenced, normals present).
 /// Works on any input: borders, non-manifold edges, several components, zero-area triangles and
-/// coincident vertices are handled (such vertices are locked so no crack can open).
+/// coincident vertices are handled (such vertices are locked so no crack can open). The parts'
+/// common borders are coincident copies too: they collapse together or not at all.
 /// No substitution flips a triangle. Runs until no legal substitution is left.
 TomMesh build(const Mesh& mesh, const BuildParams& params = {}, BuildStats* stats = nullptr);
 

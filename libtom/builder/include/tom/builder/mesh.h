@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "tom/view.h"
+
 namespace tom {
 
 /// An indexed triangle mesh, one std::vector per attribute (struct of arrays).
@@ -19,6 +21,12 @@ struct Mesh {
     std::vector<float> tangents;     ///< xyzw per vertex (glTF TANGENT: unit xyz, w = +-1 handedness), or empty
     std::vector<uint32_t> indices;   ///< 3 per triangle, counter-clockwise front faces
     int32_t material = -1;           ///< material index of the source file, -1 if none
+    /// The parts (a glTF mesh's primitives, an OBJ's `usemtl` groups): ranges of `indices`' triangles
+    /// that tile them in order, each with its material and the streams its source had. Empty for
+    /// a mesh of one part drawn with `material`. Parts share the vertex arrays; where two meet they
+    /// share vertices (an OBJ's groups) or each has its own coincident copy (glTF primitives),
+    /// which the builder ties like a seam.
+    std::vector<Part> parts;
 
     uint32_t vertex_count() const noexcept { return uint32_t(positions.size() / 3); }
     uint32_t triangle_count() const noexcept { return uint32_t(indices.size() / 3); }
@@ -35,6 +43,10 @@ void for_each_attribute_stream(M& mesh, F&& f) {
     f(mesh.tangents, 4, "tangent");
 }
 
+/// The optional streams a mesh has, as the bits of MESH `attributes` and Part::attributes
+/// (bit k for the k-th stream of for_each_attribute_stream).
+uint32_t attribute_bits(const Mesh& mesh) noexcept;
+
 /// What clean_mesh() changed.
 struct CleanStats {
     uint32_t degenerate_triangles = 0;   ///< triangles with a repeated index, removed
@@ -46,8 +58,17 @@ struct CleanStats {
 ///        position is not finite, a stream has the wrong size, or the mesh has
 ///        more than 2^32-2 vertices.
 /// \post every triangle has three distinct indices; every vertex is referenced;
-///       normals are present (area-weighted from the triangles when absent).
+///       normals are present (area-weighted from the triangles when absent); the parts still
+///       tile the triangles (a part left without triangles is dropped; one part left means none).
+/// \throw ImportError also when the parts do not tile the triangles.
 CleanStats clean_mesh(Mesh& mesh);
+
+/// One mesh made of several: vertices and triangles appended in order, one part per input (an
+/// input with parts keeps them). The streams are the union of the inputs'; where an input lacks
+/// one, its vertices get neutral values (normals zero, so clean_mesh computes them; texture
+/// coordinates 0; colours opaque white; tangents +x with w = +1) and its part's `attributes` say
+/// which streams are its own. The result has parts unless there is a single input without them.
+Mesh join_parts(const std::vector<Mesh>& inputs, std::string name);
 
 /// Area-weighted vertex normals from the triangles (zero-area neighbourhoods get +z).
 void compute_normals(Mesh& mesh);

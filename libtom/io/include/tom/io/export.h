@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "tom/extract.h"
 #include "tom/scene.h"
 #include "tom/view.h"
 
@@ -18,14 +19,20 @@ struct ExportPart {
     const MeshView* mesh = nullptr;
     uint32_t vertex_count = 0;
     std::vector<uint32_t> indices;
+    /// Where each of the mesh's parts lies in `indices` (extract_parts); empty: all of them are
+    /// one group with the mesh's material.
+    std::vector<PartDraw> draws;
 };
 
-/// Writes the parts into one file, one after another (indices offset accordingly), with every
-/// attribute stream that all parts have. The format follows the extension: .obj (text; v, vt,
-/// vn, colours as "v x y z r g b") or .ply (binary little-endian, colours as uchar rgba).
-/// The file is written to a temporary name and renamed into place.
-/// \throw IoError when the extension is unknown or the file cannot be written.
-void export_meshes(const std::string& path, const std::vector<ExportPart>& parts);
+/// Writes the meshes into one file, one after another (indices offset accordingly), with every
+/// attribute stream that all of them have. The format follows the extension: .obj (text; v, vt,
+/// vn, colours as "v x y z r g b"; an `o` per mesh, a `usemtl` per part with a material, and
+/// beside it a .mtl of the same stem with the materials: Kd, d, Ke and the texture maps, their
+/// URIs rewritten relative to the output when `texture_dir` names the folder they are relative
+/// to) or .ply (binary little-endian, colours as uchar rgba, and with materials an int
+/// `material_index` per face, -1 for none). Files are written to temporary names and renamed.
+/// \throw IoError when the extension is unknown or a file cannot be written.
+void export_meshes(const std::string& path, const std::vector<ExportPart>& parts, const Scene& scene = {}, const std::string& texture_dir = "");
 
 /// One mesh of a .tom file at one or more resolutions, for export_glb().
 struct GlbMesh {
@@ -33,7 +40,9 @@ struct GlbMesh {
     std::vector<uint32_t> vertex_counts;  ///< resolutions, finest first
 };
 
-/// Writes a binary glTF 2.0 (.glb). Per input mesh and resolution a glTF mesh of one primitive;
+/// Writes a binary glTF 2.0 (.glb). Per input mesh and resolution a glTF mesh of one primitive
+/// per part (those with triangles at that resolution, each with its material and the optional
+/// streams its source had);
 /// all levels of an input mesh share its vertex streams (POSITION, NORMAL, TEXCOORD_0/1, COLOR_0,
 /// TANGENT: the levels are prefixes of one vertex array) with their own indices (16-bit when they
 /// fit). One node per instance of `scene` (instances index `meshes`), with its world transform;
