@@ -117,6 +117,30 @@ static void check_levels(const tom_mesh_view* mesh) {
             for (c = 0; c < 3 * (size_t)e.triangle_count; ++c) same &= out16[c] == out32[c];
             CHECK(same);
         }
+        /* the parts' draws tile the same buffer, in order, each with its part's material */
+        {
+            tom_part_draw draws[64];
+            tom_extracted ep;
+            const uint32_t parts = tom_mesh_part_count(mesh);
+            uint32_t p, next = 0, sum = 0;
+            CHECK(parts >= 1 && parts <= 64);
+            CHECK(tom_extract_parts_u32(mesh, n, out32, capacity, draws, parts, &ep) == TOM_OK);
+            CHECK(ep.triangle_count == e.triangle_count);
+            for (p = 0; p < parts && p < 64; ++p) {
+                tom_part part;
+                CHECK(tom_mesh_part(mesh, p, &part) == TOM_OK);
+                CHECK(draws[p].first_index == next && draws[p].material == part.material);
+                CHECK(draws[p].index_count <= 3 * part.triangle_count);
+                next += draws[p].index_count;
+                sum += draws[p].index_count;
+            }
+            CHECK(sum == 3 * e.triangle_count);
+            if (parts > 0) {
+                CHECK(tom_extract_parts_u32(mesh, n, out32, capacity, draws, parts - 1, &ep) == TOM_ERROR_CAPACITY);
+                CHECK(strstr(tom_last_error(), "parts") != NULL);
+            }
+            CHECK(tom_mesh_part(mesh, parts, &(tom_part){0, 0, 0, 0}) == TOM_ERROR_ARGUMENT);
+        }
         /* a buffer one triangle too small for this level is refused; an exact one is enough */
         if (e.triangle_count > 0 && e.triangle_count < mesh->triangle_count) {
             tom_extracted small;
@@ -258,6 +282,20 @@ int main(int argc, char** argv) {
     CHECK(tom_file_open(NULL, &mapped) == TOM_ERROR_ARGUMENT);
 
     if (argc > 2) check_real_file(argv[2]);
+    if (argc > 3) { /* a file with multi-part meshes (2CylinderEngine: four meshes of several primitives) */
+        tom_file* parts_file = NULL;
+        uint32_t i, multi = 0;
+        CHECK(tom_file_open(argv[3], &parts_file) == TOM_OK);
+        for (i = 0; i < tom_file_mesh_count(parts_file); ++i) {
+            tom_mesh_view v;
+            CHECK(tom_file_mesh(parts_file, i, &v) == TOM_OK);
+            if (tom_mesh_part_count(&v) < 2) continue;
+            ++multi;
+            check_levels(&v);
+        }
+        CHECK(multi == 4);
+        tom_file_close(parts_file);
+    }
 
     tom_file_close(memory);
     allocator.release(allocator.user, bytes);

@@ -79,11 +79,16 @@ tom_file* make_file(tom::File f) {
 }
 
 template <class Index>
-tom_status extract_into(const char* function, const tom_mesh_view* mesh, uint32_t vertex_count, Index* out, size_t capacity, tom_extracted* result) {
+tom_status extract_into(const char* function, const tom_mesh_view* mesh, uint32_t vertex_count, Index* out, size_t capacity, tom_extracted* result,
+                        tom_part_draw* draws = nullptr, size_t draw_capacity = 0, bool with_draws = false) {
     const tom::MeshView* v = view_of(mesh);
     if (!v) return null_argument(function, "mesh");
     if (!out && capacity > 0) return null_argument(function, "out");
     if (!result) return null_argument(function, "result");
+    if (with_draws && !draws) return null_argument(function, "draws");
+    if (with_draws && draw_capacity < tom::part_count(*v))
+        return fail(TOM_ERROR_CAPACITY, std::string(function) + ": the mesh has " + std::to_string(tom::part_count(*v)) + " parts, the draw array holds " +
+                                            std::to_string(draw_capacity));
     // a buffer of 3 T always suffices; a smaller one must hold this level's triangles
     if (capacity / 3 < v->triangle_count) {
         const uint32_t needed = tom::active_triangle_count(*v, vertex_count);
@@ -95,7 +100,14 @@ tom_status extract_into(const char* function, const tom_mesh_view* mesh, uint32_
         const uint32_t n = std::min(std::max(vertex_count, v->min_vertex_count), v->vertex_count);
         if (n > 65536) return fail(TOM_ERROR_ARGUMENT, std::string(function) + ": resolution " + std::to_string(n) + " has more vertices than 16-bit indices address");
     }
-    const tom::Extracted e = tom::extract(*v, vertex_count, out, capacity);
+    tom::Extracted e;
+    if (with_draws) {
+        std::vector<tom::PartDraw> parts(tom::part_count(*v));  // a copy into the C layout; parts are few
+        e = tom::extract_parts(*v, vertex_count, out, capacity, parts.data());
+        for (size_t p = 0; p < parts.size(); ++p) draws[p] = {parts[p].first_index, parts[p].index_count, parts[p].material, 0};
+    } else {
+        e = tom::extract(*v, vertex_count, out, capacity);
+    }
     result->vertex_count = e.vertex_count;
     result->triangle_count = e.triangle_count;
     return TOM_OK;
@@ -262,6 +274,32 @@ tom_status tom_extract_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uin
 
 tom_status tom_extract_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_extracted* result) {
     return extract_into("tom_extract_u16", mesh, vertex_count, out, capacity, result);
+}
+
+uint32_t tom_mesh_part_count(const tom_mesh_view* mesh) {
+    const tom::MeshView* v = view_of(mesh);
+    return v ? tom::part_count(*v) : 0;
+}
+
+tom_status tom_mesh_part(const tom_mesh_view* mesh, uint32_t index, tom_part* out) {
+    const tom::MeshView* v = view_of(mesh);
+    if (!v) return null_argument("tom_mesh_part", "mesh");
+    if (!out) return null_argument("tom_mesh_part", "out");
+    if (index >= tom::part_count(*v))
+        return fail(TOM_ERROR_ARGUMENT, "tom_mesh_part: part " + std::to_string(index) + " of " + std::to_string(tom::part_count(*v)));
+    const tom::Part p = tom::part_at(*v, index);
+    *out = {p.first_triangle, p.triangle_count, p.material, p.attributes};
+    return TOM_OK;
+}
+
+tom_status tom_extract_parts_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uint32_t* out, size_t capacity, tom_part_draw* draws, size_t draw_capacity,
+                                 tom_extracted* result) {
+    return extract_into("tom_extract_parts_u32", mesh, vertex_count, out, capacity, result, draws, draw_capacity, true);
+}
+
+tom_status tom_extract_parts_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_part_draw* draws, size_t draw_capacity,
+                                 tom_extracted* result) {
+    return extract_into("tom_extract_parts_u16", mesh, vertex_count, out, capacity, result, draws, draw_capacity, true);
 }
 
 tom_status tom_geomorph(const tom_mesh_view* mesh, uint32_t n, float a, tom_morphed_vertex* out) {

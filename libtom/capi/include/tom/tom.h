@@ -111,6 +111,38 @@ typedef struct tom_extracted {
 tom_status tom_extract_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uint32_t* out, size_t capacity, tom_extracted* result);
 tom_status tom_extract_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_extracted* result);
 
+/* ---- parts --------------------------------------------------------------------------- */
+
+/* A mesh drawn with several materials (a glTF mesh's primitives, an OBJ's usemtl groups) has
+ * parts: ranges of its triangles sharing one vertex order. A mesh without them is one part. */
+typedef struct tom_part {
+    uint32_t first_triangle;
+    uint32_t triangle_count;
+    int32_t material;    /* index into the file's materials, or -1 */
+    uint32_t attributes; /* the streams the part's source had: 1 normals, 2 TEXCOORD_0, 4 COLOR_0, 8 TEXCOORD_1, 16 tangents */
+} tom_part;
+
+/* The number of parts (1 for a mesh without parts; 0 for NULL), and part `index`. */
+uint32_t tom_mesh_part_count(const tom_mesh_view* mesh);
+tom_status tom_mesh_part(const tom_mesh_view* mesh, uint32_t index, tom_part* out);
+
+/* One part's draw in a buffer written by tom_extract_parts_*: indices [first_index,
+ * first_index + index_count) with `material`, over the vertices [0, n). */
+typedef struct tom_part_draw {
+    uint32_t first_index;
+    uint32_t index_count;
+    int32_t material;
+    uint32_t reserved;
+} tom_part_draw;
+
+/* tom_extract_* that also says where each part's triangles went: `draws` holds
+ * `draw_capacity` entries, at least tom_mesh_part_count(mesh) (else TOM_ERROR_CAPACITY). The
+ * index buffer is the one tom_extract_* writes. Allocates nothing. */
+tom_status tom_extract_parts_u32(const tom_mesh_view* mesh, uint32_t vertex_count, uint32_t* out, size_t capacity, tom_part_draw* draws,
+                                 size_t draw_capacity, tom_extracted* result);
+tom_status tom_extract_parts_u16(const tom_mesh_view* mesh, uint32_t vertex_count, uint16_t* out, size_t capacity, tom_part_draw* draws,
+                                 size_t draw_capacity, tom_extracted* result);
+
 /* Vertex n at the fractional resolution n + a (a in [0, 1]): a geomorph between n and n + 1
  * (tom::geomorph in tom/extract.h). Streams the mesh lacks are zero. */
 typedef struct tom_morphed_vertex {
