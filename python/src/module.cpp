@@ -252,6 +252,28 @@ void mesh_properties(Class& c, ViewOf view_of) {
              }, py::arg("fraction") = py::none(), py::arg("triangles") = py::none(), "The resolution for a fraction of the triangles, or for at least a triangle count.")
         .def("active_triangles", [view_of](py::object self, uint32_t n) { return tom::active_triangle_count(view_of(self), n); }, py::arg("vertices"),
              "Triangles alive at a resolution.")
+        .def_property_readonly("parts", [view_of](py::object self) {
+                 const tom::MeshView& v = view_of(self);
+                 py::list out;
+                 for (uint32_t p = 0; p < tom::part_count(v); ++p) {
+                     const tom::Part part = tom::part_at(v, p);
+                     out.append(py::make_tuple(part.first_triangle, part.triangle_count, part.material));
+                 }
+                 return out;
+             }, "[(first_triangle, triangle_count, material)] per part (one for a mesh without parts): ranges of `triangles`.")
+        .def("draws", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles) {
+                 const tom::MeshView& v = view_of(self);
+                 const uint32_t n = resolution(v, fraction, vertices, triangles);
+                 py::list out;
+                 uint32_t first = 0;
+                 for (uint32_t p = 0; p < tom::part_count(v); ++p) {
+                     const uint32_t count = tom::active_part_triangle_count(v, p, n);
+                     out.append(py::make_tuple(first, count, tom::part_at(v, p).material));
+                     first += count;
+                 }
+                 return out;
+             }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(),
+             "[(first_row, row_count, material)] per part: where each part's triangles lie in what extract() returns for the same level.")
         .def("extract", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles, py::object out) {
                  return extract(view_of(self), fraction, vertices, triangles, out);
              }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc);

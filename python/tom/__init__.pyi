@@ -1,5 +1,5 @@
 # Type stubs of the tom package (the native module tom._tom).
-from typing import Any, Optional, Sequence, Tuple, Union
+from typing import Any, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -26,6 +26,8 @@ class _MeshView:
     substitute: Union[npt.NDArray[np.uint16], npt.NDArray[np.uint32]]
     def vertex_count_for(self, fraction: Optional[float] = ..., triangles: Optional[int] = ...) -> int: ...
     def active_triangles(self, vertices: int) -> int: ...
+    parts: List[Tuple[int, int, int]]
+    def draws(self, *, fraction: Optional[float] = ..., vertices: Optional[int] = ..., triangles: Optional[int] = ...) -> List[Tuple[int, int, int]]: ...
     def extract(self, *, fraction: Optional[float] = ..., vertices: Optional[int] = ..., triangles: Optional[int] = ...,
                 out: Optional[npt.NDArray[Any]] = ...) -> Tuple[npt.NDArray[Any], int]: ...
 

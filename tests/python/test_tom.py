@@ -184,3 +184,22 @@ def test_the_gil_is_released_while_building():
     worker.join()
     # with the GIL held, this loop would stall for the whole build
     assert alone > 0.05 and max(gaps) < alone / 2
+
+
+def test_parts_draw_each_material_over_the_level(tmp_path):
+    # 2CylinderEngine: four glTF meshes of several primitives, each now one mesh of parts
+    f = tom.open(str(tombuild(tmp_path, f"{DATA}/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb", "--no-error-curve")))
+    multi = [m for m in f.meshes if len(m.parts) > 1]
+    assert len(multi) == 4
+    for m in multi:
+        ranges = m.parts
+        assert ranges[0][0] == 0 and sum(count for _, count, _ in ranges) == m.triangle_count
+        for fraction in (1.0, 0.25, 0.05):
+            level, n = m.extract(fraction=fraction)
+            draws = m.draws(fraction=fraction)
+            assert [d[2] for d in draws] == [p[2] for p in ranges]  # each part keeps its material
+            assert sum(d[1] for d in draws) == len(level)
+            for (first, count, _), (_, part_triangles, _) in zip(draws, ranges):
+                assert count <= part_triangles
+                assert first + count <= len(level)
+            assert int(level.max()) < n
