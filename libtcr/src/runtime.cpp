@@ -201,7 +201,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         problem_.per_tri_ms[k] = std::max(a, 1e-12);
         // cost s + max(a n, fill): on [lo, hi] it is s + a n, unless the object is fill bound
         // even at full resolution (lo = hi), where the fill time is folded into the setup
-        problem_.setup_ms[k] = model_.t_setup_ms + std::max(0.0, fill_ms - a * lo);
+        problem_.setup_ms[k] = model_.t_setup_ms * double(tom::part_count(*o.mesh)) + std::max(0.0, fill_ms - a * lo);
         problem_.lo[k] = lo;
         problem_.hi[k] = hi;
         problem_.previous[k] = r.triangles > 0 ? std::min(hi, std::max(lo, double(r.triangles))) : 0.0;
@@ -237,7 +237,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     auto choose = [&](const Object& o, ObjectResult& r, double triangles) {
         r.vertices = resolution_for(o, triangles);
         r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share);
+        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, double(tom::part_count(*o.mesh)));
         r.error_px = projected_error_px(o, r, r.triangles);
         return r.predicted_ms;
     };
@@ -283,6 +283,16 @@ tom::Extracted Runtime::indices(uint32_t id, uint32_t* destination, size_t capac
     const ObjectResult& r = results_[id];
     if (!r.drawn) return {};
     return tom::extract(*objects_[id].mesh, r.vertices, destination, capacity);
+}
+
+tom::Extracted Runtime::indices(uint32_t id, uint32_t* destination, size_t capacity, tom::PartDraw* draws) const noexcept {
+    const ObjectResult& r = results_[id];
+    const uint32_t parts = tom::part_count(*objects_[id].mesh);
+    if (!r.drawn) {
+        for (uint32_t p = 0; p < parts; ++p) draws[p] = {0, 0, tom::part_at(*objects_[id].mesh, p).material};
+        return {};
+    }
+    return tom::extract_parts(*objects_[id].mesh, r.vertices, destination, capacity, draws);
 }
 
 tom::Extracted Runtime::indices(uint32_t id, uint16_t* destination, size_t capacity) const noexcept {

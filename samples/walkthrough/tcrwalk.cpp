@@ -169,16 +169,27 @@ void ensure(std::vector<uint32_t>& v, size_t n) {
 }
 
 // The frame the runtime planned, extracted: each drawn object's level into `indices` (grown as
-// needed), one draw per object in `color`. Returns the frame's index count.
+// needed), one draw per object, or per part of a multi-part object (as the cost model counts
+// them), in `color`. Returns the frame's index count.
 size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<uint32_t>& mesh_handles, const float color[3],
                      std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws) {
     ensure(indices, size_t(rt.last_frame().triangles) * 3);
     draws.clear();
     size_t at = 0;
+    tom::PartDraw parts[64];
     for (uint32_t id = 0; id < rt.object_count(); ++id) {
         if (!rt.object(id).drawn) continue;
-        const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
-        draws.push_back({mesh_handles[w.scene.instances[id].mesh], w.transforms[id].data(), at, e.triangle_count * 3, {color[0], color[1], color[2]}});
+        const uint32_t mesh = w.scene.instances[id].mesh;
+        if (tom::part_count(*w.meshes[mesh]) > 64) {  // more than a draw list here holds: one draw
+            const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
+            draws.push_back({mesh_handles[mesh], w.transforms[id].data(), at, e.triangle_count * 3, {color[0], color[1], color[2]}});
+            at += size_t(e.triangle_count) * 3;
+            continue;
+        }
+        const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at, parts);
+        for (uint32_t p = 0; p < tom::part_count(*w.meshes[mesh]); ++p)
+            if (parts[p].index_count > 0)
+                draws.push_back({mesh_handles[mesh], w.transforms[id].data(), at + parts[p].first_index, parts[p].index_count, {color[0], color[1], color[2]}});
         at += size_t(e.triangle_count) * 3;
     }
     return at;

@@ -289,3 +289,38 @@ TEST_CASE("a warm runtime allocates nothing per frame", "[tcr][runtime][alloc]")
     CHECK(g_allocations.load() > before);
     CHECK(grown.size() == 1000);
 }
+
+TEST_CASE("a multi-part object is one object with one resolution and a draw set-up per part", "[tcr][runtime][parts]") {
+    tom::Mesh sphere = tom::make_sphere(24, 32, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    const uint32_t third = sphere.triangle_count() / 3;
+    sphere.parts = {{0, third, 0, 1}, {third, third, 1, 1}, {2 * third, sphere.triangle_count() - 2 * third, 2, 1}};
+    const tom::TomMesh parts = tom::build(sphere);
+    tom::TomMesh whole = parts;  // the same order and triangles, drawn as one part
+    whole.parts.clear();
+    float transform[16];
+    tcr::identity(transform);
+    tcr::FrameParams f;
+    f.camera = camera_at(4.0f);
+    f.budget_ms = 1e6;
+    f.correct_model = false;
+    double predicted[2];
+    for (int k = 0; k < 2; ++k) {
+        const tom::MeshView v = (k == 0 ? parts : whole).view();
+        tcr::Runtime rt(model(), tcr::SelectorKind::exact);
+        rt.add_object(v, transform);
+        rt.plan_frame(f);
+        REQUIRE(rt.object(0).drawn);
+        REQUIRE(rt.object(0).triangles == v.triangle_count);
+        predicted[k] = rt.object(0).predicted_ms;
+        if (k == 0) {  // its draws: one per part, with the part's material, tiling the level
+            std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
+            tom::PartDraw draws[3];
+            const tom::Extracted e = rt.indices(0, buffer.data(), buffer.size(), draws);
+            CHECK(e.triangle_count == v.triangle_count);
+            for (uint32_t p = 0; p < 3; ++p) CHECK(draws[p].material == int32_t(p));
+            CHECK(draws[0].index_count + draws[1].index_count + draws[2].index_count == 3 * e.triangle_count);
+        }
+    }
+    CHECK(predicted[0] - predicted[1] == Approx(2 * model().t_setup_ms));  // three set-ups instead of one
+}

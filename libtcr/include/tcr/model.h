@@ -1,7 +1,8 @@
 #pragma once
 // Frame cost model of time-critical rendering (Funkhouser & Sequin 1993; Gobbetti & Bouvier 1999):
-//   frame = t_init + t_final + sum_i (t_setup + max((t_tri * tris_i + t_vert * verts_i) * inside_i, t_pix * pixels_i)) + safety
-// (inside_i: the share of object i inside the view frustum; 1 for calibration's whole objects)
+//   frame = t_init + t_final + sum_i (draws_i t_setup + max((t_tri * tris_i + t_vert * verts_i) * inside_i, t_pix * pixels_i)) + safety
+// (inside_i: the share of object i inside the view frustum, 1 for calibration's whole objects;
+// draws_i: its parts, one draw set-up each, as a multi-material mesh is drawn)
 // All times in milliseconds.
 
 #include <cstddef>
@@ -13,7 +14,7 @@ namespace tcr {
 struct CostModel {
     double t_init_ms = 0.0;   ///< per frame, before the objects
     double t_final_ms = 0.0;  ///< per frame, after the objects (swap, read-back)
-    double t_setup_ms = 0.0;  ///< per drawn object
+    double t_setup_ms = 0.0;  ///< per draw (one per drawn object, or per part of a multi-part one)
     double t_tri_ms = 0.0;    ///< per triangle
     double t_vert_ms = 0.0;   ///< per vertex
     double t_pix_ms = 0.0;    ///< per covered pixel
@@ -24,11 +25,11 @@ struct CostModel {
     /// inside the view frustum (Projection::inside_share); the rest is clipped before set-up and
     /// rasterisation, so the geometry term counts only that share (on the walkthrough's path,
     /// frames whose close objects reach far off screen took as little as 0.55x the time the
-    /// whole objects' geometry predicted).
-    double object_ms(double triangles, double vertices, double pixels, double inside_share = 1.0) const noexcept {
+    /// whole objects' geometry predicted). `draws`: the object's parts, one set-up each.
+    double object_ms(double triangles, double vertices, double pixels, double inside_share = 1.0, double draws = 1.0) const noexcept {
         const double geometry = (t_tri_ms * triangles + t_vert_ms * vertices) * inside_share;
         const double fill = t_pix_ms * pixels;
-        return t_setup_ms + (geometry > fill ? geometry : fill);
+        return t_setup_ms * draws + (geometry > fill ? geometry : fill);
     }
     /// Fixed part of a frame: t_init + t_final + safety.
     double frame_fixed_ms() const noexcept { return t_init_ms + t_final_ms + safety_ms; }

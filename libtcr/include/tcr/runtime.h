@@ -98,6 +98,9 @@ public:
     /// The chosen level's index buffer (nothing written for an object not drawn).
     tom::Extracted indices(uint32_t id, uint32_t* destination, size_t capacity) const noexcept;
     tom::Extracted indices(uint32_t id, uint16_t* destination, size_t capacity) const noexcept;
+    /// The same, with where each part's triangles went: `draws` holds tom::part_count(mesh)
+    /// entries (one draw per part, each with its material; empty ones for an object not drawn).
+    tom::Extracted indices(uint32_t id, uint32_t* destination, size_t capacity, tom::PartDraw* draws) const noexcept;
 
     /// Projected error in pixels of object `id` at `triangles`, for its last projection.
     double error_px(uint32_t id, double triangles, double m) const noexcept;
