@@ -339,3 +339,28 @@ TEST_CASE("mirrored texture coordinates: copies with opposite tangent handedness
         }
     }
 }
+
+TEST_CASE("parts: the OBJ samples with usemtl convert with their groups as parts and their .mtl materials", "[parts][obj][samples]") {
+    const fs::path root = test::sample("assimp/OBJ");
+    int with_parts = 0;
+    for (const char* name : {"spider.obj", "cube_usemtl.obj", "regr01.obj", "box.obj"}) {
+        INFO(name);
+        tom::ImportResult r = tom::import_file((root / name).string());
+        REQUIRE(r.meshes.size() == 1);
+        tom::Mesh m = r.meshes[0];
+        tom::clean_mesh(m);
+        CHECK(!r.scene.materials.empty());
+        for (const tom::Part& p : m.parts) CHECK((p.material >= 0 && size_t(p.material) < r.scene.materials.size()));
+        if (m.parts.empty()) continue;
+        ++with_parts;
+        check_parts(m, tom::build(m));
+    }
+    CHECK(with_parts == 3);  // box.obj has one material: one part
+    // spider: four materials, each with its texture, relative to the OBJ
+    tom::ImportResult spider = tom::import_file((root / "spider.obj").string());
+    REQUIRE(spider.scene.materials.size() == 4);
+    CHECK(spider.meshes[0].parts.size() == 4);
+    REQUIRE(spider.scene.materials[0].textures.size() == 1);
+    CHECK(spider.scene.materials[0].textures[0].uri == "SpiderTex.jpg");
+    CHECK(fs::exists(root / spider.scene.materials[0].textures[0].uri));
+}

@@ -77,7 +77,7 @@ TEST_CASE("every glTF2 sample with triangles converts with its attributes, mater
     REQUIRE(files.size() >= 40);
     const fs::path tmp = fs::temp_directory_path() / "tom_scene_test";
     fs::create_directories(tmp);
-    std::string table = "| asset | primitives (skipped) | triangles | attributes | materials | instances | levels checked | border edges: input / worst level | glTF out (100/50/10%) |\n"
+    std::string table = "| asset | meshes / parts (skipped primitives) | triangles | attributes | materials | instances | levels checked | border edges: input / worst level | glTF out (100/50/10%) |\n"
                         "|---|---|---|---|---|---|---|---|---|\n";
     int converted = 0, failed = 0, points_lines_only = 0;
     for (const fs::path& file : files) {
@@ -145,8 +145,16 @@ TEST_CASE("every glTF2 sample with triangles converts with its attributes, mater
             CHECK(f.scene().materials[i].name == r.scene.materials[i].name);
             CHECK(f.scene().materials[i].textures.size() == r.scene.materials[i].textures.size());
         }
+        size_t parts = 0, back_parts = 0;
         for (uint32_t i = 0; i < f.mesh_count(); ++i) {
             CHECK(f.mesh(i).material == r.meshes[i].material);
+            // each part keeps its range and material through the file
+            REQUIRE(tom::part_count(f.mesh(i)) == std::max<size_t>(1, built[i].parts.size()));
+            for (uint32_t p = 0; p < built[i].parts.size(); ++p) {
+                CHECK(tom::part_at(f.mesh(i), p).material == built[i].parts[p].material);
+                CHECK(tom::part_at(f.mesh(i), p).triangle_count == built[i].parts[p].triangle_count);
+            }
+            parts += tom::part_count(f.mesh(i));
             CHECK((f.mesh(i).texcoords != nullptr) == !r.meshes[i].texcoords.empty());
             CHECK((f.mesh(i).texcoords1 != nullptr) == !r.meshes[i].texcoords1.empty());
             CHECK((f.mesh(i).colors != nullptr) == !r.meshes[i].colors.empty());
@@ -164,14 +172,18 @@ TEST_CASE("every glTF2 sample with triangles converts with its attributes, mater
         const std::vector<tom::Instance> drawn = tom::draw_list(f.scene(), f.mesh_count());
         std::set<uint32_t> drawn_meshes;
         for (const tom::Instance& inst : drawn) drawn_meshes.insert(inst.mesh);
-        // each drawn mesh comes back as 3 glTF meshes (its levels) of one primitive
+        // each drawn mesh comes back as 3 glTF meshes (its levels), the finest with all its parts
         CHECK(back.meshes.size() == 3 * drawn_meshes.size());
+        for (size_t i = 0; i < back.meshes.size(); i += 3) back_parts += std::max<size_t>(1, back.meshes[i].parts.size());
+        size_t drawn_parts = 0;
+        for (const uint32_t i : drawn_meshes) drawn_parts += tom::part_count(f.mesh(i));
+        CHECK(back_parts == drawn_parts);
         CHECK(back.scene.materials.size() == f.scene().materials.size());
         REQUIRE(back.scene.instances.size() == drawn.size());
         for (size_t i = 0; i < drawn.size(); ++i) CHECK(same_transform(back.scene.instances[i].transform, drawn[i].transform));
         std::string attr_list;
         for (const std::string& a : attributes) attr_list += (attr_list.empty() ? "" : ", ") + a;
-        table += "| " + rel + " | " + std::to_string(r.meshes.size()) + " (" + std::to_string(r.skipped.size()) + ") | " + std::to_string(triangles) +
+        table += "| " + rel + " | " + std::to_string(r.meshes.size()) + " / " + std::to_string(parts) + " (" + std::to_string(r.skipped.size()) + ") | " + std::to_string(triangles) +
                  " | " + attr_list + " | " + std::to_string(r.scene.materials.size()) + " | " + std::to_string(r.scene.instances.size()) + " | " +
                  std::to_string(levels) + " | " + std::to_string(input_border) + " / " + std::to_string(worst_border) + " | " +
                  std::to_string(back.meshes.size()) + " meshes, " + std::to_string(back.scene.instances.size()) + " nodes |\n";
