@@ -91,6 +91,12 @@ nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext
                                  {"diagonal", d}}},
                                {"chain", {{"mean_steps", l.mean_steps}, {"max_steps", l.chain.max_steps}, {"overhead", l.overhead}, {"histogram", hist}}},
                                {"attributes", attributes_json(l.attributes)}});
+        if (!l.parts.empty()) {  // a multi-part mesh: each part's attributes against the original part's
+            nlohmann::ordered_json parts = nlohmann::json::array();
+            for (const tom::PartLevelReport& p : l.parts)
+                parts.push_back({{"material", p.material}, {"triangles", p.triangles}, {"attributes", attributes_json(p.attributes)}});
+            j["levels"].back()["parts"] = parts;
+        }
     }
     if (!ctx.params.error_curve) {
         j["error_curve"] = nullptr;  // --no-error-curve: not measured

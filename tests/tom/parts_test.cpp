@@ -20,6 +20,7 @@
 #include "tom/format.h"
 #include "tom/io/export.h"
 #include "tom/io/import.h"
+#include "tom/metrics/report.h"
 
 namespace fs = std::filesystem;
 
@@ -363,4 +364,28 @@ TEST_CASE("parts: the OBJ samples with usemtl convert with their groups as parts
     REQUIRE(spider.scene.materials[0].textures.size() == 1);
     CHECK(spider.scene.materials[0].textures[0].uri == "SpiderTex.jpg");
     CHECK(fs::exists(root / spider.scene.materials[0].textures[0].uri));
+}
+
+TEST_CASE("parts: the report gives each part's attributes per level, the whole mesh's error once", "[parts][report]") {
+    tom::Mesh mesh = two_material_grid();
+    // texture coordinates from the position: both parts carry them
+    for (uint32_t v = 0; v < mesh.vertex_count(); ++v) mesh.texcoords.insert(mesh.texcoords.end(), {mesh.positions[3 * v], mesh.positions[3 * v + 1]});
+    for (tom::Part& p : mesh.parts) p.attributes |= 2u;
+    const tom::TomMesh built = tom::build(mesh);
+    tom::ReportParams params;
+    params.levels = {0.5, 0.1};
+    params.error_curve = false;
+    const tom::MeshReport r = tom::make_report(mesh, built, params);
+    for (const tom::LevelReport& l : r.levels) {
+        INFO("level " << l.fraction);
+        REQUIRE(l.parts.size() == 2);
+        CHECK(l.parts[0].triangles + l.parts[1].triangles == l.triangles);
+        for (uint32_t p = 0; p < 2; ++p) {
+            CHECK(l.parts[p].material == int32_t(p));
+            CHECK(l.parts[p].attributes.samples > 0);
+            CHECK(l.parts[p].attributes.texcoords);
+            // a part's displacement is of the order of the whole mesh's (the same surface, split)
+            CHECK(l.parts[p].attributes.uv_mean <= 4 * l.attributes.uv_mean + 1e-6);
+        }
+    }
 }

@@ -187,6 +187,35 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
 
 } // namespace
 
+// Each part's attributes against the original part's, at every measured level: the part's live
+// triangles (extract_parts) compared with its own triangles of the original (a reference each).
+static void measure_parts(const Mesh& original, const TomMesh& built, const ReportParams& params, const SurfaceAttributes& original_attributes,
+                          const SurfaceAttributes& level_attributes, std::vector<LevelReport>& levels, const std::vector<size_t>& first_of) {
+    if (original.parts.empty() || original.parts.size() != built.parts.size()) return;
+    const MeshView v = built.view();
+    std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
+    std::vector<PartDraw> draws(original.parts.size());
+    for (size_t p = 0; p < original.parts.size(); ++p) {
+        const Part& part = original.parts[p];
+        const MetroReference reference({original.positions.data(), original.vertex_count(), original.indices.data() + 3 * size_t(part.first_triangle), part.triangle_count},
+                                       params.distance, original_attributes);
+        for (size_t i = 0; i < levels.size(); ++i) {
+            LevelReport& lr = levels[i];
+            if (lr.parts.size() != original.parts.size()) lr.parts.resize(original.parts.size());
+            PartLevelReport& pr = lr.parts[p];
+            if (first_of[i] != i) {
+                pr = levels[first_of[i]].parts[p];
+                continue;
+            }
+            const Extracted e = extract_parts(v, lr.vertices, buffer.data(), buffer.size(), draws.data());
+            pr.material = part.material;
+            pr.triangles = draws[p].index_count / 3;
+            if (pr.triangles > 0)
+                reference.compare({built.positions.data(), e.vertex_count, buffer.data() + draws[p].first_index, pr.triangles}, level_attributes, pr.attributes);
+        }
+    }
+}
+
 // The curve is a runtime estimate (the runtime reads its means): area-uniform face samples, a
 // budget that grows with the mesh up to a cap, and fewer on a level of a few faces: its means stay
 // within a few percent of a dense sampling's at half its cost, and a file of many small meshes
@@ -276,6 +305,7 @@ MeshReport make_report(const Mesh& original, const TomMesh& built, const ReportP
         if (l.e.triangle_count > 0)
             lr.error = reference.compare({built.positions.data(), lr.vertices, l.indices.data(), l.e.triangle_count}, level_attributes, lr.attributes);
     });
+    measure_parts(original, built, params, original_attributes, level_attributes, r.levels, first_of);
     std::vector<double> tris, means, maxes;
     for (size_t i = 0; i < r.levels.size(); ++i) {
         LevelReport& lr = r.levels[i];

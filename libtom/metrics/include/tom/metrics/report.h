@@ -29,6 +29,14 @@ struct ReportParams {
     double curve_samples_per_level_face = 64;
 };
 
+/// One part of a multi-part mesh at one level: its live triangles and its attributes against
+/// the original part's (the geometric error is the whole mesh's, LevelReport::error).
+struct PartLevelReport {
+    int32_t material = -1;
+    uint32_t triangles = 0;
+    AttributeDeviation attributes;
+};
+
 struct LevelReport {
     double fraction = 0;
     uint32_t vertices = 0, triangles = 0;
@@ -38,6 +46,7 @@ struct LevelReport {
     ChainStats chain;
     double mean_steps = 0;       ///< substitution steps per corner emitted
     double overhead = 0;         ///< extra distinct vertices walked over vertices sent (n): the paper's Fig. 6
+    std::vector<PartLevelReport> parts;  ///< per part, for a mesh of several; empty otherwise
 };
 
 struct MemoryReport {
