@@ -251,6 +251,36 @@ int main(int argc, char** argv) {
         tom_file_close(mapped);
     }
 
+    /* two parts (materials 0 and 1, the first and second half of the triangles), and locked
+     * borders: the parts come back with their ranges, every level draws both, and the grid's
+     * 4 (n - 1) border vertices survive to the coarsest level */
+    {
+        tom_build_mesh parted = input;
+        tom_build_params locked = params;
+        const tom_part halves[2] = {{0, input.triangle_count / 2, 0, 1}, {input.triangle_count / 2, input.triangle_count - input.triangle_count / 2, 1, 1}};
+        void* image = NULL;
+        size_t image_size = 0;
+        tom_file* pf = NULL;
+        tom_mesh_view pm;
+        parted.parts = halves;
+        parted.part_count = 2;
+        locked.lock_borders = 1;
+        CHECK(tom_build_memory(&parted, 1, &locked, NULL, &image, &image_size) == TOM_OK);
+        CHECK(tom_file_open_memory(image, image_size, "parts", &pf) == TOM_OK);
+        if (pf && tom_file_mesh(pf, 0, &pm) == TOM_OK) {
+            tom_part part;
+            CHECK(tom_mesh_part_count(&pm) == 2);
+            CHECK(tom_mesh_part(&pm, 1, &part) == TOM_OK && part.material == 1 && part.first_triangle == input.triangle_count / 2);
+            CHECK(pm.min_vertex_count >= 4 * (40 - 1));
+            check_levels(&pm);
+        }
+        tom_file_close(pf);
+        free(image);
+        parted.parts = NULL; /* part_count 2 without the parts */
+        CHECK(tom_build_memory(&parted, 1, &locked, NULL, &image, &image_size) == TOM_ERROR_ARGUMENT);
+        CHECK(strstr(tom_last_error(), "parts is NULL") != NULL);
+    }
+
     /* a changed byte is a format error naming the buffer and the rule; the file stays unopened */
     {
         unsigned char* copy = malloc(size);

@@ -19,6 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         const tom::File file = tom::File::from_bytes(data, size, "fuzz.tom", options);
         std::vector<uint32_t> wide;
         std::vector<uint16_t> narrow;
+        std::vector<tom::PartDraw> draws;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const tom::MeshView& m = file.mesh(i);
             wide.assign(size_t(m.triangle_count) * 3, 0);
@@ -33,6 +34,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                     tom::extract(m, n, narrow.data(), narrow.size());
                 }
                 if (n < m.vertex_count) (void)tom::geomorph(m, n, 0.5f);
+                // the parts' draws tile the same level, each within its part
+                draws.assign(tom::part_count(m), {});
+                const tom::Extracted p = tom::extract_parts(m, n, wide.data(), wide.size(), draws.data());
+                uint64_t next = 0;
+                for (uint32_t k = 0; k < draws.size(); ++k) {
+                    if (draws[k].first_index != next || draws[k].index_count > 3 * uint64_t(tom::part_at(m, k).triangle_count)) __builtin_trap();
+                    next += draws[k].index_count;
+                }
+                if (next != 3 * uint64_t(p.triangle_count) || p.triangle_count != e.triangle_count) __builtin_trap();
             }
             if (const auto curve = tom::read_error_curve(m)) {
                 for (const double t : {0.0, 1.0, 100.0, double(m.triangle_count), 1e9})

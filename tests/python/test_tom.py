@@ -203,3 +203,14 @@ def test_parts_draw_each_material_over_the_level(tmp_path):
                 assert count <= part_triangles
                 assert first + count <= len(level)
             assert int(level.max()) < n
+
+
+def test_an_obj_with_usemtl_builds_with_its_parts_and_locked_borders_stay():
+    src = tom.import_file(f"{DATA}/assimp/OBJ/spider.obj")[0]
+    built = tom.build(src, threads=1)
+    assert [p[2] for p in built.parts] == [0, 1, 2, 3]  # the four usemtl groups, each its material
+    positions, triangles = grid(30)
+    free = tom.build(positions, triangles, threads=1)
+    locked = tom.build(positions, triangles, threads=1, lock_borders=True)
+    border = 4 * (30 - 1)
+    assert locked.min_vertex_count >= border > free.min_vertex_count

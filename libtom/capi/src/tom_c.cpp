@@ -144,7 +144,11 @@ tom_status to_mesh(const tom_build_mesh& in, uint32_t which, tom::Mesh& m) {
     m.indices.resize(size_t(in.triangle_count) * 3);
     for (size_t c = 0; c < m.indices.size(); ++c)
         m.indices[c] = in.index_size == 2 ? static_cast<const uint16_t*>(in.indices)[c] : static_cast<const uint32_t*>(in.indices)[c];
-    tom::clean_mesh(m);  // throws ImportError naming the mesh for an index past its vertices
+    if (in.part_count > 0 && !in.parts) return fail(TOM_ERROR_ARGUMENT, where + ": parts is NULL with part_count " + std::to_string(in.part_count));
+    for (uint32_t p = 0; p < in.part_count; ++p)
+        m.parts.push_back({in.parts[p].first_triangle, in.parts[p].triangle_count, in.parts[p].material, in.parts[p].attributes & tom::attribute_bits(m)});
+    if (m.parts.size() == 1) m.material = m.parts[0].material, m.parts.clear();
+    tom::clean_mesh(m);  // throws ImportError naming the mesh for an index past its vertices or parts that do not tile
     return TOM_OK;
 }
 
@@ -165,6 +169,7 @@ tom_status build_image(const tom_build_mesh* meshes, uint32_t mesh_count, const 
     bp.max_rotation_degrees = p.max_rotation_degrees;
     bp.threads = p.threads;
     bp.foresight = p.foresight != 0;
+    bp.lock_borders = p.lock_borders != 0;
     std::vector<tom::TomMesh> built;
     for (uint32_t i = 0; i < mesh_count; ++i) {
         tom::Mesh m;
@@ -370,6 +375,7 @@ void tom_build_params_default(tom_build_params* params) {
     params->threads = d.threads;
     params->foresight = d.foresight ? 1 : 0;
     params->index_size = 0;
+    params->lock_borders = d.lock_borders ? 1 : 0;
 }
 
 tom_status tom_build_memory(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, const tom_allocator* allocator, void** out_bytes,

@@ -227,6 +227,10 @@ typedef struct tom_build_mesh {
     const void* indices;   /* 3 per triangle */
     uint32_t index_size;   /* bytes per index: 2 or 4 */
     int32_t material;      /* -1 for none */
+    /* Parts (several materials over one vertex array): `part_count` ranges that tile the
+     * triangles in order, or NULL and 0 for a mesh of one part with `material`. */
+    const tom_part* parts;
+    uint32_t part_count;
 } tom_build_mesh;
 
 typedef enum tom_predicate { TOM_PREDICATE_QUADRIC = 0, TOM_PREDICATE_MEMORYLESS = 1 } tom_predicate;
@@ -243,6 +247,7 @@ typedef struct tom_build_params {
     uint32_t threads;   /* 0: all cores; the output is the same for any count */
     int foresight;
     uint32_t index_size; /* stored index width: 0 automatic, 16 or 32 */
+    int lock_borders;    /* non-zero: vertices on open borders are never removed (tombuild --lock-borders) */
 } tom_build_params;
 
 void tom_build_params_default(tom_build_params* params);
