@@ -98,7 +98,10 @@ LevelReport check_parts(const tom::Mesh& input, const tom::TomMesh& built) {
     const tom::MeshView v = built.view();
     REQUIRE(tom::part_count(v) == std::max<size_t>(1, input.parts.size()));
     LevelReport report;
-    report.input_open = open_edges(input.positions.data(), input.indices.data(), input.triangle_count()).size();
+    const auto input_edges = open_edges(input.positions.data(), input.indices.data(), input.triangle_count());
+    report.input_open = input_edges.size();
+    std::set<std::array<float, 3>> boundary;  // the welded input's open boundary: where a level may have open edges
+    for (const auto& [a, b] : input_edges) boundary.insert(a), boundary.insert(b);
     std::vector<uint32_t> whole(size_t(v.triangle_count) * 3), by_part(whole.size());
     std::vector<tom::PartDraw> draws(tom::part_count(v));
     for (double f : {1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.0}) {
@@ -116,8 +119,14 @@ LevelReport check_parts(const tom::Mesh& input, const tom::TomMesh& built) {
             CHECK(draws[p].material == tom::part_at(v, p).material);
             next += draws[p].index_count;
         }
-        const size_t open = open_edges(v.positions, whole.data(), a.triangle_count).size();
+        const auto level_edges = open_edges(v.positions, whole.data(), a.triangle_count);
+        const size_t open = level_edges.size();
         CHECK(open <= report.input_open);
+        // no crack: every open edge of the level runs between points of the input's own boundary
+        // (a border between parts that came apart would have open edges inside the welded surface)
+        size_t inside = 0;
+        for (const auto& [p, q] : level_edges) inside += !boundary.count(p) || !boundary.count(q);
+        CHECK(inside == 0);
         report.worst_open = std::max(report.worst_open, open);
         ++report.levels;
     }
