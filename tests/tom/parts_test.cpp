@@ -398,3 +398,39 @@ TEST_CASE("parts: the report gives each part's attributes per level, the whole m
         }
     }
 }
+
+TEST_CASE("parts with different attribute sets: the mesh holds the union, each part says which are its own", "[parts][gltf]") {
+    // the top half textured, the bottom not: as two glTF primitives of one mesh would be
+    tom::Mesh sphere = tom::make_sphere(24, 32, 1.0f, 0.05f);
+    for (uint32_t v = 0; v < sphere.vertex_count(); ++v)
+        sphere.texcoords.insert(sphere.texcoords.end(), {sphere.positions[3 * v], sphere.positions[3 * v + 1]});
+    tom::Mesh top = piece(sphere, [](const float c[3]) { return c[2] >= 0; }, 0);
+    tom::Mesh bottom = piece(sphere, [](const float c[3]) { return c[2] < 0; }, 1);
+    bottom.texcoords.clear();
+    tom::Mesh mesh = tom::join_parts({top, bottom}, "half textured");
+    tom::clean_mesh(mesh);
+    REQUIRE(mesh.texcoords.size() == 2 * size_t(mesh.vertex_count()));
+    REQUIRE(mesh.parts.size() == 2);
+    CHECK((mesh.parts[0].attributes & 2u) != 0);
+    CHECK((mesh.parts[1].attributes & 2u) == 0);
+    // the bottom's vertices hold the neutral (0, 0)
+    for (uint32_t v = top.vertex_count(); v < mesh.vertex_count(); ++v) CHECK((mesh.texcoords[2 * v] == 0 && mesh.texcoords[2 * v + 1] == 0));
+    const tom::TomMesh built = tom::build(mesh);
+    const LevelReport r = check_parts(mesh, built);
+    CHECK(r.worst_open == 0);
+    // glTF: the textured part's primitive has TEXCOORD_0, the other's not
+    const fs::path dir = fs::temp_directory_path() / "tom_parts_test";
+    fs::create_directories(dir);
+    const std::string glb = (dir / "half.glb").string();
+    const tom::MeshView v = built.view();
+    tom::GlbMesh g;
+    g.mesh = &v;
+    g.vertex_counts = {v.vertex_count, tom::vertex_count_for_fraction(v, 0.1)};
+    tom::export_glb(glb, {g});
+    const nlohmann::json doc = glb_json(glb);
+    for (const auto& m : doc["meshes"]) {
+        REQUIRE(m["primitives"].size() == 2);
+        CHECK(m["primitives"][0]["attributes"].contains("TEXCOORD_0"));
+        CHECK(!m["primitives"][1]["attributes"].contains("TEXCOORD_0"));
+    }
+}
