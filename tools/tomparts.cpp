@@ -3,7 +3,8 @@
 // triangle fractions, the whole mesh's two-sided Metro mean error and its open edges (welded by
 // position) for both, at the same total triangle count: each part alone at the level's fraction
 // of its triangles, the joint mesh at the smallest resolution with at least their sum. Prints a
-// table (open: the input's open edges; j, a: the levels'), or JSON with --json.
+// table (open: the input's open edges; j, a: the levels'; crack: a level's open edges with an end
+// off the input's open boundary, which a crack between parts makes), or JSON with --json.
 
 #include <cstdio>
 #include <map>
@@ -50,8 +51,10 @@ struct Level {
         for (size_t i = 0; i < 3 * size_t(e.triangle_count); ++i) indices.push_back(base + buffer[i]);
     }
     tom::Surface surface() const { return {positions.data(), uint32_t(positions.size() / 3), indices.data(), indices.size() / 3}; }
-    size_t open_edges() const {
-        std::map<std::pair<std::array<float, 3>, std::array<float, 3>>, int> count;
+    using Point = std::array<float, 3>;
+    // open edges welded by position, as position pairs
+    std::set<std::pair<Point, Point>> open_edges() const {
+        std::map<std::pair<Point, Point>, int> count;
         auto at = [&](uint32_t v) { return std::array<float, 3>{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]}; };
         for (size_t t = 0; t < indices.size() / 3; ++t)
             for (int k = 0; k < 3; ++k) {
@@ -59,9 +62,16 @@ struct Level {
                 if (b < a) std::swap(a, b);
                 ++count[{a, b}];
             }
-        size_t open = 0;
-        for (const auto& [edge, c] : count) open += c == 1;
+        std::set<std::pair<Point, Point>> open;
+        for (const auto& [edge, c] : count)
+            if (c == 1) open.insert(edge);
         return open;
+    }
+    // open edges with an end off `boundary` (the input's open boundary): cracks the level opened
+    size_t cracks(const std::set<Point>& boundary) const {
+        size_t n = 0;
+        for (const auto& [a, b] : open_edges()) n += !boundary.count(a) || !boundary.count(b);
+        return n;
     }
 };
 
@@ -81,8 +91,8 @@ int main(int argc, char** argv) {
     try {
         nlohmann::ordered_json rows = nlohmann::json::array();
         if (!json)
-            std::printf("%-40s %5s %6s %11s %12s %12s %7s %6s %6s %6s\n", "mesh", "parts", "level", "tris j/a", "mean joint %", "mean alone %",
-                        "a / j", "open", "open j", "open a");
+            std::printf("%-40s %5s %6s %11s %12s %12s %7s %6s %6s %6s %7s %7s\n", "mesh", "parts", "level", "tris j/a", "mean joint %", "mean alone %",
+                        "a / j", "open", "open j", "open a", "crack j", "crack a");
         for (const std::string& path : inputs) {
             tom::ImportResult r = tom::import_file(path);
             for (tom::Mesh& mesh : r.meshes) {
@@ -98,7 +108,10 @@ int main(int argc, char** argv) {
                 const tom::Surface original{mesh.positions.data(), mesh.vertex_count(), mesh.indices.data(), mesh.triangle_count()};
                 Level full;
                 full.add(joint.view(), joint.vertex_count());
-                const size_t input_open = full.open_edges();
+                const auto input_edges = full.open_edges();
+                const size_t input_open = input_edges.size();
+                std::set<Level::Point> boundary;
+                for (const auto& [a, b] : input_edges) boundary.insert(a), boundary.insert(b);
                 for (const double pct : percents) {
                     // each part alone at the level's share of its triangles, as before parts; then the
                     // joint mesh at (at least) the same total, so both spend the same triangles
@@ -119,12 +132,15 @@ int main(int argc, char** argv) {
                                                   {"mean_percent_joint", mj},
                                                   {"mean_percent_alone", ma},
                                                   {"open_edges_input", input_open},
-                                                  {"open_edges_joint", together.open_edges()},
-                                                  {"open_edges_alone", apart.open_edges()}};
+                                                  {"open_edges_joint", together.open_edges().size()},
+                                                  {"open_edges_alone", apart.open_edges().size()},
+                                                  {"crack_edges_joint", together.cracks(boundary)},
+                                                  {"crack_edges_alone", apart.cracks(boundary)}};
                     if (!json)
-                        std::printf("%-40.40s %5zu %5.0f%% %5zu/%-5zu %12.4f %12.4f %7.2f %6zu %6zu %6zu\n", mesh.name.c_str(), mesh.parts.size(), pct,
+                        std::printf("%-40.40s %5zu %5.0f%% %5zu/%-5zu %12.4f %12.4f %7.2f %6zu %6zu %6zu %7zu %7zu\n", mesh.name.c_str(), mesh.parts.size(), pct,
                                     together.indices.size() / 3, apart.indices.size() / 3, mj, ma, mj > 0 ? ma / mj : 0.0, input_open,
-                                    row["open_edges_joint"].get<size_t>(), row["open_edges_alone"].get<size_t>());
+                                    row["open_edges_joint"].get<size_t>(), row["open_edges_alone"].get<size_t>(), row["crack_edges_joint"].get<size_t>(),
+                                    row["crack_edges_alone"].get<size_t>());
                     rows.push_back(row);
                 }
             }
