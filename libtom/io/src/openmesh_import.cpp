@@ -83,9 +83,13 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
   private:
     // The face line a polygon came from: the next line, from the last one matched, whose vertices
     // include all of the polygon's (OpenMesh may drop repeated corners or a line it cannot add).
+    // The search looks a bounded way ahead, so no input makes it quadratic; a polygon matched
+    // nowhere takes the group of the line after the last match.
     int32_t material_of(const VHandles& polygon) {
         const ObjGroups& g = *groups_;
-        for (size_t line = cursor_; line < g.face_material.size(); ++line) {
+        constexpr size_t kLookAhead = 64;
+        const size_t end_line = std::min(g.face_material.size(), cursor_ + kLookAhead);
+        for (size_t line = cursor_; line < end_line; ++line) {
             const uint32_t* begin = g.face_vertices.data() + g.face_first[line];
             const uint32_t* end = g.face_vertices.data() + g.face_first[line + 1];
             bool all = true;
@@ -95,7 +99,7 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
                 return g.face_material[line];
             }
         }
-        return cursor_ > 0 ? g.face_material[cursor_ - 1] : -1;
+        return cursor_ < g.face_material.size() ? g.face_material[cursor_] : g.face_material.empty() ? -1 : g.face_material.back();
     }
 
     OmMesh& mesh_;
