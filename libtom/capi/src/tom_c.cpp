@@ -100,13 +100,14 @@ tom_status extract_into(const char* function, const tom_mesh_view* mesh, uint32_
         const uint32_t n = std::min(std::max(vertex_count, v->min_vertex_count), v->vertex_count);
         if (n > 65536) return fail(TOM_ERROR_ARGUMENT, std::string(function) + ": resolution " + std::to_string(n) + " has more vertices than 16-bit indices address");
     }
-    tom::Extracted e;
-    if (with_draws) {
-        std::vector<tom::PartDraw> parts(tom::part_count(*v));  // a copy into the C layout; parts are few
-        e = tom::extract_parts(*v, vertex_count, out, capacity, parts.data());
-        for (size_t p = 0; p < parts.size(); ++p) draws[p] = {parts[p].first_index, parts[p].index_count, parts[p].material, 0};
-    } else {
-        e = tom::extract(*v, vertex_count, out, capacity);
+    const tom::Extracted e = tom::extract(*v, vertex_count, out, capacity);
+    // extract() wrote the parts one after another, whole (the capacity was checked above): each
+    // draw is its part's live count after the previous ones, with nothing allocated
+    uint32_t first = 0;
+    for (uint32_t p = 0; with_draws && p < tom::part_count(*v); ++p) {
+        const uint32_t count = 3 * tom::active_part_triangle_count(*v, p, e.vertex_count);
+        draws[p] = {first, count, tom::part_at(*v, p).material, 0};
+        first += count;
     }
     result->vertex_count = e.vertex_count;
     result->triangle_count = e.triangle_count;
