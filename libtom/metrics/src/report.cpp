@@ -193,27 +193,37 @@ static void measure_parts(const Mesh& original, const TomMesh& built, const Repo
                           const SurfaceAttributes& level_attributes, std::vector<LevelReport>& levels, const std::vector<size_t>& first_of) {
     if (original.parts.empty() || original.parts.size() != built.parts.size()) return;
     const MeshView v = built.view();
-    std::vector<uint32_t> buffer(size_t(v.triangle_count) * 3);
-    std::vector<PartDraw> draws(original.parts.size());
+    // each measured level extracted once, with where each part's triangles went
+    struct PartsLevel {
+        Extracted e;
+        std::vector<uint32_t> indices;
+        std::vector<PartDraw> draws;
+    };
+    std::vector<PartsLevel> extracted(levels.size());
+    for (size_t i = 0; i < levels.size(); ++i) {
+        if (first_of[i] != i) continue;
+        PartsLevel& l = extracted[i];
+        l.indices.resize(size_t(active_triangle_count(v, levels[i].vertices)) * 3);
+        l.draws.resize(original.parts.size());
+        l.e = extract_parts(v, levels[i].vertices, l.indices.data(), l.indices.size(), l.draws.data());
+        levels[i].parts.resize(original.parts.size());
+    }
     for (size_t p = 0; p < original.parts.size(); ++p) {
         const Part& part = original.parts[p];
         const MetroReference reference({original.positions.data(), original.vertex_count(), original.indices.data() + 3 * size_t(part.first_triangle), part.triangle_count},
                                        params.distance, original_attributes);
         for (size_t i = 0; i < levels.size(); ++i) {
-            LevelReport& lr = levels[i];
-            if (lr.parts.size() != original.parts.size()) lr.parts.resize(original.parts.size());
-            PartLevelReport& pr = lr.parts[p];
-            if (first_of[i] != i) {
-                pr = levels[first_of[i]].parts[p];
-                continue;
-            }
-            const Extracted e = extract_parts(v, lr.vertices, buffer.data(), buffer.size(), draws.data());
+            if (first_of[i] != i) continue;
+            const PartsLevel& l = extracted[i];
+            PartLevelReport& pr = levels[i].parts[p];
             pr.material = part.material;
-            pr.triangles = draws[p].index_count / 3;
+            pr.triangles = l.draws[p].index_count / 3;
             if (pr.triangles > 0)
-                reference.compare({built.positions.data(), e.vertex_count, buffer.data() + draws[p].first_index, pr.triangles}, level_attributes, pr.attributes);
+                reference.compare({built.positions.data(), l.e.vertex_count, l.indices.data() + l.draws[p].first_index, pr.triangles}, level_attributes, pr.attributes);
         }
     }
+    for (size_t i = 0; i < levels.size(); ++i)  // a level at an earlier one's resolution repeats its figures
+        if (first_of[i] != i) levels[i].parts = levels[first_of[i]].parts;
 }
 
 // The curve is a runtime estimate (the runtime reads its means): area-uniform face samples, a
