@@ -70,16 +70,8 @@ Mesh join_parts(const std::vector<Mesh>& inputs, std::string name) {
         out = inputs[0];
         return out;
     }
-    // which streams any input has: those the joined mesh has
-    std::vector<bool> present;
-    for (const Mesh& in : inputs) {
-        size_t k = 0;
-        for_each_attribute_stream(in, [&](const std::vector<float>& s, size_t, const char*) {
-            if (present.size() <= k) present.push_back(false);
-            present[k] = present[k] || !s.empty();
-            ++k;
-        });
-    }
+    uint32_t present = 0;  // the streams any input has: those the joined mesh has
+    for (const Mesh& in : inputs) present |= attribute_bits(in);
     static const float neutral[5][4] = {{0, 0, 0, 0}, {0, 0, 0, 0}, {1, 1, 1, 1}, {0, 0, 0, 0}, {1, 0, 0, 1}};
     for (const Mesh& in : inputs) {
         const uint32_t base = out.vertex_count(), first_triangle = out.triangle_count(), n = in.vertex_count();
@@ -90,7 +82,7 @@ Mesh join_parts(const std::vector<Mesh>& inputs, std::string name) {
         size_t k = 0;
         for_each_attribute_stream(out, [&](std::vector<float>& dst, size_t width, const char*) {
             const std::vector<float>& src = *sources[k];
-            if (present[k]) {
+            if (present & (1u << k)) {
                 if (src.size() == size_t(n) * width)
                     dst.insert(dst.end(), src.begin(), src.end());
                 else

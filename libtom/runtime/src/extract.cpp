@@ -7,6 +7,7 @@
 #include "tom/extract.h"
 
 #include "coarse.h"
+#include "format_layout.h"
 #include "platform.h"
 #include "simd.h"
 
@@ -290,8 +291,8 @@ uint32_t active_count_at(const MeshView& m, uint32_t n) noexcept {
 // Part p as a mesh of its own: the same vertices, the part's range of triangles, no coarse
 // corners (COAR is only for meshes without parts). The single-part code runs on it unchanged.
 MeshView part_mesh(const MeshView& m, uint32_t p) noexcept {
-    const Part part = part_at(m, p);
     if (!m.parts) return m;
+    const Part& part = m.parts[p];
     MeshView v = m;
     v.triangles = static_cast<const uint8_t*>(m.triangles) + size_t(part.first_triangle) * 3 * m.index_size;
     v.triangle_count = part.triangle_count;
@@ -333,11 +334,8 @@ Part part_at(const MeshView& m, uint32_t p) noexcept {
     Part whole;
     whole.triangle_count = m.triangle_count;
     whole.material = m.material;
-    for (int k = 0; k < 5; ++k) {
-        static constexpr const float* MeshView::*streams[5] = {&MeshView::normals, &MeshView::texcoords, &MeshView::colors,
-                                                               &MeshView::texcoords1, &MeshView::tangents};
-        if (m.*streams[k]) whole.attributes |= 1u << k;
-    }
+    for (const layout::AttributeStream& stream : layout::attribute_streams)
+        if (m.*stream.view) whole.attributes |= stream.flag;
     return whole;
 }
 
@@ -347,9 +345,8 @@ uint32_t active_part_triangle_count(const MeshView& m, uint32_t p, uint32_t vert
 
 uint32_t active_triangle_count(const MeshView& m, uint32_t vertex_count) noexcept {
     const uint32_t n = clamp_resolution(m, vertex_count);
-    if (!m.parts) return active_count_at(m, n);
     uint32_t total = 0;
-    for (uint32_t p = 0; p < m.part_count; ++p) total += active_count_at(part_mesh(m, p), n);
+    for (uint32_t p = 0; p < part_count(m); ++p) total += active_count_at(part_mesh(m, p), n);
     return total;
 }
 
