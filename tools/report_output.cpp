@@ -170,7 +170,7 @@ std::string summary_csv_header(const tom::ReportParams& params) {
     return h + "\n";
 }
 
-std::string summary_csv_row(const tom::MeshReport& r, const ReportContext& ctx) {
+std::string summary_csv_row(const nlohmann::ordered_json& mesh, const std::string& file) {
     auto quote = [](const std::string& s) {
         std::string q = "\"";
         for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
@@ -178,11 +178,13 @@ std::string summary_csv_row(const tom::MeshReport& r, const ReportContext& ctx) 
     };
     std::ostringstream o;
     o.precision(6);
-    o << quote(ctx.file) << ',' << quote(r.name) << ',' << r.vertices << ',' << r.triangles << ',' << ctx.build_seconds << ',' << ctx.report_seconds
-      << ',' << 100.0 * double(r.memory.tom_bytes) / double(r.memory.face_vertex_bytes) << ',' << r.fit.mean.k << ',' << r.fit.max.k;
-    for (const tom::LevelReport& l : r.levels)
-        o << ',' << l.triangles << ',' << pct(l.error.hausdorff, l.error.diagonal) << ','
-          << pct(std::max(l.error.forward.mean, l.error.backward.mean), l.error.diagonal);
+    o << quote(file) << ',' << quote(mesh.at("name").get<std::string>()) << ',' << mesh.at("vertices").get<uint64_t>() << ','
+      << mesh.at("triangles").get<uint64_t>() << ',' << mesh.at("build_seconds").get<double>() << ',' << mesh.at("report_seconds").get<double>()
+      << ',' << mesh.at("memory").at("tom_percent").get<double>() << ',' << mesh.at("fit").at("k_mean").get<double>() << ','
+      << mesh.at("fit").at("k_max").get<double>();
+    for (const auto& l : mesh.at("levels"))
+        o << ',' << l.at("triangles").get<uint64_t>() << ',' << l.at("error").at("hausdorff").get<double>() << ','
+          << l.at("error").at("mean").get<double>();
     o << '\n';
     return o.str();
 }

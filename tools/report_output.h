@@ -26,6 +26,8 @@ nlohmann::ordered_json conventions_json(const tom::ReportParams& params);
 std::string report_table(const tom::MeshReport& r, const ReportContext& ctx);
 /// The header and one row of the batch summary CSV.
 std::string summary_csv_header(const tom::ReportParams& params);
-std::string summary_csv_row(const tom::MeshReport& r, const ReportContext& ctx);
+/// A mesh's row from its report_json() object, so that a rerun that skips an up-to-date input
+/// rebuilds the same row from the report on disk.
+std::string summary_csv_row(const nlohmann::ordered_json& mesh, const std::string& file);
 
 } // namespace tools

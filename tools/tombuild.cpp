@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
+#include <set>
 #include <new>
 #include <thread>
 
@@ -23,6 +25,7 @@
 #include "tom/format.h"
 #include "tom/io/import.h"
 #include "tom/metrics/report.h"
+#include "batch.h"
 #include "report_output.h"
 #include "tool_common.h"
 
@@ -49,12 +52,48 @@ struct Options {
     double timeout_seconds = 3600;  // per input
     double max_memory_mb = 0;       // per input; 0: three quarters of the machine's memory over the jobs
     bool isolate = true;            // each input in a worker process of its own
+    bool force = false;             // convert even the inputs whose output is up to date
+    bool prune = false;             // remove outputs whose input is gone
+    std::string shard = "0/1";      // --shard K/N | auto | auto/N
+    std::string merge_dir;          // --merge OUTDIR
 };
+
+const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) + ")";
+
+// Every option that changes a .tom's bytes (its provenance records them): not the thread or
+// job count, and the error curve's sampling only when the curve is stored.
+nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams& params) {
+    nlohmann::ordered_json j;
+    j["build"] = tools::build_params_json(params);
+    j["index_size"] = opt.index_size;
+    j["error_curve"] = !opt.no_error_curve;
+    if (!opt.no_error_curve) {
+        j["curve_points"] = opt.curve_points;
+        j["samples_per_face"] = opt.samples_per_face;
+        j["seed"] = opt.seed;
+    }
+    return j;
+}
+
+// The options that change a JSON report besides its .tom's.
+nlohmann::ordered_json report_options(const Options& opt) {
+    return {{"levels", opt.levels_percent}, {"samples_per_face", opt.samples_per_face}, {"seed", opt.seed}};
+}
 
 struct Outcome {
     bool ok = false;
     std::string text;         // what to print for this input (stdout if ok, stderr otherwise)
     std::string summary_csv;  // rows of the batch summary, one per mesh (with --report-json)
+    std::string digest;       // of the input as converted
+    uint64_t triangles = 0;
+};
+
+// What a conversion needs besides the job: the settings, and what the provenance records.
+struct Settings {
+    tom::BuildParams params;
+    tom::WriteOptions write;
+    tom::ReportParams report;
+    nlohmann::ordered_json output_options, report_options;
 };
 
 tom::ReportParams report_params(const Options& opt, unsigned threads) {
@@ -73,12 +112,15 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParams& params, const tom::WriteOptions& wopt,
-                const tom::ReportParams& rparams, const std::string& report_path) {
+Outcome convert(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path) {
     Outcome out;
     const auto start = std::chrono::steady_clock::now();
+    const tom::BuildParams& params = settings.params;
+    const tom::ReportParams& rparams = settings.report;
     try {
         tom::ImportResult imported = tom::import_file(job.input);
+        const tools::Provenance provenance = tools::describe(job.input, imported.sources, tool_version, settings.output_options);
+        out.digest = provenance.input_digest;
         if (imported.meshes.empty())
             throw tom::ImportError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
         std::vector<tom::CleanStats> cleans;
@@ -111,7 +153,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
                 if (!opt.no_error_curve) t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(r.curve)});
                 if (opt.report) tables += tools::report_table(r, ctx);
                 json_meshes.push_back(tools::report_json(r, ctx));
-                out.summary_csv += tools::summary_csv_row(r, ctx);
+                out.summary_csv += tools::summary_csv_row(json_meshes.back(), job.input);
             } else if (!opt.no_error_curve) {
                 t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(tom::measure_error_curve(mesh, t, rparams))});
             }
@@ -132,7 +174,10 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
         }
         std::error_code ec;
         fs::create_directories(fs::path(job.output).parent_path(), ec);
+        tom::WriteOptions wopt = settings.write;
+        wopt.provenance = provenance.text();
         const std::vector<uint8_t> bytes = tom::serialize(built, imported.scene, wopt);
+        out.triangles = triangles;
         tom::write_bytes_atomically(job.output, bytes.data(), bytes.size());
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[1024];
@@ -151,8 +196,11 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
             doc["conventions"] = tools::conventions_json(rparams);
             doc["skipped"] = imported.skipped;
             doc["meshes"] = json_meshes;
+            // what made the report: its .tom's provenance and the report's own options (a rerun
+            // keeps the report when both are unchanged)
+            doc["provenance"] = {{"tom", nlohmann::ordered_json::parse(wopt.provenance)}, {"report", settings.report_options}};
             fs::create_directories(fs::path(report_path).parent_path(), ec);
-            const std::string text = doc.dump(2) + "\n";
+            const std::string text = doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
             tom::write_bytes_atomically(report_path, text.data(), text.size());
         }
         if (opt.verbose > 0)
@@ -166,6 +214,11 @@ Outcome convert(const tools::Job& job, const Options& opt, const tom::BuildParam
     }
     return out;
 }
+
+// The signal (SIGTERM, SIGINT) that asked the batch to stop, 0 while it runs: workers kill their
+// conversion, remove its temporary files and start no other; no manifest is written.
+volatile std::sig_atomic_t stop_signal = 0;
+extern "C" void on_stop_signal(int signal) { stop_signal = signal; }
 
 // --- worker processes ---------------------------------------------------------------------
 // Each input is converted in a child process with an address-space limit, watched for a time
@@ -209,30 +262,33 @@ void remove_temporaries(const std::string& output, pid_t child) {
         if (e.path().filename().string().rfind(prefix, 0) == 0) fs::remove(e.path(), ec);
 }
 
-Outcome convert_isolated(const tools::Job& job, const Options& opt, const tom::BuildParams& params, const tom::WriteOptions& wopt,
-                         const tom::ReportParams& rparams, const std::string& report_path) {
+Outcome convert_isolated(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path) {
     Outcome out;
     int fds[2];
-    if (::pipe(fds) != 0) return convert(job, opt, params, wopt, rparams, report_path);
+    if (::pipe(fds) != 0) return convert(job, opt, settings, report_path);
     std::fflush(stdout);
     std::fflush(stderr);
     const pid_t child = ::fork();
     if (child < 0) {
         ::close(fds[0]);
         ::close(fds[1]);
-        return convert(job, opt, params, wopt, rparams, report_path);
+        return convert(job, opt, settings, report_path);
     }
     if (child == 0) {
         ::close(fds[0]);
+        std::signal(SIGTERM, SIG_DFL);  // a stopped batch ends its workers at once
+        std::signal(SIGINT, SIG_DFL);
         if (!kAddressSanitizer && opt.max_memory_mb > 0) {
             const rlim_t bytes = rlim_t(opt.max_memory_mb * 1024.0 * 1024.0);
             const struct rlimit limit = {bytes, bytes};
             ::setrlimit(RLIMIT_AS, &limit);
         }
-        const Outcome r = convert(job, opt, params, wopt, rparams, report_path);
+        const Outcome r = convert(job, opt, settings, report_path);
         std::string wire(1, r.ok ? '1' : '0');
         put_string(wire, r.text);
         put_string(wire, r.summary_csv);
+        put_string(wire, r.digest);
+        put_string(wire, std::to_string(r.triangles));
         for (size_t at = 0; at < wire.size();) {
             const ssize_t n = ::write(fds[1], wire.data() + at, wire.size() - at);
             if (n <= 0) break;
@@ -245,11 +301,15 @@ Outcome convert_isolated(const tools::Job& job, const Options& opt, const tom::B
     // read what the child sends until it closes the pipe, or the time limit passes
     std::string wire;
     const auto start = std::chrono::steady_clock::now();
-    bool timed_out = false;
+    bool timed_out = false, stopped = false;
     for (char buffer[65536];;) {
         const double left = opt.timeout_seconds - seconds_since(start);
         if (left <= 0) {
             timed_out = true;
+            break;
+        }
+        if (stop_signal != 0) {
+            stopped = true;
             break;
         }
         struct pollfd pfd = {fds[0], POLLIN, 0};
@@ -262,19 +322,24 @@ Outcome convert_isolated(const tools::Job& job, const Options& opt, const tom::B
         wire.append(buffer, size_t(n));
     }
     ::close(fds[0]);
-    if (timed_out) ::kill(child, SIGKILL);
+    if (timed_out || stopped) ::kill(child, SIGKILL);
     int status = 0;
     while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
     }
     size_t at = 1;
-    if (!timed_out && WIFEXITED(status) && WEXITSTATUS(status) == 0 && !wire.empty() && get_string(wire, at, out.text) &&
-        get_string(wire, at, out.summary_csv)) {
+    std::string triangles;
+    if (!timed_out && !stopped && WIFEXITED(status) && WEXITSTATUS(status) == 0 && !wire.empty() && get_string(wire, at, out.text) &&
+        get_string(wire, at, out.summary_csv) && get_string(wire, at, out.digest) && get_string(wire, at, triangles)) {
         out.ok = wire[0] == '1';
+        out.triangles = std::strtoull(triangles.c_str(), nullptr, 10);
         return out;
     }
     remove_temporaries(job.output, child);
+    if (!report_path.empty()) remove_temporaries(report_path, child);
     char reason[256];
-    if (timed_out)
+    if (stopped)
+        std::snprintf(reason, sizeof reason, "stopped by signal %d (%s) before it finished", int(stop_signal), strsignal(stop_signal));
+    else if (timed_out)
         std::snprintf(reason, sizeof reason, "took longer than --timeout %g s and was stopped", opt.timeout_seconds);
     else if (WIFSIGNALED(status))
         std::snprintf(reason, sizeof reason, "the conversion crashed (signal %d, %s)%s", WTERMSIG(status), strsignal(WTERMSIG(status)),
@@ -293,17 +358,53 @@ void draw_progress(size_t done, size_t total, size_t failed) {
     std::fflush(stderr);
 }
 
+// The .tom files under `outdir` that tombuild made (they have a provenance) and that no input of
+// this run maps to: their input is gone, or was not given this time.
+std::vector<std::string> find_orphans(const std::string& outdir, const std::vector<tools::Job>& jobs) {
+    std::set<std::string> planned;
+    for (const tools::Job& j : jobs) planned.insert(fs::path(j.output).lexically_normal().string());
+    std::vector<std::string> orphans;
+    std::error_code ec;
+    for (auto it = fs::recursive_directory_iterator(outdir, fs::directory_options::skip_permission_denied, ec);
+         !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+        if (!it->is_regular_file(ec) || it->path().extension() != ".tom") continue;
+        const std::string path = it->path().lexically_normal().string();
+        if (planned.count(path)) continue;
+        try {
+            const tom::File f = tom::File::open(path);
+            if (f.provenance().rfind("{\"tool\":\"tombuild", 0) == 0) orphans.push_back(path);
+        } catch (const std::exception&) {
+        }  // not a .tom of ours: never touched
+    }
+    std::sort(orphans.begin(), orphans.end());
+    return orphans;
+}
+
+// Whether the JSON report at `path` belongs to the up-to-date output (its provenance) and the
+// report options; if so its summary rows go to `rows`.
+bool report_is_current(const std::string& path, const std::string& input, const std::string& provenance, const nlohmann::ordered_json& options,
+                       std::string& rows) {
+    try {
+        std::ifstream in(path);
+        if (!in) return false;
+        const nlohmann::ordered_json doc = nlohmann::ordered_json::parse(in);
+        const nlohmann::ordered_json expected = {{"tom", nlohmann::ordered_json::parse(provenance)}, {"report", options}};
+        if (!doc.contains("provenance") || doc["provenance"] != expected) return false;
+        for (const auto& mesh : doc.at("meshes")) rows += tools::summary_csv_row(mesh, input);
+        return true;
+    } catch (const std::exception&) {
+        return false;
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     Options opt;
     CLI::App app{"tombuild: simplify meshes by greedy vertex substitution into Totally Ordered Meshes (.tom)"};
-    app.set_version_flag("--version", "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." +
-                                          std::to_string(tom::format_version_minor) + ")");
-    app.add_option("inputs", opt.inputs, "Mesh files (obj, ply, off, stl, gltf, glb) or folders, searched recursively")
-        ->required()
-        ->group("Basics");
-    app.add_option("-o,--output", opt.outdir, "Output folder; one .tom per input, sub-folders mirrored")->required()->group("Basics");
+    app.set_version_flag("--version", tool_version);
+    app.add_option("inputs", opt.inputs, "Mesh files (obj, ply, off, stl, gltf, glb) or folders, searched recursively")->group("Basics");
+    app.add_option("-o,--output", opt.outdir, "Output folder; one .tom per input, sub-folders mirrored")->group("Basics");
     app.add_option("-j,--jobs", opt.jobs, "Files converted in parallel (default 1)")->check(CLI::Range(1u, 256u))->group("Basics");
     app.add_flag("--progress", opt.progress, "Show a progress bar on stderr even when it is not a terminal")->group("Basics");
     app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group("Basics");
@@ -336,17 +437,45 @@ int main(int argc, char** argv) {
         ->group("Batch");
     app.add_flag("!--no-isolate", opt.isolate, "Convert in this process instead of one worker process per input (no --timeout or --max-memory)")
         ->group("Batch");
-    app.footer("Exit codes: 0 every input converted, 1 some inputs failed (the others are still written), 2 usage error.\n"
+    app.add_flag("--force", opt.force, "Convert every input, also those whose output is up to date")->group("Batch");
+    app.add_flag("--prune", opt.prune, "Remove the outputs (and reports) of tombuild in the output folder that no input maps to any more")->group("Batch");
+    app.add_option("--shard", opt.shard,
+                   "Convert only shard K of N of the inputs (0 <= K < N, balanced by size, the same split on every machine); auto: K and N "
+                   "of a Slurm job array; auto/N: K from Kubernetes' JOB_COMPLETION_INDEX")
+        ->group("Batch");
+    app.add_option("--merge", opt.merge_dir, "Join the shards' manifests in this output folder into manifest.jsonl and summary.csv; names missing or failed shards")
+        ->group("Batch");
+    app.footer("Exit codes: 0 every input converted or up to date, 1 some inputs failed (the others are still written), 2 usage error.\n"
                "Example: tombuild data/meshes/bunny00.off assets/ -o out/ -j 2");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
 
     try {
-        tom::BuildParams params = opt.build.params();
-        tom::WriteOptions wopt;
-        wopt.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
+        if (!opt.merge_dir.empty()) {
+            if (!opt.inputs.empty() || !opt.outdir.empty()) {
+                std::fprintf(stderr, "error: --merge OUTDIR takes no inputs and no -o\n");
+                return tools::exit_usage;
+            }
+            return tools::merge_shards(opt.merge_dir, opt.quiet);
+        }
+        if (opt.inputs.empty() || opt.outdir.empty()) {
+            std::fprintf(stderr, "error: %s\nRun with --help for more information.\n", opt.inputs.empty() ? "inputs is required" : "--output is required");
+            return tools::exit_usage;
+        }
+        tools::Shard shard;
+        try {
+            shard = tools::parse_shard(opt.shard);
+        } catch (const std::invalid_argument& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return tools::exit_usage;
+        }
+        Settings settings;
+        settings.params = opt.build.params();
+        settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
+        settings.output_options = output_options(opt, settings.params);
+        settings.report_options = report_options(opt);
 
         std::vector<std::string> errors;
-        const std::vector<tools::Job> jobs = tools::plan_jobs(opt.inputs, opt.outdir, ".tom", errors);
+        const std::vector<tools::Job> all_jobs = tools::plan_jobs(opt.inputs, opt.outdir, ".tom", errors);
         for (const std::string& e : errors) std::fprintf(stderr, "error: %s\n", e.c_str());
         std::error_code ec;
         fs::create_directories(opt.outdir, ec);
@@ -354,60 +483,146 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "error: cannot create output folder '%s': %s\n", opt.outdir.c_str(), ec.message().c_str());
             return tools::exit_failed;
         }
-        const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && jobs.size() > 1;
+        // this run's share of the inputs (all of them without --shard)
+        std::vector<size_t> selected;
+        {
+            std::vector<uint64_t> sizes;
+            for (const tools::Job& j : all_jobs) sizes.push_back(fs::file_size(j.input, ec));
+            const std::vector<uint32_t> of = tools::assign_shards(all_jobs, sizes, shard.count);
+            for (size_t i = 0; i < all_jobs.size(); ++i)
+                if (of[i] == shard.index) selected.push_back(i);
+        }
+        const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && selected.size() > 1;
         // the cores shared among the -j jobs: each job's build and report threads
         const unsigned per_job = std::max(1u, std::max(1u, std::thread::hardware_concurrency()) / std::max(1u, opt.jobs));
-        const tom::ReportParams rparams = report_params(opt, per_job);
-        if (params.threads == 0) params.threads = per_job;
+        settings.report = report_params(opt, per_job);
+        if (settings.params.threads == 0) settings.params.threads = per_job;
         if (opt.max_memory_mb == 0) {
             const double total_mb = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)) / (1024.0 * 1024.0);
             opt.max_memory_mb = std::max(1024.0, 0.75 * total_mb / double(std::max(1u, opt.jobs)));
         }
-        std::vector<std::string> summary_rows(jobs.size());
         auto report_path_of = [&](const tools::Job& job) -> std::string {
             if (opt.report_json_dir.empty()) return "";
             fs::path rel = fs::path(job.output).lexically_relative(opt.outdir);
             rel.replace_extension(".json");
             return (fs::path(opt.report_json_dir) / rel).string();
         };
+        std::signal(SIGTERM, on_stop_signal);
+        std::signal(SIGINT, on_stop_signal);
+
+        std::vector<std::string> summary_rows(selected.size());
+        std::vector<tools::ManifestRecord> records(selected.size());
         std::atomic<size_t> next{0};
-        size_t done = 0, failed = errors.size();
+        size_t done = 0, failed = errors.size(), fresh = 0;
         std::mutex print_mutex;
         auto worker = [&] {
-            for (size_t i; (i = next++) < jobs.size();) {
-                const Outcome r = opt.isolate ? convert_isolated(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]))
-                                              : convert(jobs[i], opt, params, wopt, rparams, report_path_of(jobs[i]));
+            for (size_t s; (s = next++) < selected.size() && stop_signal == 0;) {
+                const tools::Job& job = all_jobs[selected[s]];
+                const std::string report_path = report_path_of(job);
+                const auto start = std::chrono::steady_clock::now();
+                tools::ManifestRecord& rec = records[s];
+                rec.index = selected[s];
+                rec.input = job.input;
+                rec.output = job.output;
+                rec.report = report_path;
+                Outcome r;
+                tools::Freshness f;
+                if (!opt.force) {
+                    f = tools::check_output(job.input, job.output, tool_version, settings.output_options);
+                    if (f.up_to_date && !report_path.empty() && !opt.report &&
+                        !report_is_current(report_path, job.input, f.provenance, settings.report_options, r.summary_csv))
+                        f.up_to_date = false;
+                    if (opt.report) f.up_to_date = false;  // the printed report is made by converting
+                }
+                if (f.up_to_date) {
+                    r.ok = true;
+                    r.digest = f.digest;
+                    r.triangles = f.triangles;
+                    r.text = job.input + ": up to date (" + job.output + ")\n";
+                } else {
+                    r = opt.isolate ? convert_isolated(job, opt, settings, report_path) : convert(job, opt, settings, report_path);
+                    if (r.digest.empty()) {
+                        try {
+                            r.digest = tools::file_digest(job.input);
+                        } catch (const std::exception&) {
+                        }
+                    }
+                }
+                rec.digest = r.digest == "missing" ? "" : r.digest;
+                rec.status = !r.ok ? "failed" : f.up_to_date ? "up to date" : "converted";
+                rec.triangles = r.ok ? r.triangles : 0;
+                rec.seconds = seconds_since(start);
+                if (!r.ok) {
+                    std::string message = r.text;
+                    if (message.rfind("error: ", 0) == 0) message.erase(0, 7);
+                    while (!message.empty() && message.back() == '\n') message.pop_back();
+                    rec.message = message;
+                }
                 std::lock_guard<std::mutex> lock(print_mutex);
-                summary_rows[i] = r.summary_csv;
+                summary_rows[s] = r.summary_csv;
                 ++done;
                 if (!r.ok) ++failed;
+                if (f.up_to_date) ++fresh;
                 if (show_progress) std::fprintf(stderr, "\r%*s\r", 60, "");
                 if (!r.ok)
                     std::fputs(r.text.c_str(), stderr);
-                else if (!opt.quiet)
+                else if (!opt.quiet && (!f.up_to_date || opt.verbose > 0))
                     std::fputs(r.text.c_str(), stdout);
                 std::fflush(stdout);
-                if (show_progress) draw_progress(done, jobs.size(), failed);
+                if (show_progress) draw_progress(done, selected.size(), failed);
             }
         };
         std::vector<std::thread> pool;
-        const unsigned threads = std::min<unsigned>(opt.jobs, unsigned(std::max<size_t>(1, jobs.size())));
+        const unsigned threads = std::min<unsigned>(opt.jobs, unsigned(std::max<size_t>(1, selected.size())));
         for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
         worker();
         for (std::thread& t : pool) t.join();
         if (show_progress) std::fprintf(stderr, "\n");
-        if (!opt.report_json_dir.empty()) {
-            std::string csv = tools::summary_csv_header(rparams);
+        if (stop_signal != 0) {
+            std::fprintf(stderr, "error: stopped by signal %d (%s) after %zu of %zu inputs; no manifest written, a rerun converts the rest\n", int(stop_signal),
+                         strsignal(stop_signal), done, selected.size());
+            return 128 + stop_signal;
+        }
+        // outputs whose input is gone: named by every run over the whole batch, removed with
+        // --prune (by shard 0 only, so that shards do not race)
+        if (shard.index == 0) {
+            for (const std::string& orphan : find_orphans(opt.outdir, all_jobs)) {
+                if (opt.prune) {
+                    fs::remove(orphan, ec);
+                    if (!opt.report_json_dir.empty()) {
+                        fs::path rel = fs::path(orphan).lexically_relative(opt.outdir);
+                        rel.replace_extension(".json");
+                        fs::remove(fs::path(opt.report_json_dir) / rel, ec);
+                    }
+                    if (!opt.quiet) std::printf("%s: removed (no input maps to it)\n", orphan.c_str());
+                } else if (!opt.quiet) {
+                    std::printf("%s: no input of this run maps to it (its input is gone?); --prune removes it\n", orphan.c_str());
+                }
+            }
+        }
+        tools::ManifestHeader header;
+        header.shard = shard;
+        header.inputs = all_jobs.size();
+        header.report_json = opt.report_json_dir;
+        header.summary_header = tools::summary_csv_header(settings.report);
+        const std::string manifest = tools::manifest_path(opt.outdir, shard);
+        tools::write_manifest(manifest, header, records);
+        if (!opt.report_json_dir.empty() && shard.count == 1) {  // shards: tombuild --merge writes it
+            std::string csv = header.summary_header;
             for (const std::string& rows : summary_rows) csv += rows;  // input order, whatever -j
             fs::create_directories(opt.report_json_dir, ec);
             const std::string path = (fs::path(opt.report_json_dir) / "summary.csv").string();
             tom::write_bytes_atomically(path, csv.data(), csv.size());
             if (!opt.quiet) std::printf("reports: %s (one JSON per input), %s\n", opt.report_json_dir.c_str(), path.c_str());
         }
+        const size_t total = selected.size() + errors.size();
         if (!opt.quiet || failed)
-            std::fprintf(failed ? stderr : stdout, "%zu of %zu inputs converted%s\n", jobs.size() + errors.size() - failed,
-                         jobs.size() + errors.size(), failed ? (", " + std::to_string(failed) + " failed").c_str() : "");
-        if (jobs.empty() && errors.empty()) {
+            std::fprintf(failed ? stderr : stdout, "%zu of %zu inputs converted%s%s%s; manifest %s\n", total - failed - fresh, total,
+                         fresh ? (", " + std::to_string(fresh) + " up to date").c_str() : "",
+                         failed ? (", " + std::to_string(failed) + " failed").c_str() : "",
+                         shard.count > 1 ? (" (shard " + shard.name() + " of " + std::to_string(all_jobs.size()) + " inputs)").c_str() : "",
+                         manifest.c_str());
+        if (all_jobs.empty() && errors.empty()) {
             std::fprintf(stderr, "error: no mesh files found in the inputs\n");
             return tools::exit_failed;
         }

@@ -118,6 +118,14 @@ int main(int argc, char** argv) {
         j["instances"] = nlohmann::json::array();
         for (const tom::Instance& inst : scene.instances)
             j["instances"].push_back({{"mesh", inst.mesh}, {"node", inst.node}, {"name", inst.name}, {"transform", inst.transform}});
+        // what made the file (PROV): tombuild's JSON, or the writer's text as a string
+        if (file.provenance().empty()) {
+            j["provenance"] = nullptr;
+        } else {
+            const std::string text(file.provenance());
+            const nlohmann::ordered_json parsed = nlohmann::ordered_json::parse(text, nullptr, false);
+            j["provenance"] = parsed.is_discarded() ? nlohmann::ordered_json(text) : parsed;
+        }
         j["face_vertex_bytes"] = total_fv;
         j["percent_of_face_vertex"] = total_fv ? 100.0 * double(file.file_bytes()) / double(total_fv) : 0.0;
         if (sections || json) {
@@ -162,6 +170,15 @@ int main(int argc, char** argv) {
         std::printf("  scene: %zu material%s, %zu instance%s%s\n", scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
                     scene.instances.size(), scene.instances.size() == 1 ? "" : "s",
                     scene.instances.empty() ? " (each mesh is drawn once, untransformed)" : "");
+        if (const auto& pj = j["provenance"]; pj.is_object() && pj.contains("input")) {
+            std::string sources;
+            for (const auto& src : pj.value("sources", nlohmann::ordered_json::array())) sources += ", " + src.value("file", std::string("?"));
+            std::printf("  made by %s from %s bytes (%s)%s%s\n", pj.value("tool", std::string("?")).c_str(),
+                        std::to_string(pj["input"].value("bytes", uint64_t(0))).c_str(), pj["input"].value("digest", std::string("?")).c_str(),
+                        sources.empty() ? "" : " with", sources.empty() ? "" : sources.c_str() + 1);
+        } else if (pj.is_string()) {
+            std::printf("  provenance: %s\n", pj.get<std::string>().c_str());
+        }
         for (size_t i = 0; show_scene && i < scene.materials.size(); ++i) {
             const tom::Material& m = scene.materials[i];
             std::printf("    material %zu '%s': base colour %.3g %.3g %.3g %.3g, metallic %.3g, roughness %.3g%s%s\n", i, m.name.c_str(), m.base_color[0],

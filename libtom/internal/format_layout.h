@@ -46,8 +46,9 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),
                    sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
                    sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
-                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR"), sec_parts = fourcc("PART");
-/// The `mesh` field of file-level sections (MATL, INST).
+                   sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR"), sec_parts = fourcc("PART"),
+                   sec_provenance = fourcc("PROV");
+/// The `mesh` field of file-level sections (MATL, INST, PROV).
 constexpr uint32_t file_level = SectionInfo::file_level;
 
 /// The optional f32 vertex streams, in the order of tom::for_each_attribute_stream: attribute

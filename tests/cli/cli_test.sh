@@ -6,16 +6,7 @@
 set -u
 tools="$1"; data="$2"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
-fail=0; passed=0
-check() {  # check "description" command...
-  local what="$1"; shift
-  if "$@"; then passed=$((passed+1)); else echo "FAILED: $what"; fail=$((fail+1)); fi
-}
-expect_exit() {  # expect_exit CODE command...
-  local want="$1"; shift
-  "$@" >"$work/stdout" 2>"$work/stderr"; local got=$?
-  if [ "$got" -ne "$want" ]; then echo "exit $got, expected $want: $*"; cat "$work/stderr"; return 1; fi
-}
+. "$(dirname "$0")/check.sh"
 
 [ -s "$data/meshes/bunny00.off" ] || { echo "samples missing: run scripts/fetch-samples.sh"; exit 1; }
 

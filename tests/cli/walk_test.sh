@@ -5,11 +5,7 @@
 set -u
 tools="$1"; walk="$2"; data="$3"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
-fail=0; passed=0
-check() {
-  local what="$1"; shift
-  if "$@"; then passed=$((passed+1)); else echo "FAILED: $what"; fail=$((fail+1)); fi
-}
+. "$(dirname "$0")/check.sh"
 "$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
 check "a scene file is made" "$walk" --make-scene "$work/scene.txt" --meshes "$work"/meshes/*.tom --instances 60 --seed 3
 check "the scene file lists meshes and instances" test "$(grep -c '^instance' "$work/scene.txt")" -eq 60

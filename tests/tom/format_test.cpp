@@ -483,6 +483,44 @@ TEST_CASE("version 1.3 files: read by this reader as meshes of one part", "[form
     CHECK(a == c);
 }
 
+TEST_CASE("provenance (PROV, since 1.5): stored as given, file-level, once (rule 9), skipped by 1.4 readers", "[format][provenance]") {
+    tom::WriteOptions with;
+    with.provenance = R"({"tool":"test","input":{"bytes":3,"digest":"xxh3-128:00"}})";
+    const std::vector<uint8_t> plain = tom::serialize({coarse_sphere()});
+    const std::vector<uint8_t> b = tom::serialize({coarse_sphere()}, with);
+    const tom::File f = tom::File::from_bytes(b.data(), b.size(), "prov.tom");
+    CHECK(f.provenance() == with.provenance);
+    CHECK(f.version_minor() == 5);
+    CHECK(tom::File::from_bytes(plain.data(), plain.size(), "plain.tom").provenance().empty());
+    // the same provenance gives the same bytes; the meshes' sections are those of a file without it
+    CHECK(tom::serialize({coarse_sphere()}, with) == b);
+    const tom::File g = tom::File::from_bytes(plain.data(), plain.size(), "plain.tom");
+    REQUIRE(f.mesh(0).triangle_count == g.mesh(0).triangle_count);
+    CHECK(std::memcmp(f.mesh(0).triangles, g.mesh(0).triangles, size_t(g.mesh(0).triangle_count) * 3 * g.mesh(0).index_size) == 0);
+    const std::vector<Section> secs = sections_of(b);
+    const Section& prov = find(secs, "PROV");
+    CHECK(get32(b, prov.entry + 4) == 0xFFFFFFFFu);
+    std::vector<uint8_t> c = b;
+    put32(c, prov.entry + 4, 0);  // claimed by mesh 0
+    fix_checksums(c);
+    CHECK(rule_of(c) == 9);
+    // a reader that does not know PROV (1.4) skips it: renamed to an unknown type, the file reads
+    c = b;
+    std::memcpy(&c[prov.entry], "ZZZZ", 4);
+    fix_checksums(c);
+    const tom::File old = tom::File::from_bytes(c.data(), c.size(), "renamed.tom");
+    CHECK(old.provenance().empty());
+    CHECK(old.mesh(0).triangle_count == f.mesh(0).triangle_count);
+    // twice: the second MESH-less copy of PROV is a rule 9 error
+    c = tom::serialize({small_mesh()}, with);  // (a mesh with metadata)
+    const size_t meta = find(sections_of(c), "META").entry;
+    std::memcpy(&c[meta], "PROV", 4);
+    put32(c, meta + 4, 0xFFFFFFFFu);
+    fix_checksums(c);
+    CHECK(rule_of(c) == 9);
+    CHECK(message_of(c).find("twice") != std::string::npos);
+}
+
 TEST_CASE("scenes: materials with texture references and instances survive the round trip (rules 17 and 18)", "[format][scene]") {
     tom::TomMesh a = small_mesh(), b = small_mesh();
     a.material = 1;

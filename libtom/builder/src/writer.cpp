@@ -118,6 +118,8 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
     std::vector<PendingSection> sections;
     if (!scene.materials.empty()) sections.push_back({sec_materials, file_level, detail::encode_materials(scene.materials)});
     if (!scene.instances.empty()) sections.push_back({sec_instances, file_level, detail::encode_instances(scene.instances)});
+    if (!options.provenance.empty())
+        sections.push_back({sec_provenance, file_level, std::vector<uint8_t>(options.provenance.begin(), options.provenance.end())});
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {
         const TomMesh& m = meshes[mi];
         const uint32_t index_size = choose_index_size(m, options.index_size);

@@ -271,6 +271,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     }
     ImportResult result;
     if (!warn.empty()) result.warnings.push_back(one_line(warn));
+    for (const tinygltf::Buffer& b : model.buffers)  // external buffers (images are not read)
+        if (!b.uri.empty() && !tinygltf::IsDataURI(b.uri)) result.sources.push_back(b.uri);
     for (const std::string& ext : model.extensionsRequired)
         if (ext != "KHR_draco_mesh_compression" && ext != "KHR_materials_pbrSpecularGlossiness" && ext != "KHR_texture_transform" &&
             ext != "KHR_materials_unlit" && ext != "KHR_mesh_quantization" && ext != "EXT_meshopt_compression")

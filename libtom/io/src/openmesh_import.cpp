@@ -313,6 +313,11 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     if (importer.face_material().size() == mesh.triangle_count()) group_by_material(mesh, importer.face_material());
     if (extension == "obj" && (!groups.materials.empty() || !groups.libraries.empty()))
         result.scene.materials = read_obj_materials(path, groups.libraries, groups.materials, result.warnings);
+    if (extension == "obj")
+        for (std::string name : groups.libraries) {
+            std::replace(name.begin(), name.end(), '\\', '/');  // as read_obj_materials opens it
+            result.sources.push_back(name);
+        }
     result.meshes.push_back(std::move(mesh));
     return result;
 }

@@ -35,6 +35,7 @@ struct File::Impl {
     std::vector<MeshView> meshes;
     std::vector<SectionInfo> sections;
     Scene scene;
+    std::string_view provenance;  // into data
 
     [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
         throw FormatError(path, offset, field, rule, detail);
@@ -131,6 +132,7 @@ void File::Impl::validate(const OpenOptions& options) {
     std::vector<MeshSections> per_mesh(mesh_count);
     const SectionInfo* materials_section = nullptr;
     const SectionInfo* instances_section = nullptr;
+    const SectionInfo* provenance_section = nullptr;
     sections.resize(section_count);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
@@ -150,9 +152,9 @@ void File::Impl::validate(const OpenOptions& options) {
         if (options.verify_checksums && crc32(data + s.offset, s.bytes) != s.checksum)
             fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
         // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
-        if (type == sec_materials || type == sec_instances) {
+        if (type == sec_materials || type == sec_instances || type == sec_provenance) {
             if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
-            const SectionInfo*& file_slot = type == sec_materials ? materials_section : instances_section;
+            const SectionInfo*& file_slot = type == sec_materials ? materials_section : type == sec_instances ? instances_section : provenance_section;
             if (file_slot) fail(e, field, 9, "the file has this section twice");
             file_slot = &s;
             continue;
@@ -303,6 +305,7 @@ void File::Impl::validate(const OpenOptions& options) {
                          "material " + std::to_string(v.parts[p].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
         }
     }
+    if (provenance_section) provenance = std::string_view(reinterpret_cast<const char*>(data + provenance_section->offset), provenance_section->bytes);
     if (instances_section)
         scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
     // rule 19: coarse corners are exactly the active triangles' corners mapped to their resolution
@@ -396,6 +399,7 @@ uint32_t File::mesh_count() const noexcept { return uint32_t(impl_->meshes.size(
 const MeshView& File::mesh(uint32_t index) const noexcept { return impl_->meshes[index]; }
 const std::vector<SectionInfo>& File::sections() const noexcept { return impl_->sections; }
 const Scene& File::scene() const noexcept { return impl_->scene; }
+std::string_view File::provenance() const noexcept { return impl_->provenance; }
 
 MetadataValue find_metadata(const MeshView& view, std::string_view key) noexcept {
     MetadataValue r;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "tom/scene.h"
@@ -14,7 +15,7 @@
 namespace tom {
 
 constexpr uint32_t format_version_major = 1;
-constexpr uint32_t format_version_minor = 4;
+constexpr uint32_t format_version_minor = 5;
 
 struct OpenOptions {
     bool verify_checksums = true;  ///< CRC-32 of every section; costs one pass over the file
@@ -55,6 +56,10 @@ public:
     const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count()
     /// Materials and instances (empty when the file has none; see tom::draw_list).
     const Scene& scene() const noexcept;
+    /// What made the file (section PROV, since 1.5): text the writer chose, for tombuild a JSON
+    /// object with the input's digest, the files it read and the options (docs/FORMAT.md); empty
+    /// when the file has none. Readers do not interpret it.
+    std::string_view provenance() const noexcept;
     const std::vector<SectionInfo>& sections() const noexcept;
 
 private:

@@ -19,6 +19,9 @@ enum class IndexSize {
 
 struct WriteOptions {
     IndexSize index_size = IndexSize::automatic;
+    /// Stored as the file-level PROV section when not empty (tom::File::provenance): what made
+    /// the file. It is part of the bytes, so equal provenance keeps equal inputs byte-identical.
+    std::string provenance;
 };
 
 /// The complete file image of `meshes`. Deterministic: equal inputs give equal bytes. The image

@@ -18,6 +18,10 @@ struct ImportResult {
     std::vector<std::string> skipped;   ///< primitives not imported and why (points, lines, ...)
     std::vector<std::string> warnings;  ///< problems the reader worked around (one line each)
     Scene scene;                        ///< glTF: materials, and the default scene's nodes as instances of `meshes`
+    /// The other files the input names and the import reads (a glTF's external buffers, an
+    /// OBJ's `mtllib` libraries, read or found missing), relative to the input's folder as the
+    /// input names them, in the input's order: with the input, everything the result depends on.
+    std::vector<std::string> sources;
 };
 
 /// True when `path` has an extension import_file() reads (case-insensitive).
