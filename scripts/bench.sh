@@ -4,16 +4,19 @@
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
 # conversion and report times of tombuild, and one extraction through the C++, C and Python
 # APIs (scripts/bench-bindings.py). Stamped with the commit, the date and the CPU.
-# Usage: scripts/bench.sh [--quick] [--walk] [OUT.md]
+# Usage: scripts/bench.sh [--quick] [--walk] [--scale] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
-#   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test
+#   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test;
+#   --scale: also scripts/bench-scale.sh (a 10M-triangle conversion and a 2M report, about
+#   3 minutes and 7 GB)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-quick=0; walk=0
+quick=0; walk=0; scale=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1; shift ;;
     --walk) walk=1; shift ;;
+    --scale) scale=1; shift ;;
     *) break ;;
   esac
 done
@@ -53,6 +56,11 @@ folders_s=$(echo "$(date +%s.%N) - $start" | bc)
 start=$(date +%s.%N); "$tools/tombuild" "$root/data/assimp" "$root/data/meshes" -o "$work/folders3" -q -j 2 --no-error-curve >/dev/null 2>&1 || true
 folders_nocurve_s=$(echo "$(date +%s.%N) - $start" | bc)
 
+scale_table="$work/scale-table.txt"; : > "$scale_table"
+if [ $scale = 1 ]; then
+  echo "bench: bench-scale" >&2
+  bash "$root/scripts/bench-scale.sh" > "$scale_table"
+fi
 walk_table="$work/walk-table.txt"; : > "$walk_table"
 if [ $walk = 1 ]; then
   echo "bench: walkthrough" >&2
@@ -64,9 +72,9 @@ fi
 commit="$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)"
 [ -z "$(git -C "$root" status --porcelain 2>/dev/null)" ] || commit="$commit (with uncommitted changes)"
 cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
-/usr/bin/python3 - "$work" "$out" "$commit" "$cpu" "$(nproc)" "$folders_s" "$folders_nocurve_s" "$walk_table" <<'PY'
+/usr/bin/python3 - "$work" "$out" "$commit" "$cpu" "$(nproc)" "$folders_s" "$folders_nocurve_s" "$walk_table" "$scale_table" <<'PY'
 import datetime, glob, json, os, sys
-work, out, commit, cpu, cores, folders_s, folders_nocurve_s, walk_table = sys.argv[1:9]
+work, out, commit, cpu, cores, folders_s, folders_nocurve_s, walk_table, scale_table = sys.argv[1:10]
 tb = [json.loads(l) for l in open(os.path.join(work, 'tombench.jsonl')) if l.strip()]
 tc = [json.loads(l) for l in open(os.path.join(work, 'tcrbench.jsonl')) if l.strip()]
 reports = {}
@@ -140,6 +148,11 @@ for d in tc:
     gap = '-' if d['gap'] is None else '%.1e' % d['gap']
     L.append('| %s | %d | %.0f | %.5f | %.4f | %s |' % (d['selector'], d['objects'], d['ns_per_object'], d['benefit'] / exact[d['objects']],
              d['predicted_ms'] / d['budget_ms'], gap))
+L.append('')
+scale = open(scale_table).read().strip()
+L.append('## Conversion at scale')
+L.append('')
+L.append(scale if scale else 'Not measured in this run (`scripts/bench.sh --scale`).')
 L.append('')
 walk = open(walk_table).read().strip()
 L.append('## Walkthrough')

@@ -118,6 +118,33 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
 int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const tom::BuildParams& params,
         const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
 
+// The generated bumpy sphere of about `triangles` triangles (2 s (s - 1) for s rings and segments).
+tom::Mesh generated_sphere(uint32_t triangles) {
+    uint32_t s = 3;
+    while (2.0 * s * (s - 1) < triangles) ++s;
+    tom::Mesh m = tom::make_sphere(s, s, 1.0f, 0.05f);
+    m.name = "generated-sphere-" + std::to_string(m.triangle_count());
+    tom::clean_mesh(m);
+    return m;
+}
+
+// Writes a mesh's positions and triangles as binary little-endian PLY (tombuild's large input).
+void write_binary_ply(const std::string& path, const tom::Mesh& m) {
+    std::string head = "ply\nformat binary_little_endian 1.0\ncomment tombench --write-generated\nelement vertex " + std::to_string(m.vertex_count()) +
+                       "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(m.triangle_count()) +
+                       "\nproperty list uchar int vertex_indices\nend_header\n";
+    std::vector<uint8_t> bytes(head.begin(), head.end());
+    const size_t at = bytes.size();
+    bytes.resize(at + m.positions.size() * 4 + size_t(m.triangle_count()) * 13);
+    std::memcpy(&bytes[at], m.positions.data(), m.positions.size() * 4);
+    uint8_t* f = &bytes[at + m.positions.size() * 4];
+    for (size_t t = 0; t < m.triangle_count(); ++t, f += 13) {
+        f[0] = 3;
+        std::memcpy(f + 1, &m.indices[3 * t], 12);
+    }
+    tom::write_bytes_atomically(path, bytes.data(), bytes.size());
+}
+
 int main(int argc, char** argv) {
     std::vector<std::string> inputs;
     uint32_t generated = 0;
@@ -135,8 +162,23 @@ int main(int argc, char** argv) {
     std::vector<double> meshopt_levels = {10, 5, 2, 1};
     app.add_option("--meshopt-out", meshopt_out, "Also write meshopt_simplify's result at --meshopt-levels as MESH-meshopt-P.obj here, for tomerr");
     app.add_option("--meshopt-levels", meshopt_levels, "Levels in % of the triangles for --meshopt-out (default 10,5,2,1)")->delimiter(',');
+    std::string write_generated;
+    app.add_option("--write-generated", write_generated, "Write the --generated sphere as binary PLY to this file and exit (a large input for tombuild)");
     app.footer("Exit codes: 0 ok, 1 a mesh could not be read, 2 usage error.\nExample: tombench data/meshes/bunny00.off --generated 2000000");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
+    if (!write_generated.empty()) {
+        if (generated == 0) {
+            std::fprintf(stderr, "error: --write-generated needs --generated N\n");
+            return tools::exit_usage;
+        }
+        try {
+            write_binary_ply(write_generated, generated_sphere(generated));
+            return tools::exit_ok;
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "error: %s\n", e.what());
+            return tools::exit_failed;
+        }
+    }
     if (inputs.empty() && generated == 0) {
         std::fprintf(stderr, "error: give mesh files or --generated N\n");
         return tools::exit_usage;
@@ -167,15 +209,7 @@ int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, i
             status = tools::exit_failed;
         }
     }
-    if (generated) {
-        // 2 * s * (s - 1) triangles for s rings and segments
-        uint32_t s = 3;
-        while (2.0 * s * (s - 1) < generated) ++s;
-        tom::Mesh m = tom::make_sphere(s, s, 1.0f, 0.05f);
-        m.name = "generated-sphere-" + std::to_string(m.triangle_count());
-        tom::clean_mesh(m);
-        meshes.push_back(std::move(m));
-    }
+    if (generated) meshes.push_back(generated_sphere(generated));
     if (!json) {
         std::printf("build: %s/%s, attribute weight %g, %u thread%s; meshopt = meshopt_simplify to 1%% of the triangles (reference, 1 thread); "
                     "medians of %d\n",

@@ -40,6 +40,7 @@ struct Options {
     tools::BuildOptions build;
     std::string index_size = "auto";
     bool progress = false;
+    bool mesh_progress = false;     // a line per input's stages (set by main: a terminal, one job at a time)
     bool quiet = false;
     int verbose = 0;
     bool report = false;
@@ -112,12 +113,46 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// One input's stages on one line of stderr ("bunny.off: build 45%"), for a long single mesh;
+// redrawn at most every quarter second, erased when the input is done.
+struct StageLine {
+    bool on = false;
+    std::string input, shown;  // shown: the stage on the line
+    std::chrono::steady_clock::time_point last{};
+    void show(const std::string& stage, double fraction = -1) {
+        if (!on) return;
+        const auto now = std::chrono::steady_clock::now();
+        if (stage == shown && fraction < 1 && now - last < std::chrono::milliseconds(250)) return;
+        last = now;
+        shown = stage;
+        char line[160];
+        if (fraction >= 0)
+            std::snprintf(line, sizeof line, "%.90s: %s %3.0f%%", input.c_str(), stage.c_str(), 100.0 * fraction);
+        else
+            std::snprintf(line, sizeof line, "%.90s: %s", input.c_str(), stage.c_str());
+        std::fprintf(stderr, "\r%-120s", line);
+        std::fflush(stderr);
+    }
+    ~StageLine() {
+        if (on) std::fprintf(stderr, "\r%-120s\r", "");
+    }
+};
+
 Outcome convert(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path) {
     Outcome out;
     const auto start = std::chrono::steady_clock::now();
-    const tom::BuildParams& params = settings.params;
-    const tom::ReportParams& rparams = settings.report;
+    StageLine stage;
+    stage.on = opt.mesh_progress;
+    stage.input = job.input;
+    tom::BuildParams params = settings.params;
+    tom::ReportParams rparams = settings.report;
+    std::string stage_name;
+    if (stage.on) {
+        params.progress = [&](double f) { stage.show(stage_name, f); };
+        rparams.progress = [&](double f) { stage.show(stage_name, f); };
+    }
     try {
+        stage.show("import");
         tom::ImportResult imported = tom::import_file(job.input);
         const tools::Provenance provenance = tools::describe(job.input, imported.sources, tool_version, settings.output_options);
         out.digest = provenance.input_digest;
@@ -129,6 +164,9 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             if (mesh.indices.empty()) throw tom::ImportError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
         }
         const double import_seconds = seconds_since(start);
+        struct {
+            double build = 0, measure = 0;
+        } times;
         std::vector<tom::TomMesh> built;
         uint64_t vertices = 0, triangles = 0, fv_bytes = 0;
         std::string details, tables;
@@ -138,8 +176,15 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             const tom::CleanStats& clean = cleans[mi];
             tom::BuildStats stats;
             const auto build_start = std::chrono::steady_clock::now();
+            stage_name = imported.meshes.size() > 1 ? "build mesh " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size()) : "build";
+            stage.show(stage_name, 0);
             built.push_back(tom::build(mesh, params, &stats));
+            stage_name = opt.report || !report_path.empty() ? "report" : "error curve";
+            if (imported.meshes.size() > 1) stage_name += " " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size());
+            if (!opt.no_error_curve || opt.report || !report_path.empty()) stage.show(stage_name, 0);
             const double build_seconds = seconds_since(build_start);
+            times.build += build_seconds;
+            const auto measure_start = std::chrono::steady_clock::now();
             tom::TomMesh& t = built.back();
             if (opt.report || !report_path.empty()) {
                 tools::ReportContext ctx;
@@ -157,6 +202,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             } else if (!opt.no_error_curve) {
                 t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(tom::measure_error_curve(mesh, t, rparams))});
             }
+            times.measure += seconds_since(measure_start);
             vertices += t.vertex_count();
             triangles += t.triangle_count();
             fv_bytes += tools::face_vertex_bytes(t.vertex_count(), t.triangle_count());
@@ -174,11 +220,20 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
         }
         std::error_code ec;
         fs::create_directories(fs::path(job.output).parent_path(), ec);
+        stage.show("write");
+        const auto write_start = std::chrono::steady_clock::now();
         tom::WriteOptions wopt = settings.write;
         wopt.provenance = provenance.text();
         const std::vector<uint8_t> bytes = tom::serialize(built, imported.scene, wopt);
         out.triangles = triangles;
         tom::write_bytes_atomically(job.output, bytes.data(), bytes.size());
+        const double write_seconds = seconds_since(write_start);
+        if (opt.verbose > 0) {
+            char line[256];
+            std::snprintf(line, sizeof line, "  seconds: import %.3f, build %.3f, error curve and report %.3f, write %.3f\n", import_seconds, times.build,
+                          times.measure, write_seconds);
+            details += line;
+        }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         char line[1024];
         std::snprintf(line, sizeof line, "%s: %zu mesh%s, %llu vertices, %llu triangles -> %s (%s, %.1f%% of face-vertex) in %.2f s\n",
@@ -406,7 +461,7 @@ int main(int argc, char** argv) {
     app.add_option("inputs", opt.inputs, "Mesh files (obj, ply, off, stl, gltf, glb) or folders, searched recursively")->group("Basics");
     app.add_option("-o,--output", opt.outdir, "Output folder; one .tom per input, sub-folders mirrored")->group("Basics");
     app.add_option("-j,--jobs", opt.jobs, "Files converted in parallel (default 1)")->check(CLI::Range(1u, 256u))->group("Basics");
-    app.add_flag("--progress", opt.progress, "Show a progress bar on stderr even when it is not a terminal")->group("Basics");
+    app.add_flag("--progress", opt.progress, "Show progress on stderr even when it is not a terminal: a bar over the files and, with -j 1, each input's stage (import, build %, error curve %, write)")->group("Basics");
     app.add_flag("-q,--quiet", opt.quiet, "Print only errors")->group("Basics");
     app.add_flag("-v,--verbose", opt.verbose, "Per-mesh statistics, reader warnings")->group("Basics");
     opt.build.add_to(app, "Simplification");
@@ -493,6 +548,7 @@ int main(int argc, char** argv) {
                 if (of[i] == shard.index) selected.push_back(i);
         }
         const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && selected.size() > 1;
+        opt.mesh_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && opt.jobs == 1;
         // the cores shared among the -j jobs: each job's build and report threads
         const unsigned per_job = std::max(1u, std::max(1u, std::thread::hardware_concurrency()) / std::max(1u, opt.jobs));
         settings.report = report_params(opt, per_job);

@@ -311,6 +311,10 @@ PYBIND11_MODULE(_tom, m) {
     mesh_properties(file_mesh, [](py::object self) -> const tom::MeshView& { return self.cast<const FileMesh&>().view(); });
 
     file.def_property_readonly("path", [](const FileHolder& f) { return f.file.path(); })
+        .def_property_readonly("provenance", [](const FileHolder& f) -> py::object {
+            if (f.file.provenance().empty()) return py::none();
+            return py::str(f.file.provenance().data(), f.file.provenance().size());
+        }, "What made the file (PROV: tombuild's JSON text with the input's digest, sources and options), or None")
         .def_property_readonly("meshes", [](const std::shared_ptr<FileHolder>& f) {
             std::vector<FileMesh> out;
             for (uint32_t i = 0; i < f->file.mesh_count(); ++i) out.push_back({f, i});

@@ -36,6 +36,7 @@ class BuiltMesh(_MeshView): ...
 
 class File:
     path: str
+    provenance: str | None
     meshes: list[FileMesh]
     materials: list[dict[str, Any]]
     instances: list[dict[str, Any]]

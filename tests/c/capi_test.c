@@ -163,6 +163,11 @@ static void check_real_file(const char* path) {
         return;
     }
     CHECK(tom_file_mesh_count(file) >= 1);
+    {  /* tombuild records what made the file */
+        size_t length = 0;
+        const char* prov = tom_file_provenance(file, &length);
+        CHECK(prov != NULL && length > 40 && strncmp(prov, "{\"tool\":\"tombuild", 17) == 0 && prov[length - 1] == '}');
+    }
     for (i = 0; i < tom_file_mesh_count(file); ++i) {
         tom_mesh_view mesh;
         CHECK(tom_file_mesh(file, i, &mesh) == TOM_OK);
@@ -205,6 +210,10 @@ int main(int argc, char** argv) {
     /* in place: the streams point into the caller's bytes */
     CHECK(tom_file_open_memory(bytes, size, "grid-image", &memory) == TOM_OK);
     CHECK(tom_file_mesh_count(memory) == 1);
+    {  /* the builder alone records nothing */
+        size_t length = 7;
+        CHECK(tom_file_provenance(memory, &length) == NULL && length == 0);
+    }
     CHECK(tom_file_mesh(memory, 0, &mesh) == TOM_OK);
     CHECK(mesh.vertex_count == g.vertex_count && mesh.triangle_count == g.triangle_count);
     CHECK(mesh.name_length == 4 && memcmp(mesh.name, "grid", 4) == 0);

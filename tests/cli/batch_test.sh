@@ -74,6 +74,10 @@ check "rerun with --force" expect_exit 0 tb --pass-fraction 0.2 --levels 50,10 -
 check "--force converts every input" test "$(count_status "$m" converted)" -eq $n
 check "a damaged output is converted again" bash -c "printf 'x' >> '$work/out/fandisk.tom' && '$tools/tombuild' '$work/in' -o '$work/out' -q && grep fandisk.off '$m' | grep -q '\"converted\"' && '$tools/tominfo' '$work/out/fandisk.tom' >/dev/null"
 
+# --progress with one job shows each input's stages, and -v their seconds
+check "--progress shows the stages of one input" bash -c "'$tools/tombuild' '$work/in/fandisk.off' -o '$work/prog' --progress -v 2>'$work/prog.err' >'$work/prog.out' && tr '\\r' '\\n' < '$work/prog.err' | grep -q 'fandisk.off: build ' && tr '\\r' '\\n' < '$work/prog.err' | grep -q 'fandisk.off: error curve 100%' && tr '\\r' '\\n' < '$work/prog.err' | grep -q 'fandisk.off: write'"
+check "-v gives the seconds of each stage" grep -q "seconds: import [0-9.]*, build [0-9.]*, error curve and report [0-9.]*, write [0-9.]*" "$work/prog.out"
+
 # an output whose input is gone is named, and removed only with --prune
 rm "$work/in/eight.off"
 check "rerun without eight.off" expect_exit 0 tb

@@ -214,3 +214,12 @@ def test_an_obj_with_usemtl_builds_with_its_parts_and_locked_borders_stay():
     locked = tom.build(positions, triangles, threads=1, lock_borders=True)
     border = 4 * (30 - 1)
     assert locked.min_vertex_count >= border > free.min_vertex_count
+
+
+def test_provenance_names_the_input_tombuild_read(bunny):
+    """tombuild's PROV: the tool, the input's size and XXH3-128 digest, the options."""
+    prov = json.loads(tom.open(str(bunny)).provenance)
+    assert prov["tool"].startswith("tombuild ")
+    assert prov["input"]["bytes"] == os.path.getsize(f"{DATA}/meshes/bunny00.off")
+    assert prov["input"]["digest"].startswith("xxh3-128:") and len(prov["input"]["digest"]) == 9 + 32
+    assert prov["sources"] == [] and prov["options"]["build"]["predicate"] == "quadric"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cstring>
 #include <iterator>
 #include <random>
 #include <cmath>
@@ -15,6 +16,7 @@
 
 #include "support.h"
 #include "tom/builder/builder.h"
+#include "tom/builder/generate.h"
 #include "tom/errors.h"
 #include "tom/builder/writer.h"
 #include "tom/format.h"
@@ -625,5 +627,83 @@ TEST_CASE("mutated sample files (truncated, bytes flipped, extreme numbers) give
     }
     CHECK(meshes > 0);
     CHECK(errors > 0);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("binary PLY of a scan's layout reads directly, as OpenMesh reads it, and bad counts are errors", "[import][ply]") {
+    // the same sphere with normals and colours, as quads and triangles, written twice: in the
+    // simple layout (read by read_simple_binary_ply) and with one more vertex property, which
+    // sends it to OpenMesh; both must give the same mesh
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / "tom_ply_simple";
+    fs::create_directories(dir);
+    tom::Mesh sphere = tom::make_sphere(24, 32, 1.0f, 0.05f);
+    tom::clean_mesh(sphere);
+    auto write = [&](const fs::path& path, bool extra, const std::vector<std::vector<uint32_t>>& faces, const std::string& list = "uchar int") {
+        std::ostringstream o(std::ios::binary);
+        o << "ply\nformat binary_little_endian 1.0\ncomment a test\nelement vertex " << sphere.vertex_count()
+          << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+             "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+          << (extra ? "property float quality\n" : "") << "element face " << faces.size() << "\nproperty list " << list << " vertex_indices\nend_header\n";
+        for (uint32_t v = 0; v < sphere.vertex_count(); ++v) {
+            o.write(reinterpret_cast<const char*>(&sphere.positions[3 * v]), 12);
+            o.write(reinterpret_cast<const char*>(&sphere.normals[3 * v]), 12);
+            const uint8_t rgb[3] = {uint8_t(v % 256), uint8_t(v * 7 % 256), 200};
+            o.write(reinterpret_cast<const char*>(rgb), 3);
+            const float q = 0.5f;
+            if (extra) o.write(reinterpret_cast<const char*>(&q), 4);
+        }
+        for (const std::vector<uint32_t>& f : faces) {
+            if (list.rfind("uchar", 0) == 0) {
+                const uint8_t n = uint8_t(f.size());
+                o.write(reinterpret_cast<const char*>(&n), 1);
+            } else {
+                const uint32_t n = uint32_t(f.size());
+                o.write(reinterpret_cast<const char*>(&n), 4);
+            }
+            o.write(reinterpret_cast<const char*>(f.data()), std::streamsize(4 * f.size()));
+        }
+        std::ofstream(path, std::ios::binary) << o.str();
+    };
+    std::vector<std::vector<uint32_t>> faces;  // pairs of triangles as quads where they share an edge, the rest as triangles
+    for (size_t t = 0; t < sphere.indices.size(); t += 3) {
+        const uint32_t a = sphere.indices[t], b = sphere.indices[t + 1], c = sphere.indices[t + 2];
+        if (t + 5 < sphere.indices.size() && t % 12 == 0 && sphere.indices[t + 3] == a && sphere.indices[t + 4] == c)
+            faces.push_back({a, b, c, sphere.indices[t + 5]}), t += 3;
+        else
+            faces.push_back({a, b, c});
+    }
+    write(dir / "simple.ply", false, faces);
+    write(dir / "openmesh.ply", true, faces);
+    write(dir / "uint-counts.ply", false, faces, "uint uint");
+    const tom::Mesh a = tom::import_file((dir / "simple.ply").string()).meshes.at(0);
+    const tom::Mesh b = tom::import_file((dir / "openmesh.ply").string()).meshes.at(0);
+    const tom::Mesh c = tom::import_file((dir / "uint-counts.ply").string()).meshes.at(0);
+    REQUIRE(a.triangle_count() > faces.size());  // some quads were cut
+    CHECK(a.positions == b.positions);
+    CHECK(a.indices == b.indices);
+    CHECK(a.normals == b.normals);
+    REQUIRE(a.colors.size() == b.colors.size());
+    for (size_t i = 0; i < a.colors.size(); ++i) CHECK(a.colors[i] == Approx(b.colors[i]).margin(1e-6));
+    CHECK(c.indices == a.indices);
+    // a corner past the vertices, a count past the data, and truncation are errors naming the file
+    std::vector<std::vector<uint32_t>> bad = faces;
+    bad[5][1] = sphere.vertex_count();
+    write(dir / "bad-index.ply", false, bad);
+    CHECK(import_error((dir / "bad-index.ply").string()).find("face 5 refers to vertex " + std::to_string(sphere.vertex_count())) != std::string::npos);
+    bad = faces;
+    bad.back() = std::vector<uint32_t>(200, 0);
+    write(dir / "long-face.ply", false, bad, "uint int");
+    std::string bytes;
+    {
+        std::ifstream in(dir / "long-face.ply", std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const uint32_t huge = 0x7fffffffu;
+    std::memcpy(&bytes[bytes.size() - 4 * 200 - 4], &huge, 4);  // the last face announces 2^31 - 1 corners
+    std::ofstream(dir / "huge-count.ply", std::ios::binary) << bytes;
+    CHECK(import_error((dir / "huge-count.ply").string()).find("announces 2147483647 corners, the file holds fewer") != std::string::npos);
+    std::ofstream(dir / "truncated.ply", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    CHECK(import_error((dir / "truncated.ply").string()).find((dir / "truncated.ply").string()) == 0);
     fs::remove_all(dir);
 }

@@ -598,7 +598,7 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     if (params.strategy == Strategy::heap)
         run_heap(b);
     else
-        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), params.foresight, team, stats);
+        run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), params.foresight, team, stats, params.progress);
 
     to_input_numbering(b, local, team);
     TomMesh out;

@@ -198,6 +198,8 @@ public:
         for (Scratch& h : helpers_) h.stamp.assign(b.n, 0);
     }
 
+    std::function<void(double)> progress;  // after each pass: the share of the vertices removed
+
     void run() {
         for (s_.pass = 1;; ++s_.pass) {
             evaluate_dirty();
@@ -208,6 +210,7 @@ public:
                 continue;
             }
             end_pass();
+            if (progress && b_.n) progress(double(b_.n - s_.alive_count) / double(b_.n));
         }
     }
 
@@ -533,8 +536,10 @@ private:
 
 } // namespace
 
-void run_passes(Builder& b, float fraction, bool foresight, detail::Team& team, BuildStats& stats) {
-    PassRunner(b, fraction, foresight, team, stats).run();
+void run_passes(Builder& b, float fraction, bool foresight, detail::Team& team, BuildStats& stats, const std::function<void(double)>& progress) {
+    PassRunner runner(b, fraction, foresight, team, stats);
+    runner.progress = progress;
+    runner.run();
 }
 
 } // namespace tom::build_detail

@@ -230,6 +230,12 @@ void tom_file_close(tom_file* file) { delete file; }
 
 uint32_t tom_file_mesh_count(const tom_file* file) { return file ? file->file.mesh_count() : 0; }
 
+const char* tom_file_provenance(const tom_file* file, size_t* bytes) {
+    const std::string_view text = file ? file->file.provenance() : std::string_view();
+    if (bytes) *bytes = text.size();
+    return text.empty() ? nullptr : text.data();
+}
+
 tom_status tom_file_mesh(const tom_file* file, uint32_t index, tom_mesh_view* out) {
     if (!file) return null_argument("tom_file_mesh", "file");
     if (!out) return null_argument("tom_file_mesh", "out");

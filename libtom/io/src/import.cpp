@@ -63,7 +63,10 @@ ImportResult import_file(const std::string& path) {
     ImportResult result;
     if (ext == "gltf" || ext == "glb") {
         result = detail::import_gltf(path, ext == "glb");
-    } else if (ext == "obj" || ext == "ply" || ext == "off" || ext == "stl") {
+    } else if (ext == "ply") {
+        std::optional<ImportResult> simple = detail::read_simple_binary_ply(path, detail::read_whole_file(path));
+        result = simple ? std::move(*simple) : detail::import_openmesh(path, ext);
+    } else if (ext == "obj" || ext == "off" || ext == "stl") {
         result = detail::import_openmesh(path, ext);
     } else {
         throw ImportError(path + ": unsupported file type '." + ext + "' (supported: obj, ply, off, stl, gltf, glb)");

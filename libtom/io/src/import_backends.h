@@ -2,6 +2,7 @@
 // The readers behind import_file(); private to tom::io.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,11 @@ namespace tom::detail {
 
 ImportResult import_openmesh(const std::string& path, const std::string& extension);
 ImportResult import_gltf(const std::string& path, bool binary);
+/// A binary little-endian PLY of the simple layout of scans (vertex: float x y z, optional float
+/// nx ny nz and uchar red green blue [alpha]; face: only an int or uint vertex_indices list) read
+/// directly; std::nullopt for any other layout (import_openmesh reads those).
+/// \throw ImportError naming the file and the face or count at fault
+std::optional<ImportResult> read_simple_binary_ply(const std::string& path, const std::vector<uint8_t>& bytes);
 std::string file_stem(const std::string& path);
 /// The whole file; IoError when it cannot be read.
 std::vector<uint8_t> read_whole_file(const std::string& path);

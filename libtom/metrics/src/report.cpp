@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <future>
+#include <mutex>
 #include <stdexcept>
 
 #include "tom/builder/writer.h"
@@ -155,7 +156,18 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
     // levels lie far from the original, fine ones make large trees), taken in turn
     std::vector<ErrorCurvePoint> points(ns.size());
     std::vector<float> diagonals(ns.size(), 0.0f);
+    std::mutex progress_lock;
+    size_t measured = 0;
+    auto point_done = [&] {
+        if (!params.progress) return;
+        std::lock_guard<std::mutex> hold(progress_lock);
+        params.progress(double(++measured) / double(ns.size()));
+    };
     detail::parallel_blocks(ns.size(), 1, workers, [&](unsigned, size_t i, size_t) {
+        struct Done {
+            const decltype(point_done)& done;
+            ~Done() { done(); }
+        } done{point_done};
         const uint32_t n = ns[i];
         const Level l = extract_level(built, n);
         ErrorCurvePoint& p = points[i];

@@ -61,6 +61,10 @@ tom_status tom_file_open_memory(const void* bytes, size_t size, const char* name
 void tom_file_close(tom_file* file);
 
 uint32_t tom_file_mesh_count(const tom_file* file);
+/* What made the file (its PROV section: for tombuild's files a JSON object with the input's
+ * digest, the files it read and the options; docs/FORMAT.md): `*bytes` (may be NULL) receives
+ * its length; NULL when the file has none. The text is not terminated and lives as the file. */
+const char* tom_file_provenance(const tom_file* file, size_t* bytes);
 
 /* One mesh of a file: counts and pointers into its streams, in resolution order (vertex i is
  * the (i+1)-th to appear; the first n vertices are the mesh at resolution n). Optional streams

@@ -2,6 +2,7 @@
 // Greedy vertex substitution into a Totally Ordered Mesh (Gobbetti & Bouvier 1999).
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,6 +53,10 @@ struct BuildParams {
     /// (terrain tiles, modular kits) keeps its outline at every resolution (meshoptimizer's
     /// LockBorder, gltfpack's -slb).
     bool lock_borders = false;
+    /// Called on the calling thread after each pass (Strategy::passes) with the share of the
+    /// vertices removed so far, which follows the work done (a pass's work is its live
+    /// vertices): for a progress display on long builds. Never changes the result.
+    std::function<void(double)> progress;
 };
 
 /// What the builder did, for reports.

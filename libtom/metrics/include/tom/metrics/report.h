@@ -4,6 +4,7 @@
 // error curve stored in the .tom. Part of tom::metrics.
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct ReportParams {
     uint64_t curve_min_samples = 1024;
     uint64_t curve_samples = 4096;
     double curve_samples_per_level_face = 64;
+    /// Called after each error-curve point (from the measuring threads, one call at a time) with
+    /// the share of the points measured: for a progress display. Never changes the figures.
+    std::function<void(double)> progress;
 };
 
 /// One part of a multi-part mesh at one level: its live triangles and its attributes against
