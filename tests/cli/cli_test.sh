@@ -226,5 +226,29 @@ check "names both directions and Hausdorff" grep -q "Hausdorff distance" "$work/
 check "tomerr with a missing file exits 1" expect_exit 1 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/missing.obj"
 check "tomerr without arguments exits 2" expect_exit 2 "$tools/tomerr"
 
+# tcrmodel: Pasman & Jansen's model, the paper's example against its switching distances, a
+# mesh's own k from its stored error curve, the CSV and its plot
+check "tcrmodel --paper-example --json" expect_exit 0 "$tools/tcrmodel" --paper-example --json
+check "its switching distances are the paper's within 25% (polygons, full resolution)" /usr/bin/python3 -c "
+import json
+d = json.load(open('$work/stdout'))
+for key in ('polygons_below_m', 'simple_imposters_above_m', 'full_resolution_below_m'):
+    assert isinstance(d[key], float) and d[key] > 0, (key, d[key])
+assert abs(d['paper']['ratio_polygons_below'] - 1) <= 0.25 and abs(d['paper']['ratio_full_resolution_below'] - 1) <= 0.25, d['paper']
+assert d['full_resolution_below_m'] < d['polygons_below_m'] < d['simple_imposters_above_m']
+row = [r for r in d['distances'] if r['distance_m'] == 30][0]
+m = {x['method']: x for x in row['methods']}
+assert m['meshed_imposter']['feasible'] and not m['simple_imposter']['feasible'], row
+assert m['polygons']['geometry_bytes'] == 25 * m['polygons']['polygons'] / 8
+"
+"$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/model" -q
+check "tcrmodel --tom reads k and the triangles from the stored curve" expect_exit 0 "$tools/tcrmodel" --tom "$work/model/bunny00.tom" --scale 10 --csv "$work/model.csv"
+bunny_triangles=$("$tools/tominfo" --json "$work/model/bunny00.tom" | /usr/bin/python3 -c "import json,sys; print(json.load(sys.stdin)['meshes'][0]['triangles'])")
+check "and takes the mesh's triangles as the full model" grep -q "at most $bunny_triangles polygons" "$work/stdout"
+check "plot-model.py draws the CSV" bash -c "/usr/bin/python3 '$src/scripts/plot-model.py' '$work/model.csv' -o '$work/model.png' >/dev/null && test -s '$work/model.png'"
+"$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/model-nc" -q --no-error-curve
+check "tcrmodel --tom without a stored curve exits 1" expect_exit 1 "$tools/tcrmodel" --tom "$work/model-nc/fandisk.tom"
+check "and says why" grep -q "no mesh has a stored error curve" "$work/stderr"
+
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]

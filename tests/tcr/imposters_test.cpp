@@ -1,0 +1,131 @@
+// Pasman & Jansen's model (tcr/imposters.h) against hand-computed cases and brute force, and
+// the paper's example: its switching distances.
+
+#include <cmath>
+
+#include <catch2/catch.hpp>
+
+#include "tcr/imposters.h"
+
+namespace im = tcr::imposters;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The least over the imposter's placement d_imp in [d, d + 2r] of the larger parallax of the
+// object's nearest and farthest points, by a fine scan and a local refinement.
+double brute_force_gamma(double d, double r, double theta) {
+    auto worst = [&](double at) { return std::max(im::parallax(at - d, at, theta, false), im::parallax(d + 2 * r - at, at, theta, true)); };
+    double best = 1e300, best_at = d;
+    for (int i = 0; i <= 20000; ++i) {
+        const double at = d + 2 * r * i / 20000.0;
+        if (worst(at) < best) best = worst(at), best_at = at;
+    }
+    for (double step = 2 * r / 20000.0; step > 1e-12; step /= 2)
+        for (double at : {best_at - step, best_at + step})
+            if (at >= d && at <= d + 2 * r && worst(at) < best) best = worst(at), best_at = at;
+    return best;
+}
+
+} // namespace
+
+TEST_CASE("simple imposters: gamma_min's closed form is the best placement's parallax", "[tcr][imposters]") {
+    // Figure 8's setting and others near and far, narrow and wide
+    const double cases[][3] = {{5, 9, 25}, {5, 1, 5}, {20, 1, 2}, {1, 1, 40}, {50, 10, 10}, {0.5, 2, 60}, {100, 1, 0.5}};
+    for (const auto& c : cases) {
+        const double d = c[0], r = c[1], theta = c[2] * kPi / 180;
+        INFO("d " << d << " r " << r << " theta " << c[2]);
+        CHECK(im::gamma_min(d, r, theta) == Approx(brute_force_gamma(d, r, theta)).epsilon(1e-6));
+    }
+    CHECK(im::gamma_min(5, 9, 0.0) == 0.0);
+    // Figure 8: the best placement lies nearer the viewer than the object's centre (14 m)
+    const double d = 5, r = 9, theta = 25 * kPi / 180;
+    const double g = im::gamma_min(d, r, theta);
+    double placement = 0;
+    for (int i = 0; i <= 18000; ++i) {
+        const double at = d + 2 * r * i / 18000.0;
+        if (std::fabs(im::parallax(at - d, at, theta, false) - im::parallax(d + 2 * r - at, at, theta, true)) < 1e-3) placement = at;
+    }
+    CHECK(placement > d);
+    CHECK(placement < d + r);
+    CHECK(im::parallax(placement - d, placement, theta, false) == Approx(g).epsilon(5e-3));
+    // the simple imposter: no distortion from the optimal viewpoint, the object's whole angle from the side
+    CHECK(im::simple_imposter_distortion(10, 1, 0.0) == 0.0);
+    CHECK(im::simple_imposter_distortion(10, 1, kPi / 2) == Approx(2 * std::atan(0.1)));
+}
+
+TEST_CASE("the angle walked within a lifetime: the three cases of section 5.2 by hand", "[tcr][imposters]") {
+    // nearer than MinDist: W / (r + MinDist)
+    CHECK(im::reachable_angle(0.1, 1, 1, 0.2) == Approx(1 / 1.2));
+    // far: the side is not reached, asin(W / (d + r))
+    CHECK(im::reachable_angle(15, 1, 1, 0.2) == Approx(std::asin(1.0 / 16)));
+    // near: d_side = sqrt((0.5 - 0.2)(0.5 + 0.2 + 2)) = 0.9 < W = 1: asin(0.9 / 1.5) + 0.1 / 1.2
+    CHECK(im::reachable_angle(0.5, 1, 1, 0.2) == Approx(std::asin(0.6) + 0.1 / 1.2));
+    CHECK(im::reachable_angle(1000, 1, 0, 0.2) == 0.0);
+}
+
+TEST_CASE("Table 1: the polygons needed are the fewest that meet the bound", "[tcr][imposters]") {
+    im::Setting s = im::paper_example();
+    for (double d : {0.3, 1.0, 3.0, 12.0, 40.0, 150.0})
+        for (im::Method m : {im::Method::polygons, im::Method::viewpoint_dependent, im::Method::meshed_imposter}) {
+            const double n = im::polygons_needed(s, m, d);
+            INFO(im::to_string(m) << " at " << d << " m: " << n);
+            if (!std::isfinite(n)) {
+                CHECK(m == im::Method::meshed_imposter);  // its missing back face alone exceeds the bound
+                continue;
+            }
+            const double near = im::nearest_distance(s, d), theta = im::reachable_angle(d, s.radius, s.speed * s.lifetime, s.min_distance);
+            auto distortion = [&](double count) {
+                return m == im::Method::polygons ? im::polygon_distortion(s.k, s.radius, near, count)
+                     : m == im::Method::viewpoint_dependent ? im::viewpoint_dependent_distortion(s.k, s.radius, near, count, theta)
+                                                              : im::meshed_imposter_distortion(s.k, s.radius, near, count, theta);
+            };
+            CHECK(n >= 4);
+            CHECK(distortion(n) <= s.distortion * (1 + 1e-9));
+            if (n > 4) CHECK(distortion(n - 1) > s.distortion);
+        }
+    // by hand: 2 k atan(r / MinDist) / D polygons where the viewer can reach MinDist
+    CHECK(im::polygons_needed(s, im::Method::polygons, 1.0) == std::ceil(2 * 5 * std::atan(1 / 0.2) / 0.001));
+    // 25 bits a polygon (5.3)
+    const im::Choice c = im::evaluate(s, 1.0)[size_t(im::Method::polygons)];
+    CHECK(c.geometry_bytes == Approx(25 * c.polygons / 8));
+}
+
+TEST_CASE("texture size: the scanned surface joins FarTextureSize where the viewer reaches MinDist", "[tcr][imposters]") {
+    im::Setting s = im::paper_example();
+    s.radius = 0.5, s.distortion = 0.004, s.speed = 0.7;  // Figure 10's setting
+    const double edge = s.min_distance + s.speed * s.lifetime;
+    CHECK(im::texture_pixels(s, edge) == Approx(im::far_texture_pixels(s, s.min_distance)));
+    CHECK(im::texture_pixels(s, edge - 1e-7) == Approx(im::far_texture_pixels(s, s.min_distance)).epsilon(1e-4));
+    CHECK(im::texture_pixels(s, 10) == Approx(std::pow(2 * std::atan(0.5 / (10 - 0.7)) / 0.004, 2)));
+    // more time to scan the surface, more texture, at most the whole sphere over a pixel at MinDist
+    CHECK(im::texture_pixels(s, 0.3) > im::texture_pixels(s, 0.8));
+    const double sphere = 4 * kPi * 0.25 / std::pow(0.2 * std::tan(0.004), 2);
+    CHECK(im::texture_pixels(s, 0.0) <= sphere * (1 + 1e-12));
+}
+
+TEST_CASE("the paper's example: polygons below 15 m, meshed imposters beyond, simple ones farther", "[tcr][imposters][paper]") {
+    const im::Setting s = im::paper_example();
+    const im::Switching w = im::switching_distances(s);
+    INFO("polygons below " << w.polygons_below << " m, simple imposters above " << w.simple_imposters_above << " m, full resolution below "
+                           << w.full_resolution_below << " m");
+    CHECK(w.polygons_below == Approx(15).epsilon(0.25));
+    CHECK(w.meshed_imposters_above == w.polygons_below);
+    CHECK(w.full_resolution_below == Approx(1).epsilon(0.25));
+    // the simple imposter's threshold is where its distortion crosses the bound (the paper reads
+    // 50 m off its Figure 11; the formulas of 4.3 and 5.2 put it nearer: docs/TCR.md)
+    CHECK(w.simple_imposters_above > w.meshed_imposters_above);
+    auto simple = [&](double d) { return im::evaluate(s, d)[size_t(im::Method::simple_imposter)]; };
+    CHECK(simple(w.simple_imposters_above).feasible);
+    CHECK_FALSE(simple(w.simple_imposters_above * 0.995).feasible);
+    CHECK(simple(w.simple_imposters_above * 0.995).distortion > s.distortion);
+    // between the two, a meshed imposter meets the bound and a simple one does not
+    const std::vector<im::Choice> at30 = im::evaluate(im::paper_example(), 30);
+    CHECK(at30[size_t(im::Method::meshed_imposter)].feasible);
+    CHECK_FALSE(at30[size_t(im::Method::simple_imposter)].feasible);
+    // a larger object needs polygons farther out (6.1: r = 10 m, meshed imposters beyond 30 m)
+    im::Setting big = im::paper_example();
+    big.radius = 10;
+    CHECK(im::switching_distances(big).meshed_imposters_above > w.meshed_imposters_above);
+}
