@@ -14,6 +14,7 @@ packages=(
   libmeshoptimizer-dev                 # benchmark reference only
   libosmesa6-dev libegl-dev libgl-dev libstb-dev  # headless rendering (Mesa), PNG screenshots
   python3 python3-matplotlib python3-jsonschema   # plots; report schema check in the tests
+  python3-skimage                      # SSIM and PSNR of the walkthrough's frames against full detail (tcrwalk --quality-every)
   valgrind                             # instruction counts in benchmarks
   clang libclang-rt-14-dev             # libFuzzer and the sanitizers' runtime (scripts/fuzz.sh, CI's sanitizer run)
   python3-dev python3-numpy python3-pybind11 python3-pytest   # the Python package (python/) and its tests

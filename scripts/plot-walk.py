@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Plots of a tcrwalk run (tcrwalk --out DIR): frame time against frame for every selector with
-the budget, and visible and drawn triangles against frame.
+the budget, visible and drawn triangles against frame, and (after --quality-every) each
+selector's SSIM against full detail along the path.
 
 usage: scripts/plot-walk.py DIR [--budget-ms B] [--format svg|png]
 """
@@ -72,7 +73,20 @@ def main():
         ax.semilogy([int(r["frame"]) for r in rows], [max(1, int(r["drawn_triangles"])) for r in rows], label="drawn: " + name)
     save(fig, ax, "triangles", "Visible and drawn triangles along the path", 3,
          os.path.join(args.directory, "triangles." + args.format))
-    print("plot-walk: frame-times.%s and triangles.%s in %s" % (args.format, args.format, args.directory))
+    written = ["frame-times", "triangles"]
+    quality = os.path.join(args.directory, "quality.csv")
+    if os.path.exists(quality):
+        with open(quality) as f:
+            scores = list(csv.DictReader(f))
+        fig, ax = plt.subplots(figsize=(9, 4.8))
+        for name in runs:
+            rows = sorted((int(r["frame"]), float(r["ssim"])) for r in scores if r["selector"] == name)
+            if rows and name != "none":
+                ax.plot([f for f, _ in rows], [q for _, q in rows], marker="o", markersize=3, label=name)
+        save(fig, ax, "SSIM against full detail", "The image each selector draws, against the same view at full detail", 3,
+             os.path.join(args.directory, "quality." + args.format))
+        written.append("quality")
+    print("plot-walk: %s in %s" % (", ".join(w + "." + args.format for w in written), args.directory))
     return 0
 
 

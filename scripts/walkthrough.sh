@@ -2,7 +2,8 @@
 # The walkthrough in one command: installs what is missing, builds, fetches the sample meshes,
 # converts them with tombuild, lays out a scene of 300 instances, calibrates the cost model on
 # the headless renderer, renders the path under every selector, and writes the table, the CSV,
-# the plots, the screenshots and the renderer's noise test to out/walk/.
+# the plots, the screenshots, the image against full detail (SSIM, PSNR every 10th frame) and
+# the renderer's noise test to out/walk/.
 # usage: bash scripts/walkthrough.sh [BUDGET_MS=40] [FRAMES=300]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -18,7 +19,7 @@ build/tools/tombuild data/meshes/bunny00.off data/meshes/fandisk.off data/meshes
 build/samples/walkthrough/tcrwalk --make-scene "$out/scene.txt" --meshes "$out"/meshes/*.tom --instances 300 --seed 1
 build/samples/walkthrough/tcrwalk --scene "$out/scene.txt" --calibrate "$out/calibration.txt"
 build/samples/walkthrough/tcrwalk --scene "$out/scene.txt" --calibration "$out/calibration.txt" --budget-ms "$budget" \
-  --frames "$frames" --selector all --out "$out/run" | tee "$out/table.txt"
+  --frames "$frames" --selector all --out "$out/run" --quality-every 10 | tee "$out/table.txt"
 # the renderer's own spread: one frame drawn again and again (what no selector can remove)
 build/samples/walkthrough/tcrwalk --scene "$out/scene.txt" --calibration "$out/calibration.txt" --budget-ms "$budget" \
   --frames "$frames" --noise-test 200 | tee "$out/noise.txt"

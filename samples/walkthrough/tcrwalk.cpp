@@ -14,9 +14,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <numeric>
 #include <random>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -100,6 +102,9 @@ struct Summary {
     uint32_t frames = 0;
     double budget_ms = 0;
     double mean = 0, max = 0, std = 0, compute_mean = 0, compute_max = 0, over = 0, prediction_error = 0, drawn = 0, visible = 0, gap = NAN;
+    // the image against full detail (--quality-every): SSIM and PSNR over the measured frames
+    uint32_t quality_frames = 0;
+    double ssim_mean = NAN, ssim_min = NAN, psnr_mean = NAN;
 };
 
 Summary summarize(const std::string& selector, double budget, const std::vector<Row>& rows) {
@@ -159,6 +164,7 @@ struct Options {
     double noise = 1.0;           // simulated: noise in standard deviations of the calibrated noise (clamped to +-2)
     double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise: less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
+    uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
 };
 
 // Grows `v` to hold at least `n` elements, by doubling, and touches the new memory once, so no
@@ -193,6 +199,78 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
         at += size_t(e.triangle_count) * 3;
     }
     return at;
+}
+
+// The full-detail frame a measured frame is compared with (--quality-every): every instance at
+// its mesh's full resolution, no budget, in the colour the recorded frames use; drawn off the
+// clock, once per frame for all selectors.
+struct Reference {
+    std::vector<uint32_t> indices;  // each mesh's full triangles, one mesh after another
+    std::vector<walk::Renderer::Draw> draws;
+    std::string folder;             // OUT/quality: SELECTOR-FRAME.png beside reference-FRAME.png
+
+    Reference(const World& w, const std::vector<uint32_t>& handles, const std::string& out) : folder((fs::path(out) / "quality").string()) {
+        std::vector<size_t> first(w.meshes.size());
+        for (size_t m = 0; m < w.meshes.size(); ++m) {
+            const tom::MeshView& mesh = *w.meshes[m];
+            first[m] = indices.size();
+            indices.resize(indices.size() + size_t(mesh.triangle_count) * 3);
+            tom::extract(mesh, mesh.vertex_count, indices.data() + first[m], size_t(mesh.triangle_count) * 3);
+        }
+        for (size_t id = 0; id < w.scene.instances.size(); ++id) {
+            const uint32_t m = w.scene.instances[id].mesh;
+            draws.push_back({handles[m], w.transforms[id].data(), first[m], w.meshes[m]->triangle_count * 3, {kSand[0], kSand[1], kSand[2]}});
+        }
+        fs::remove_all(folder);
+        fs::create_directories(folder);
+    }
+    static std::string name(uint32_t frame) {
+        char n[16];
+        std::snprintf(n, sizeof n, "%05u", frame);
+        return n;
+    }
+    // the frame on the renderer now, as SELECTOR-FRAME.png; the reference's, when not there yet
+    void save(walk::Renderer& renderer, const std::string& selector, uint32_t frame) const {
+        if (!renderer.save_png((fs::path(folder) / (selector + "-" + name(frame) + ".png")).string())) throw std::runtime_error("cannot write into " + folder);
+    }
+    void save_reference(walk::Renderer& renderer, const tcr::Camera& cam, uint32_t frame) const {
+        const fs::path path = fs::path(folder) / ("reference-" + name(frame) + ".png");
+        if (fs::exists(path)) return;
+        renderer.render(cam.view, cam.projection, draws, indices, indices.size());
+        if (!renderer.save_png(path.string())) throw std::runtime_error("cannot write " + path.string());
+    }
+};
+
+// SSIM and PSNR of every measured frame against its reference, by scikit-image
+// (scripts/image-quality.py), into the summaries and OUT/quality.csv.
+void score_quality(const Reference& ref, const std::string& out, std::vector<Summary>& summaries) {
+    const std::string command = "/usr/bin/python3 '" TOM_IMAGE_QUALITY_SCRIPT "' '" + ref.folder + "'";
+    std::FILE* pipe = ::popen(command.c_str(), "r");
+    if (!pipe) throw std::runtime_error("cannot run " + command);
+    std::string text;
+    char buffer[4096];
+    for (size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) text.append(buffer, n);
+    if (::pclose(pipe) != 0) throw std::runtime_error("image scoring failed (" + command + "); python3-skimage comes with scripts/install-deps.sh");
+    std::map<std::string, std::vector<std::pair<double, double>>> scores;  // selector -> (ssim, psnr) per frame
+    std::ofstream csv(fs::path(out) / "quality.csv");
+    csv << "selector,frame,ssim,psnr\n";
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty()) continue;
+        const nlohmann::json j = nlohmann::json::parse(line);
+        scores[j.at("selector").get<std::string>()].push_back({j.at("ssim").get<double>(), j.at("psnr").get<double>()});
+        csv << j.at("selector").get<std::string>() << ',' << j.at("frame").get<uint32_t>() << ',' << j.at("ssim").get<double>() << ',' << j.at("psnr").get<double>() << '\n';
+    }
+    for (Summary& s : summaries) {
+        const auto it = scores.find(s.selector);
+        if (it == scores.end() || it->second.empty()) continue;
+        double ssim = 0, psnr = 0, least = 1;
+        for (const auto& [a, b] : it->second) ssim += a, psnr += b, least = std::min(least, a);
+        s.quality_frames = uint32_t(it->second.size());
+        s.ssim_mean = ssim / double(it->second.size());
+        s.ssim_min = least;
+        s.psnr_mean = psnr / double(it->second.size());
+    }
 }
 
 // One selector's run along the path: the runtime and what it carries from frame to frame.
@@ -352,7 +430,7 @@ struct PathRun {
 // first frames over the budget while the correction caught up), then the recorded path, with
 // screenshots at A, B and C.
 Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
-            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows) {
+            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows, const Reference* reference) {
     PathRun path(w, selector, o, calibrated, renderer, mesh_handles);
     path.warm_up();
     uint32_t shots[3];
@@ -365,8 +443,11 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
         const Row row = path.frame(f, size_t(step + settle), index_count);
         if (step < 0) continue;
         rows.push_back(row);
+        const bool measured = reference && renderer && f % o.quality_every == 0;
+        if (measured) reference->save(*renderer, selector, f);  // (off the clock: the frame was timed)
         if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2]))
             path.save_shots(selector, f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C'), f, index_count);
+        if (measured) reference->save_reference(*renderer, camera_for(f, o.frames, o.width, o.height), f);
     }
     return summarize(selector, o.budget_ms, rows);
 }
@@ -612,6 +693,9 @@ int main(int argc, char** argv) {
     app.add_option("--hysteresis", o.hysteresis, "Relative dead band against the previous frame (default 0.05)");
     app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in standard deviations of the calibrated frame noise (default 0.35)");
     app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
+    app.add_option("--quality-every", o.quality_every,
+                   "Compare every K-th recorded frame with the same view at full detail (SSIM, PSNR by scikit-image; needs --out, not --simulate)")
+        ->check(CLI::Range(1u, 100000u));
     app.add_option("--noise-test", noise_renders, "Draw viewpoint A's frame (the exact selector's plan at --budget-ms) this many times in a row and print how much identical frames vary")
         ->check(CLI::Range(20u, 100000u));
     app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"
@@ -689,6 +773,12 @@ int main(int argc, char** argv) {
             }
         }
         if (!o.out.empty()) fs::create_directories(o.out);
+        if (o.quality_every && (o.out.empty() || !renderer || o.simulate)) {
+            std::fprintf(stderr, "error: --quality-every compares rendered frames: give --out and drop --simulate\n");
+            return 2;
+        }
+        std::unique_ptr<Reference> reference;
+        if (o.quality_every) reference = std::make_unique<Reference>(w, handles, o.out);
         if (!o.json)
             std::printf("%s, %zu objects, %llu triangles at full detail, %u frames, budget %.1f ms%s\n", o.scene.c_str(), w.scene.instances.size(),
                         static_cast<unsigned long long>(w.full_triangles), o.frames, o.budget_ms,
@@ -696,7 +786,7 @@ int main(int argc, char** argv) {
         std::vector<Summary> summaries;
         std::vector<Row> rows;
         for (const std::string& sel : o.selectors) {
-            summaries.push_back(run(w, sel, o, model, o.simulate ? nullptr : renderer.get(), handles, rows));
+            summaries.push_back(run(w, sel, o, model, o.simulate ? nullptr : renderer.get(), handles, rows, reference.get()));
             if (!o.out.empty()) {
                 std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
                 csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap\n";
@@ -706,6 +796,7 @@ int main(int argc, char** argv) {
                         << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << '\n';
             }
         }
+        if (reference) score_quality(*reference, o.out, summaries);
         std::vector<nlohmann::ordered_json> out;
         uint32_t shots[3];
         walk::viewpoints(o.frames, shots);
@@ -721,6 +812,11 @@ int main(int argc, char** argv) {
             j["drawn_triangles_mean"] = s.drawn;
             j["visible_triangles_mean"] = s.visible;
             j["gap_mean"] = std::isnan(s.gap) ? nlohmann::json(nullptr) : nlohmann::json(s.gap);
+            auto or_null = [](double x) { return std::isnan(x) ? nlohmann::json(nullptr) : nlohmann::json(x); };
+            j["quality_frames"] = s.quality_frames;
+            j["ssim_mean"] = or_null(s.ssim_mean);
+            j["ssim_min"] = or_null(s.ssim_min);
+            j["psnr_mean"] = or_null(s.psnr_mean);
             j["simulated"] = o.simulate;
             j["viewpoint_frames"] = {{"A", shots[0]}, {"B", shots[1]}, {"C", shots[2]}};  // the screenshots' frames
             out.push_back(j);
@@ -728,12 +824,20 @@ int main(int argc, char** argv) {
         if (o.json) {
             for (const auto& j : out) std::printf("%s\n", j.dump().c_str());
         } else {
-            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible");
-            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
-                        "tris mean", "tris mean");
-            for (const Summary& s : summaries)
-                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f\n", s.selector.c_str(), s.mean, s.max, s.std,
+            const bool quality = reference != nullptr;
+            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
+                        quality ? " | image vs full detail" : "");
+            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
+                        "tris mean", "tris mean", quality ? " | SSIM mean    min  PSNR dB" : "");
+            for (const Summary& s : summaries) {
+                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f", s.selector.c_str(), s.mean, s.max, s.std,
                             s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible);
+                if (quality) std::printf(" |    %.4f %.4f %8.2f", s.ssim_mean, s.ssim_min, s.psnr_mean);
+                std::printf("\n");
+            }
+            if (quality)
+                std::printf("image: %u frames of each selector against the same view at full detail (scikit-image; identical frames count as 99 dB)\n",
+                            summaries.empty() ? 0 : summaries.front().quality_frames);
         }
         if (!o.out.empty()) {
             std::ofstream js(fs::path(o.out) / "summary.json");

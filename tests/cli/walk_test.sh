@@ -25,10 +25,24 @@ echo "budget: $budget ms (a quarter of full detail along the path)"
 
 # a short real-rendered path
 check "a real-rendered path" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --selector none,exact,barrier \
-  --frames 30 --budget-ms "$budget" --width 320 --height 240 --out "$work/real" --json
+  --frames 30 --budget-ms "$budget" --width 320 --height 240 --out "$work/real" --json --quality-every 10
 for s in none exact barrier; do
   check "frames-$s.csv has a row per frame" test "$(wc -l < "$work/real/frames-$s.csv")" -eq 31
 done
+# the image against full detail: "none" draws full detail, so its frames are the reference's
+check "every 10th frame is scored against full detail (SSIM, PSNR)" /usr/bin/python3 -c "
+import csv, json
+runs = {r['selector']: r for r in json.load(open('$work/real/summary.json'))}
+for name, r in runs.items():
+    assert r['quality_frames'] == 3, (name, r['quality_frames'])
+    assert 0 < r['ssim_min'] <= r['ssim_mean'] <= 1 and r['psnr_mean'] > 0, (name, r)
+assert runs['none']['ssim_mean'] == 1.0 and runs['none']['psnr_mean'] == 99.0, runs['none']
+assert runs['exact']['ssim_mean'] < 1.0 and runs['exact']['psnr_mean'] < 99.0, runs['exact']
+rows = list(csv.DictReader(open('$work/real/quality.csv')))
+assert len(rows) == 9 and {r['selector'] for r in rows} == set(runs), rows
+"
+check "the measured frames and their references are kept" test "$(ls "$work"/real/quality/reference-*.png | wc -l)" -eq 3 -a "$(ls "$work"/real/quality/exact-*.png | wc -l)" -eq 3
+check "--quality-every with --simulate is a usage error" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --simulate --quality-every 5 --out '$work/q' --frames 10; test \$? -eq 2"
 check "the summary has the documented keys" /usr/bin/python3 -c "
 import json
 runs = json.load(open('$work/real/summary.json'))

@@ -690,7 +690,7 @@ TEST_CASE("binary PLY of a scan's layout reads directly, as OpenMesh reads it, a
     std::vector<std::vector<uint32_t>> bad = faces;
     bad[5][1] = sphere.vertex_count();
     write(dir / "bad-index.ply", false, bad);
-    CHECK(import_error((dir / "bad-index.ply").string()).find("face 5 refers to vertex " + std::to_string(sphere.vertex_count())) != std::string::npos);
+    CHECK(import_error((dir / "bad-index.ply").string()).find(":14: face 5 refers to vertex " + std::to_string(sphere.vertex_count())) != std::string::npos);
     bad = faces;
     bad.back() = std::vector<uint32_t>(200, 0);
     write(dir / "long-face.ply", false, bad, "uint int");
@@ -702,7 +702,7 @@ TEST_CASE("binary PLY of a scan's layout reads directly, as OpenMesh reads it, a
     const uint32_t huge = 0x7fffffffu;
     std::memcpy(&bytes[bytes.size() - 4 * 200 - 4], &huge, 4);  // the last face announces 2^31 - 1 corners
     std::ofstream(dir / "huge-count.ply", std::ios::binary) << bytes;
-    CHECK(import_error((dir / "huge-count.ply").string()).find("announces 2147483647 corners, the file holds fewer") != std::string::npos);
+    CHECK(import_error((dir / "huge-count.ply").string()).find(":14: face " + std::to_string(bad.size() - 1) + ": the list vertex_indices announces 2147483647 items, the file holds fewer") != std::string::npos);
     std::ofstream(dir / "truncated.ply", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
     CHECK(import_error((dir / "truncated.ply").string()).find((dir / "truncated.ply").string()) == 0);
     fs::remove_all(dir);

@@ -28,14 +28,17 @@ struct SimpleLayout {
     int position[3] = {-1, -1, -1}, normal[3] = {-1, -1, -1}, color[4] = {-1, -1, -1, -1};
     int count_bytes = 0;      // of a face's corner count: 1 or 4
     bool count_signed = false;
+    size_t vertex_line = 0, face_line = 0;  // the element lines, for messages (as check_ply's)
+    std::string list_name;
 };
 
 // The header's lines (up to end_header), as words; false when it is not a simple layout.
 bool parse_simple_header(std::string_view text, SimpleLayout& l) {
-    size_t at = 0;
+    size_t at = 0, line_number = 0;
     auto next_line = [&](std::vector<std::string_view>& words) {
         words.clear();
         if (at >= text.size() || at > (size_t(1) << 20)) return false;
+        ++line_number;
         size_t end = text.find('\n', at);
         if (end == std::string_view::npos) return false;
         std::string_view line = text.substr(at, end - at);
@@ -70,8 +73,14 @@ bool parse_simple_header(std::string_view text, SimpleLayout& l) {
         if (w[0] == "end_header") break;
         if (w[0] == "element" && w.size() == 3) {
             ++element;
-            if (element == 1 && w[1] == "vertex" && count_of(w[2], l.vertices)) continue;
-            if (element == 2 && w[1] == "face" && count_of(w[2], l.faces)) continue;
+            if (element == 1 && w[1] == "vertex" && count_of(w[2], l.vertices)) {
+                l.vertex_line = line_number;
+                continue;
+            }
+            if (element == 2 && w[1] == "face" && count_of(w[2], l.faces)) {
+                l.face_line = line_number;
+                continue;
+            }
             return false;
         }
         if (w[0] != "property") return false;
@@ -95,6 +104,7 @@ bool parse_simple_header(std::string_view text, SimpleLayout& l) {
             else if (w[2] == "uint" || w[2] == "uint32") l.count_bytes = 4;
             else return false;
             face_list = true;
+            l.list_name = std::string(w[4]);
             continue;
         }
         return false;
@@ -119,10 +129,11 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
     SimpleLayout l;
     if (!parse_simple_header(text, l)) return std::nullopt;
     const uint64_t size = bytes.size();
-    if (l.vertices == 0) throw ImportError(path + ": faces without vertices");
+    const std::string vertex_at = path + ":" + std::to_string(l.vertex_line) + ": ", face_at = path + ":" + std::to_string(l.face_line) + ": ";
+    if (l.vertices == 0 && l.faces > 0) throw ImportError(face_at + "faces without a vertex element before them");
     if (l.stride == 0 || l.vertices > (size - l.body) / l.stride)
-        throw ImportError(path + ": " + std::to_string(l.vertices) + " vertices of " + std::to_string(l.stride) + " bytes cannot fit in the " +
-                          std::to_string(size - l.body) + " bytes after the header");
+        throw ImportError(vertex_at + std::to_string(l.vertices) + " vertex elements of at least " + std::to_string(l.stride) + " bytes cannot fit in the " +
+                          std::to_string(size - l.body) + " bytes left");
     Mesh mesh;
     mesh.name = file_stem(path);
     const size_t nv = size_t(l.vertices);
@@ -145,7 +156,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
     uint64_t short_faces = 0;
     uint32_t corner[3];
     for (uint64_t f = 0; f < l.faces; ++f) {
-        if (at + size_t(l.count_bytes) > size) throw ImportError(path + ": the data ends inside face " + std::to_string(f) + " of " + std::to_string(l.faces));
+        if (at + size_t(l.count_bytes) > size) throw ImportError(face_at + "the data ends inside face " + std::to_string(f));
         int64_t n = 0;
         if (l.count_bytes == 1) {
             n = l.count_signed ? int64_t(int8_t(bytes[at])) : int64_t(bytes[at]);
@@ -156,7 +167,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
         }
         at += size_t(l.count_bytes);
         if (n < 0 || uint64_t(n) > (size - at) / 4)
-            throw ImportError(path + ": face " + std::to_string(f) + " announces " + std::to_string(n) + " corners, the file holds fewer");
+            throw ImportError(face_at + "face " + std::to_string(f) + ": the list " + l.list_name + " announces " + std::to_string(n) + " items, the file holds fewer");
         if (n < 3) {
             ++short_faces;
             at += size_t(n) * 4;
@@ -166,7 +177,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
             uint32_t index;
             std::memcpy(&index, &bytes[at], 4);
             if (index >= l.vertices)
-                throw ImportError(path + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(int32_t(index)) + ", the file has " + std::to_string(l.vertices));
+                throw ImportError(face_at + "face " + std::to_string(f) + " refers to vertex " + std::to_string(int32_t(index)) + ", the file has " + std::to_string(l.vertices));
             if (j < 2) {
                 corner[j] = index;
                 continue;
