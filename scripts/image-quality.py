@@ -4,7 +4,6 @@ folder beside its reference-FRAME.png, SSIM (colour, scikit-image's structural_s
 PSNR in dB (identical frames count as 99 dB), one JSON object per line on stdout.
 Run by tcrwalk --quality-every; by hand: scripts/image-quality.py out/walk/run/quality"""
 import json
-import math
 import os
 import re
 import sys
@@ -37,9 +36,12 @@ def main():
         img = imread(path)[..., :3]
         if ref.shape != img.shape:
             sys.exit(f"image-quality: {path} is {img.shape}, its reference {ref.shape}")
-        ssim = structural_similarity(ref, img, channel_axis=2, data_range=255)
-        psnr = peak_signal_noise_ratio(ref, img, data_range=255)
-        print(json.dumps({"selector": selector, "frame": frame, "ssim": float(ssim), "psnr": IDENTICAL_DB if math.isinf(psnr) else float(psnr)}))
+        if (ref == img).all():  # (PSNR's mean squared error would be 0)
+            ssim, psnr = 1.0, IDENTICAL_DB
+        else:
+            ssim = float(structural_similarity(ref, img, channel_axis=2, data_range=255))
+            psnr = float(peak_signal_noise_ratio(ref, img, data_range=255))
+        print(json.dumps({"selector": selector, "frame": frame, "ssim": ssim, "psnr": psnr}))
 
 
 if __name__ == "__main__":

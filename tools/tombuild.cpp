@@ -542,7 +542,10 @@ int main(int argc, char** argv) {
         std::vector<size_t> selected;
         {
             std::vector<uint64_t> sizes;
-            for (const tools::Job& j : all_jobs) sizes.push_back(fs::file_size(j.input, ec));
+            for (const tools::Job& j : all_jobs) {
+                const uintmax_t size = fs::file_size(j.input, ec);
+                sizes.push_back(ec ? 0 : uint64_t(size));
+            }
             const std::vector<uint32_t> of = tools::assign_shards(all_jobs, sizes, shard.count);
             for (size_t i = 0; i < all_jobs.size(); ++i)
                 if (of[i] == shard.index) selected.push_back(i);
@@ -584,7 +587,11 @@ int main(int argc, char** argv) {
                 Outcome r;
                 tools::Freshness f;
                 if (!opt.force) {
-                    f = tools::check_output(job.input, job.output, tool_version, settings.output_options);
+                    try {
+                        f = tools::check_output(job.input, job.output, tool_version, settings.output_options);
+                    } catch (const std::exception&) {
+                        f = tools::Freshness{};  // an unreadable input: the conversion reports it
+                    }
                     if (f.up_to_date && !report_path.empty() && !opt.report &&
                         !report_is_current(report_path, job.input, f.provenance, settings.report_options, r.summary_csv))
                         f.up_to_date = false;

@@ -202,8 +202,8 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
 }
 
 // The full-detail frame a measured frame is compared with (--quality-every): every instance at
-// its mesh's full resolution, no budget, in the colour the recorded frames use; drawn off the
-// clock, once per frame for all selectors.
+// its mesh's full resolution, no budget, in the colour the recorded frames use; drawn once per
+// measured frame for all selectors, after their paths.
 struct Reference {
     std::vector<uint32_t> indices;  // each mesh's full triangles, one mesh after another
     std::vector<walk::Renderer::Draw> draws;
@@ -447,7 +447,6 @@ Summary run(const World& w, const std::string& selector, const Options& o, const
         if (measured) reference->save(*renderer, selector, f);  // (off the clock: the frame was timed)
         if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2]))
             path.save_shots(selector, f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C'), f, index_count);
-        if (measured) reference->save_reference(*renderer, camera_for(f, o.frames, o.width, o.height), f);
     }
     return summarize(selector, o.budget_ms, rows);
 }
@@ -796,7 +795,12 @@ int main(int argc, char** argv) {
                         << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << '\n';
             }
         }
-        if (reference) score_quality(*reference, o.out, summaries);
+        if (reference) {
+            // the references after every selector's path: a full-detail render between timed
+            // frames would leave the next frame's caches cold
+            for (uint32_t f = 0; f < o.frames; f += o.quality_every) reference->save_reference(*renderer, camera_for(f, o.frames, o.width, o.height), f);
+            score_quality(*reference, o.out, summaries);
+        }
         std::vector<nlohmann::ordered_json> out;
         uint32_t shots[3];
         walk::viewpoints(o.frames, shots);
