@@ -15,4 +15,4 @@ export ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1${ASAN_OPTIONS:+:$ASAN
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 export TOM_SANITIZED=1  # the CLI test skips the memory-limit checks ASan's address space rules out
-ctest --test-dir "$root/build-asan" --output-on-failure -j "$(nproc)" -E "^(cli_contract|install_consumer|walkthrough)$" "$@"
+ctest --test-dir "$root/build-asan" --output-on-failure -j "$(nproc)" -E "^(cli_contract|batch_contract|slurm_array|install_consumer|walkthrough)$" "$@"
