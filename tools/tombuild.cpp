@@ -652,11 +652,7 @@ int main(int argc, char** argv) {
             for (const std::string& orphan : find_orphans(opt.outdir, all_jobs)) {
                 if (opt.prune) {
                     fs::remove(orphan, ec);
-                    if (!opt.report_json_dir.empty()) {
-                        fs::path rel = fs::path(orphan).lexically_relative(opt.outdir);
-                        rel.replace_extension(".json");
-                        fs::remove(fs::path(opt.report_json_dir) / rel, ec);
-                    }
+                    if (const std::string report = report_path_of({"", orphan}); !report.empty()) fs::remove(report, ec);
                     if (!opt.quiet) std::printf("%s: removed (no input maps to it)\n", orphan.c_str());
                 } else if (!opt.quiet) {
                     std::printf("%s: no input of this run maps to it (its input is gone?); --prune removes it\n", orphan.c_str());
