@@ -314,6 +314,47 @@ TEST_CASE("face hints change only the speed: the same figures with good but part
     CHECK(tom::encode_error_curve(tom::measure_error_curve(engine_part.mesh, t)) == hinted);
 }
 
+TEST_CASE("the compact search gives the run search's figures, with and without hints, dense and sparse", "[metrics][compact]") {
+    // fandisk (smooth, well shaped) and the engine's largest part (long thin CAD triangles), the
+    // levels of each against the original in both directions
+    const std::vector<test::NamedMesh> meshes = test::real_meshes();
+    for (const test::NamedMesh* named : {&meshes[1], &meshes[8]}) {
+        const tom::Mesh& mesh = named->mesh;
+        const tom::TomMesh t = tom::build(mesh);
+        tom::DistanceParams sparse;
+        sparse.vertex_samples = sparse.edge_samples = false;
+        sparse.samples_per_face = 1e9;
+        sparse.max_samples = 4096;
+        for (const tom::DistanceParams& params : {tom::DistanceParams{}, sparse}) {
+            tom::DistanceParams compact_params = params;
+            compact_params.compact_search = true;
+            const tom::MetroReference run(surface(mesh), params);
+            const tom::MetroReference compact(surface(mesh), compact_params);
+            for (double fraction : {1.0, 0.3, 0.05, 0.005}) {
+                INFO(named->name << " at " << fraction << ", " << (params.max_samples ? "sparse" : "dense"));
+                std::vector<uint32_t> idx;
+                const tom::Surface level = level_surface(t, fraction, idx);
+                tom::FaceHints hints;
+                hints.simplified_to_original = [&](uint32_t i) { return t.original_triangle[i]; };
+                hints.original_to_simplified = [](uint32_t) { return 0u; };  // (a poor one: the search must still find the nearest)
+                const tom::Distance expected = run.compare(level);
+                for (const tom::Distance& d : {compact.compare(level), compact.compare(level, hints)}) {
+                    const double tolerance = 1e-11 * expected.diagonal;  // (both stop within 2^-40 of the size on the surface)
+                    CHECK(std::fabs(d.forward.mean - expected.forward.mean) <= tolerance);
+                    CHECK(std::fabs(d.backward.mean - expected.backward.mean) <= tolerance);
+                    CHECK(std::fabs(d.forward.rms - expected.forward.rms) <= tolerance);
+                    CHECK(std::fabs(d.backward.rms - expected.backward.rms) <= tolerance);
+                    CHECK(std::fabs(d.hausdorff - expected.hausdorff) <= tolerance);
+                    CHECK(d.forward.samples == expected.forward.samples);
+                    CHECK(d.backward.samples == expected.backward.samples);
+                    CHECK(d.diagonal == expected.diagonal);
+                }
+                if (fraction < 1.0) CHECK(expected.hausdorff > 0);
+            }
+        }
+    }
+}
+
 namespace {
 
 // Squared distance from p to triangle (a, b, c) by the Voronoi regions of its vertices, edges and

@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "candidates.h"
+#include "compact_tree.h"
 #include "geometry.h"
 #include "samples.h"
 #include "wide_tree.h"
@@ -459,6 +460,53 @@ struct AttributeProbe {
 // One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
 // its picked samples into `deviation`; with `hint` (face of the sampled surface -> a triangle of
 // `target` near it, or kNoRecord; `which` names it in errors), each search starts there too.
+// Of each sample, in order, the face `hint` gives for its own face (face of the sampled surface
+// -> a face of the target near it, or kNoRecord; asked once for each run of samples on one
+// face), checked against the target's `faces` (`which` names the hint in errors); empty
+// without a hint.
+std::vector<uint32_t> hinted_faces(const Samples& samples, const std::function<uint32_t(uint32_t)>* hint, size_t faces, const char* which) {
+    std::vector<uint32_t> out;
+    if (!hint || !*hint) return out;
+    const size_t n = samples.points.size();
+    out.resize(n);
+    uint32_t face = kNoRecord, start = kNoRecord;  // the last face asked about (neighbouring points share faces)
+    for (size_t i = 0; i < n; ++i) {
+        if (samples.faces[i] != face) {
+            face = samples.faces[i];
+            start = (*hint)(face);
+            if (start != kNoRecord && start >= faces)
+                throw ArgumentError(std::string("FaceHints::") + which + ": face " + std::to_string(face) + " hints face " +
+                                    std::to_string(start) + ", the other surface has " + std::to_string(faces));
+        }
+        out[i] = start;
+    }
+    return out;
+}
+
+// The figures of one direction from its chunks' partial sums, combined in chunk order (the same
+// figures whatever the thread count).
+OneSidedDistance one_sided(const Samples& samples, const std::vector<Partial>& partial) {
+    OneSidedDistance out;
+    const size_t n = samples.points.size();
+    double sum = 0, sum_squares = 0;
+    for (const Partial& p : partial) {
+        out.max = std::max(out.max, p.max);
+        sum += p.sum;
+        sum_squares += p.sum_squares;
+    }
+    out.samples = n;
+    out.vertex_samples = samples.vertex;
+    out.edge_samples = samples.edge;
+    out.face_samples = samples.face;
+    out.sampled_area = samples.area;
+    out.mean = n ? sum / double(n) : 0.0;
+    out.rms = n ? std::sqrt(sum_squares / double(n)) : 0.0;
+    return out;
+}
+
+// One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
+// its picked samples into `deviation`; with `hint` (face of the sampled surface -> a triangle of
+// `target` near it, or kNoRecord; `which` names it in errors), each search starts there too.
 OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
                          AttributeDeviation* deviation = nullptr, const std::function<uint32_t(uint32_t)>* hint = nullptr,
                          const char* which = "") {
@@ -466,22 +514,9 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
     std::vector<AttributePartial> attribute_partial(probe ? partial.size() : 0);
     const int shift = cell_shift(samples, target);
-    std::vector<uint32_t> starts;  // per point: the record of its face's hint
-    if (hint && *hint) {
-        starts.resize(n);
-        uint32_t face = kNoRecord, start = kNoRecord;  // the last face asked about (neighbouring points share faces)
-        for (size_t i = 0; i < n; ++i) {
-            if (samples.faces[i] != face) {
-                face = samples.faces[i];
-                const uint32_t t = (*hint)(face);
-                if (t != kNoRecord && t >= target.slot.size())
-                    throw ArgumentError(std::string("FaceHints::") + which + ": face " + std::to_string(face) + " hints face " +
-                                                std::to_string(t) + ", the other surface has " + std::to_string(target.slot.size()));
-                start = t == kNoRecord ? kNoRecord : target.slot[t];
-            }
-            starts[i] = start;
-        }
-    }
+    std::vector<uint32_t> starts = hinted_faces(samples, hint, target.slot.size(), which);  // per point: the record of its face's hint
+    for (uint32_t& t : starts)
+        if (t != kNoRecord) t = target.slot[t];
     parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
         Partial& r = partial[c];
         RunSearch search(target, samples.points.data());
@@ -498,20 +533,7 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
         };
         search.runs(samples.keys.data(), begin, end, shift, emit);
     });
-    OneSidedDistance out;
-    double sum = 0, sum_squares = 0;
-    for (const Partial& p : partial) {  // in order: the same figures whatever the thread count
-        out.max = std::max(out.max, p.max);
-        sum += p.sum;
-        sum_squares += p.sum_squares;
-    }
-    out.samples = n;
-    out.vertex_samples = samples.vertex;
-    out.edge_samples = samples.edge;
-    out.face_samples = samples.face;
-    out.sampled_area = samples.area;
-    out.mean = n ? sum / double(n) : 0.0;
-    out.rms = n ? std::sqrt(sum_squares / double(n)) : 0.0;
+    const OneSidedDistance out = one_sided(samples, partial);
     if (probe && deviation) {
         AttributeDeviation& a = *deviation;
         a = AttributeDeviation{};
@@ -529,6 +551,28 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
         a.uv_mean = uv_n ? uv_sum / double(uv_n) : 0.0;
     }
     return out;
+}
+
+// One direction searched in a CompactTree, a descent for each sample from its hinted face and
+// the previous sample's nearest (DistanceParams::compact_search).
+OneSidedDistance measure_compact(const Samples& samples, const CompactTree& target, unsigned threads,
+                                 const std::function<uint32_t(uint32_t)>* hint, const char* which) {
+    const size_t n = samples.points.size();
+    std::vector<Partial> partial((n + kChunk - 1) / kChunk);
+    const std::vector<uint32_t> starts = hinted_faces(samples, hint, target.triangle_count(), which);
+    parallel_chunks(n, threads, [&](size_t c, size_t begin, size_t end) {
+        Partial& r = partial[c];
+        uint32_t last = kNoRecord;
+        for (size_t i = begin; i < end; ++i) {
+            double d2;
+            last = target.nearest(samples.points[i], starts.empty() ? kNoRecord : starts[i], last, d2);
+            const double d = std::sqrt(d2);
+            r.max = std::max(r.max, d);
+            r.sum += d;
+            r.sum_squares += d2;
+        }
+    });
+    return one_sided(samples, partial);
 }
 
 void bounds(const Surface& s, double lo[3], double hi[3]) {
@@ -586,6 +630,7 @@ struct MetroReference::Impl {
     // compare() samples the original and searches its level meanwhile), shared by the references
     // made with with_params()
     std::shared_future<std::shared_ptr<const Mesh3>> mesh;
+    std::shared_future<std::shared_ptr<const CompactTree>> compact;  // (DistanceParams::compact_search; made when first needed)
     Box box;  // of the original's corners
     mutable std::mutex lock;
     struct Forward {  // the original's samples for one target count, and the attribute samples picked from them
@@ -604,10 +649,13 @@ struct MetroReference::Impl {
     mutable std::vector<std::unique_ptr<Workspace>> idle;
     // (a small original's is made when first needed: a thread would cost more)
     static constexpr size_t kOwnThreadTriangles = 4096;
-    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a) : original(s), params(p), attributes(a), mesh(make_mesh(s)), box(box_of(s)) {}
-    static std::shared_future<std::shared_ptr<const Mesh3>> make_mesh(const Surface& s) {
+    Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a)
+        : original(s), params(p), attributes(a), mesh(make_mesh(s, !p.compact_search)), compact(make_compact(s)), box(box_of(s)) {}
+    // `early`: on a thread of its own from the start (else when first needed: a compact search's
+    // reference may never need it)
+    static std::shared_future<std::shared_ptr<const Mesh3>> make_mesh(const Surface& s, bool early) {
         auto make = [s] { return std::shared_ptr<const Mesh3>(std::make_shared<Mesh3>(s)); };
-        if (s.triangle_count >= kOwnThreadTriangles) {
+        if (early && s.triangle_count >= kOwnThreadTriangles) {
             try {
                 return std::async(std::launch::async, make).share();
             } catch (const std::system_error&) {  // no thread to be had: made when first needed
@@ -615,8 +663,11 @@ struct MetroReference::Impl {
         }
         return std::async(std::launch::deferred, make).share();
     }
+    static std::shared_future<std::shared_ptr<const CompactTree>> make_compact(const Surface& s) {
+        return std::async(std::launch::deferred, [s] { return std::shared_ptr<const CompactTree>(std::make_shared<CompactTree>(s)); }).share();
+    }
     Impl(const Impl& shared, const DistanceParams& p, const SurfaceAttributes& a)
-        : original(shared.original), params(p), attributes(a), mesh(shared.mesh), box(shared.box) {}
+        : original(shared.original), params(p), attributes(a), mesh(shared.mesh), compact(shared.compact), box(shared.box) {}
     const Forward& forward_for(uint64_t target) const {
         std::lock_guard<std::mutex> hold(lock);
         for (const Forward& f : forward)
@@ -652,6 +703,7 @@ struct MetroReference::Impl {
     Distance compare(const Surface& simplified, const SurfaceAttributes& simplified_attributes, AttributeDeviation* deviation,
                      const FaceHints* hints) const {
         validate(simplified, "simplified");
+        if (params.compact_search && !deviation) return compare_compact(simplified, hints);
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
         const Mesh3 other(simplified);
@@ -670,6 +722,25 @@ struct MetroReference::Impl {
         const std::shared_future<std::shared_ptr<const Mesh3>> original_mesh = mesh;  // (each caller its own copy)
         d.backward = measure(work->backward, *original_mesh.get(), params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
                              "simplified_to_original");
+        give_back(std::move(work));
+        d.hausdorff = std::max(d.forward.max, d.backward.max);
+        d.diagonal = enlarged_union_diagonal(box, simplified);
+        return d;
+    }
+
+    // compare() with DistanceParams::compact_search: the same samples, each searched on its own
+    Distance compare_compact(const Surface& simplified, const FaceHints* hints) const {
+        const uint64_t target = sample_target(original, simplified, params);
+        const uint64_t backward_target = sample_target(simplified, original, params);
+        const CompactTree other(simplified);
+        const Forward& f = forward_for(target);
+        Distance d;
+        d.forward = measure_compact(f.samples, other, params.threads, hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
+        std::unique_ptr<Workspace> work = borrow();
+        sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
+        const std::shared_future<std::shared_ptr<const CompactTree>> original_tree = compact;  // (each caller its own copy)
+        d.backward = measure_compact(work->backward, *original_tree.get(), params.threads, hints ? &hints->simplified_to_original : nullptr,
+                                     "simplified_to_original");
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
         d.diagonal = enlarged_union_diagonal(box, simplified);
