@@ -355,6 +355,49 @@ TEST_CASE("the compact search gives the run search's figures, with and without h
     }
 }
 
+TEST_CASE("samples in batches give the figures of the whole, attribute deviation included", "[metrics][batches]") {
+    // fandisk (its picks among Metro's face samples) and the engine's largest part (long edges
+    // take the budget: the attribute deviation's own samples, batched too), with normals; batches
+    // of 2,000 samples (dozens a direction) against none
+    const std::vector<test::NamedMesh> meshes = test::real_meshes();
+    for (const test::NamedMesh* named : {&meshes[1], &meshes[8]}) {
+        tom::Mesh mesh = named->mesh;
+        if (mesh.normals.empty()) tom::compute_normals(mesh);
+        const tom::TomMesh t = tom::build(mesh);
+        tom::DistanceParams whole, batched;
+        whole.batch_samples = 0;
+        batched.batch_samples = 2000;
+        const tom::SurfaceAttributes oa{mesh.normals.data(), nullptr}, la{t.normals.data(), nullptr};
+        const tom::MetroReference a(surface(mesh), whole, oa), b(surface(mesh), batched, oa);
+        for (double fraction : {1.0, 0.2, 0.01}) {
+            INFO(named->name << " at " << fraction);
+            std::vector<uint32_t> idx;
+            const tom::Surface level = level_surface(t, fraction, idx);
+            tom::AttributeDeviation da, db;
+            const tom::Distance x = a.compare(level, la, da), y = b.compare(level, la, db);
+            REQUIRE(x.forward.samples > 4 * batched.batch_samples);  // (both directions in batches)
+            REQUIRE(x.backward.samples > 4 * batched.batch_samples);
+            const double tolerance = 1e-12 * x.diagonal;  // (the sums in another order)
+            for (const auto& [p, q] : {std::pair{x.forward, y.forward}, std::pair{x.backward, y.backward}}) {
+                CHECK(p.samples == q.samples);
+                CHECK(p.vertex_samples == q.vertex_samples);
+                CHECK(p.edge_samples == q.edge_samples);
+                CHECK(p.face_samples == q.face_samples);
+                CHECK(p.max == q.max);
+                CHECK(std::fabs(p.mean - q.mean) <= tolerance);
+                CHECK(std::fabs(p.rms - q.rms) <= tolerance);
+                CHECK(std::fabs(p.sampled_area - q.sampled_area) <= 1e-9 * p.sampled_area);
+            }
+            CHECK(x.hausdorff == y.hausdorff);
+            CHECK(da.samples == db.samples);
+            CHECK(da.normals == db.normals);
+            CHECK(da.normal_max_degrees == db.normal_max_degrees);
+            CHECK(std::fabs(da.normal_mean_degrees - db.normal_mean_degrees) <= 1e-9);
+            if (fraction < 1.0) CHECK(da.normal_mean_degrees > 0);
+        }
+    }
+}
+
 namespace {
 
 // Squared distance from p to triangle (a, b, c) by the Voronoi regions of its vertices, edges and

@@ -483,33 +483,66 @@ std::vector<uint32_t> hinted_faces(const Samples& samples, const std::function<u
     return out;
 }
 
-// The figures of one direction from its chunks' partial sums, combined in chunk order (the same
-// figures whatever the thread count).
-OneSidedDistance one_sided(const Samples& samples, const std::vector<Partial>& partial) {
-    OneSidedDistance out;
-    const size_t n = samples.points.size();
-    double sum = 0, sum_squares = 0;
-    for (const Partial& p : partial) {
-        out.max = std::max(out.max, p.max);
-        sum += p.sum;
-        sum_squares += p.sum_squares;
+// A direction's sums over some of its samples: chunks, and the batches of a large surface,
+// added in order (the same figures whatever the thread count).
+struct Sums {
+    Partial d;
+    AttributePartial a;
+    void add(const Partial& p) {
+        d.max = std::max(d.max, p.max);
+        d.sum += p.sum;
+        d.sum_squares += p.sum_squares;
     }
-    out.samples = n;
-    out.vertex_samples = samples.vertex;
-    out.edge_samples = samples.edge;
-    out.face_samples = samples.face;
-    out.sampled_area = samples.area;
-    out.mean = n ? sum / double(n) : 0.0;
-    out.rms = n ? std::sqrt(sum_squares / double(n)) : 0.0;
+    void add(const AttributePartial& p) {
+        a.normal_sum += p.normal_sum, a.uv_sum += p.uv_sum, a.normal_n += p.normal_n, a.uv_n += p.uv_n;
+        a.normal_max = std::max(a.normal_max, p.normal_max);
+        a.uv_max = std::max(a.uv_max, p.uv_max);
+    }
+    void add(const Sums& o) {
+        add(o.d);
+        add(o.a);
+    }
+};
+
+// The sample counts of a direction, of one Samples or of all the batches of a SampleBatches.
+struct Counts {
+    uint64_t samples = 0, vertex = 0, edge = 0, face = 0;
+    double area = 0;
+    static Counts of(const Samples& s) { return {s.points.size(), s.vertex, s.edge, s.face, s.area}; }
+    static Counts of(const SampleBatches& b) { return {b.vertex + b.edge + b.face, b.vertex, b.edge, b.face, b.area}; }
+};
+
+OneSidedDistance one_sided(const Sums& sums, const Counts& c) {
+    OneSidedDistance out;
+    out.max = sums.d.max;
+    out.samples = c.samples;
+    out.vertex_samples = c.vertex;
+    out.edge_samples = c.edge;
+    out.face_samples = c.face;
+    out.sampled_area = c.area;
+    out.mean = c.samples ? sums.d.sum / double(c.samples) : 0.0;
+    out.rms = c.samples ? std::sqrt(sums.d.sum_squares / double(c.samples)) : 0.0;
     return out;
 }
 
-// One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
-// its picked samples into `deviation`; with `hint` (face of the sampled surface -> a triangle of
+// The attribute deviation from the sums at `picks` picked samples, of the streams compared.
+AttributeDeviation deviation_of(const Sums& sums, uint64_t picks, bool normals, bool texcoords) {
+    AttributeDeviation a;
+    a.normals = normals && picks > 0;  // (no face samples: nothing compared)
+    a.texcoords = texcoords && picks > 0;
+    a.samples = picks;
+    a.normal_max_degrees = sums.a.normal_max;
+    a.uv_max = sums.a.uv_max;
+    a.normal_mean_degrees = sums.a.normal_n ? sums.a.normal_sum / double(sums.a.normal_n) : 0.0;
+    a.uv_mean = sums.a.uv_n ? sums.a.uv_sum / double(sums.a.uv_n) : 0.0;
+    return a;
+}
+
+// One direction's sums: the samples' distances to `target`; with `probe`, the attribute
+// deviation's at its picked samples; with `hint` (face of the sampled surface -> a triangle of
 // `target` near it, or kNoRecord; `which` names it in errors), each search starts there too.
-OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
-                         AttributeDeviation* deviation = nullptr, const std::function<uint32_t(uint32_t)>* hint = nullptr,
-                         const char* which = "") {
+Sums measure_sums(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
+                  const std::function<uint32_t(uint32_t)>* hint = nullptr, const char* which = "") {
     const size_t n = samples.points.size();
     std::vector<Partial> partial((n + kChunk - 1) / kChunk);
     std::vector<AttributePartial> attribute_partial(probe ? partial.size() : 0);
@@ -533,24 +566,19 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
         };
         search.runs(samples.keys.data(), begin, end, shift, emit);
     });
-    const OneSidedDistance out = one_sided(samples, partial);
-    if (probe && deviation) {
-        AttributeDeviation& a = *deviation;
-        a = AttributeDeviation{};
-        a.normals = probe->normals && !probe->picks.picked.empty();  // (no face samples: nothing compared)
-        a.texcoords = probe->texcoords && !probe->picks.picked.empty();
-        double normal_sum = 0, uv_sum = 0;
-        uint64_t normal_n = 0, uv_n = 0;
-        for (const AttributePartial& p : attribute_partial) {
-            normal_sum += p.normal_sum, uv_sum += p.uv_sum, normal_n += p.normal_n, uv_n += p.uv_n;
-            a.normal_max_degrees = std::max(a.normal_max_degrees, p.normal_max);
-            a.uv_max = std::max(a.uv_max, p.uv_max);
-        }
-        a.samples = probe->picks.picked.size();
-        a.normal_mean_degrees = normal_n ? normal_sum / double(normal_n) : 0.0;
-        a.uv_mean = uv_n ? uv_sum / double(uv_n) : 0.0;
-    }
-    return out;
+    Sums sums;
+    for (const Partial& p : partial) sums.add(p);
+    for (const AttributePartial& p : attribute_partial) sums.add(p);
+    return sums;
+}
+
+// One direction (measure_sums), with `probe` its attribute deviation into `deviation`.
+OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned threads, const AttributeProbe* probe = nullptr,
+                         AttributeDeviation* deviation = nullptr, const std::function<uint32_t(uint32_t)>* hint = nullptr,
+                         const char* which = "") {
+    const Sums sums = measure_sums(samples, target, threads, probe, hint, which);
+    if (probe && deviation) *deviation = deviation_of(sums, probe->picks.picked.size(), probe->normals, probe->texcoords);
+    return one_sided(sums, Counts::of(samples));
 }
 
 // One direction searched in a CompactTree, a descent for each sample from its hinted face and
@@ -572,7 +600,9 @@ OneSidedDistance measure_compact(const Samples& samples, const CompactTree& targ
             r.sum_squares += d2;
         }
     });
-    return one_sided(samples, partial);
+    Sums sums;
+    for (const Partial& p : partial) sums.add(p);
+    return one_sided(sums, Counts::of(samples));
 }
 
 void bounds(const Surface& s, double lo[3], double hi[3]) {
@@ -622,7 +652,12 @@ struct MetroReference::Impl {
     struct Workspace {
         Samples backward;  // the simplified side's, buffers reused between calls
         MortonScratch scratch;
+        Samples batch;  // a batch of the original's (SampleBatches), its picks and their attributes
+        PickedFaceSamples picks;
+        PickedAttributes at_picks;
     };
+    // whether a direction of `samples` is made in batches (DistanceParams::batch_samples)
+    bool batched(uint64_t samples) const { return params.batch_samples > 0 && samples > 4 * params.batch_samples; }
     Surface original;
     DistanceParams params;
     SurfaceAttributes attributes;
@@ -644,6 +679,8 @@ struct MetroReference::Impl {
         Samples attribute_samples;
         PickedFaceSamples attribute_picks;
         PickedAttributes at_picks;  // of the picks in use (attribute_picks where separate)
+        // or, made in batches (batched()), the plans of those samples, made batch by batch
+        std::unique_ptr<SampleBatches> batches, attribute_batches;
     };
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
@@ -677,11 +714,19 @@ struct MetroReference::Impl {
         MortonScratch scratch;
         const bool pick = attributes.normals || attributes.texcoords;
         const uint64_t picks = uint64_t(std::llround(std::max(0.0, params.attribute_samples_per_face) * double(original.triangle_count)));
+        DistanceParams faces_only = params;
+        faces_only.vertex_samples = faces_only.edge_samples = false;
+        faces_only.face_samples = true;
+        if (batched(target)) {
+            f.batches = std::make_unique<SampleBatches>(original, target, params, params.batch_samples, pick ? picks : 0);
+            if (pick && f.batches->picked < picks / 2) {
+                f.attribute_batches = std::make_unique<SampleBatches>(original, picks, faces_only, params.batch_samples, picks);
+                f.separate = true;
+            }
+            return f;
+        }
         sample_surface(original, target, params, f.samples, scratch, pick ? &f.picks : nullptr, picks);
         if (pick && f.picks.picked.size() < picks / 2) {
-            DistanceParams faces_only = params;
-            faces_only.vertex_samples = faces_only.edge_samples = false;
-            faces_only.face_samples = true;
             sample_surface(original, picks, faces_only, f.attribute_samples, scratch, &f.attribute_picks, picks);
             f.separate = true;
         }
@@ -713,19 +758,58 @@ struct MetroReference::Impl {
         const AttributeProbe probe{f.separate ? f.attribute_picks : f.picks, f.at_picks, simplified, simplified_attributes, other, normals, texcoords};
         if (deviation) *deviation = AttributeDeviation{};
         const bool probing = normals || texcoords;
-        Distance d;
-        d.forward = measure(f.samples, other, params.threads, probing && !f.separate ? &probe : nullptr, deviation,
-                            hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
-        if (probing && f.separate) measure(f.attribute_samples, other, params.threads, &probe, deviation);  // (only its deviation)
         std::unique_ptr<Workspace> work = borrow();
-        sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
+        Distance d;
+        if (f.batches) {
+            d.forward = forward_batched(f, other, simplified, simplified_attributes, normals, texcoords, deviation, hints, *work);
+        } else {
+            d.forward = measure(f.samples, other, params.threads, probing && !f.separate ? &probe : nullptr, deviation,
+                                hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
+            if (probing && f.separate) measure(f.attribute_samples, other, params.threads, &probe, deviation);  // (only its deviation)
+        }
         const std::shared_future<std::shared_ptr<const Mesh3>> original_mesh = mesh;  // (each caller its own copy)
-        d.backward = measure(work->backward, *original_mesh.get(), params.threads, nullptr, nullptr, hints ? &hints->simplified_to_original : nullptr,
-                             "simplified_to_original");
+        const std::function<uint32_t(uint32_t)>* back_hint = hints ? &hints->simplified_to_original : nullptr;
+        if (batched(backward_target)) {
+            const SampleBatches plan(simplified, backward_target, params, params.batch_samples);
+            Sums sums;
+            for (size_t k = 0; k < plan.size(); ++k) {
+                plan.make(k, work->backward, work->scratch, nullptr, back_hint != nullptr);
+                sums.add(measure_sums(work->backward, *original_mesh.get(), params.threads, nullptr, back_hint, "simplified_to_original"));
+            }
+            d.backward = one_sided(sums, Counts::of(plan));
+        } else {
+            sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
+            d.backward = measure(work->backward, *original_mesh.get(), params.threads, nullptr, nullptr, back_hint, "simplified_to_original");
+        }
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
         d.diagonal = enlarged_union_diagonal(box, simplified);
         return d;
+    }
+
+    // The forward direction of compare() batch by batch (Forward::batches): each batch's picks
+    // and the original's attributes there made with it; the attribute deviation into `deviation`
+    // when normals or texcoords are compared.
+    OneSidedDistance forward_batched(const Forward& f, const Mesh3& other, const Surface& simplified, const SurfaceAttributes& simplified_attributes,
+                                     bool normals, bool texcoords, AttributeDeviation* deviation, const FaceHints* hints, Workspace& work) const {
+        const std::function<uint32_t(uint32_t)>* hint = hints ? &hints->original_to_simplified : nullptr;
+        auto run = [&](const SampleBatches& plan, bool probing) {
+            Sums sums;
+            for (size_t k = 0; k < plan.size(); ++k) {
+                plan.make(k, work.batch, work.scratch, probing ? &work.picks : nullptr, hint != nullptr);
+                if (probing) work.at_picks.make(original, attributes, work.picks, params.threads);
+                const AttributeProbe probe{work.picks, work.at_picks, simplified, simplified_attributes, other, normals, texcoords};
+                sums.add(measure_sums(work.batch, other, params.threads, probing ? &probe : nullptr, hint, "original_to_simplified"));
+            }
+            return sums;
+        };
+        const bool probing = normals || texcoords;
+        const Sums sums = run(*f.batches, probing && !f.separate);
+        if (probing) {
+            const SampleBatches& picked = f.separate ? *f.attribute_batches : *f.batches;
+            *deviation = deviation_of(f.separate ? run(picked, true) : sums, picked.picked, normals, texcoords);
+        }
+        return one_sided(sums, Counts::of(*f.batches));
     }
 
     // compare() with DistanceParams::compact_search: the same samples, each searched on its own

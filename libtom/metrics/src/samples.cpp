@@ -207,6 +207,15 @@ void sample_vertices(const Surface& s, SampleSink& sink) {
         if (face_of[v] != kUnused) sink.add(vertex(s, v), face_of[v]);
 }
 
+// The points spaced along the edge from pa to pb (pa the lower vertex's): `per_length` a unit of
+// length, rounded down, none at the ends; emit(point) for each. Returns their count.
+template <class Emit>
+uint64_t edge_points(V3 pa, V3 pb, double per_length, Emit&& emit) {
+    const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
+    for (int i = 1; i <= n; ++i) emit(pa + (double(i) / double(n + 1)) * (pb - pa));
+    return uint64_t(std::max(n, 0));
+}
+
 // Points spaced along every edge once, in the order of (lower vertex, higher vertex): the square
 // root of the area density along a length. A radix sort of the two vertices packed into one key
 // finds the edges, with the first face that has each.
@@ -227,19 +236,19 @@ void sample_edges(const Surface& s, double per_area, const DistanceParams& p, Mo
     const uint64_t low = (uint64_t(1) << bits) - 1;
     for (const auto& edge : edges) {
         const uint32_t a = uint32_t(edge.first >> bits), b = uint32_t(edge.first & low);
-        const V3 pa = vertex(s, a), pb = vertex(s, b);
-        const int n = int(std::sqrt(dot(pb - pa, pb - pa)) * per_length);
-        for (int i = 1; i <= n; ++i) sink.add(pa + (double(i) / double(n + 1)) * (pb - pa), edge.second);
+        edge_points(vertex(s, a), vertex(s, b), per_length, [&](const V3& q) { sink.add(q, edge.second); });
     }
 }
 
-// Face t's samples [first, first + n) of `points` (base-relative indices), stratified as Metro's
+// Face t's samples, numbers [first, first + n) among the face samples, into points[0, n), stratified as Metro's
 // similar-triangles sampling: the face is cut into m x m similar triangles, one random point in
 // each, visited row by row in serpentine order so consecutive samples are neighbours; the n - m^2
 // left over fall anywhere on the face. A point is made from its weights (u, v) of the face's
 // edges from its first corner. Every `every`-th sample (0: none) is also recorded in `picked`.
+// `points` and `picked` hold the samples from index `first` and the picks from `first_pick` on
+// (the whole surface's from 0, a batch's from its own first).
 void sample_face(const Surface& s, size_t t, uint64_t first, uint64_t n, uint64_t seed, V3* points, uint64_t every,
-                 std::vector<FaceSample>* picked) {
+                 std::vector<FaceSample>* picked, uint64_t first_pick = 0) {
     Random rng{(seed * 0x2545F4914F6CDD1DULL) ^ (uint64_t(t) * 0x9E3779B97F4A7C15ULL)};
     uint64_t index = first;  // of the face sample made next
     const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
@@ -251,8 +260,8 @@ void sample_face(const Surface& s, size_t t, uint64_t first, uint64_t n, uint64_
         double s1, s2;
         rng.in_triangle(s1, s2);
         const double u = w0.u + s1 * (w1.u - w0.u) + s2 * (w2.u - w0.u), v = w0.v + s1 * (w1.v - w0.v) + s2 * (w2.v - w0.v);
-        points[index] = a + u * (b - a) + v * (c - a);
-        if (every && index % every == 0) (*picked)[index / every] = {uint32_t(t), u, v};
+        points[index - first] = a + u * (b - a) + v * (c - a);
+        if (every && index % every == 0) (*picked)[index / every - first_pick] = {uint32_t(t), u, v};
         ++index;
     };
     auto grid = [&](uint64_t i, uint64_t j) { return Weights{double(i) / double(m), double(j) / double(m)}; };
@@ -270,6 +279,18 @@ void sample_face(const Surface& s, size_t t, uint64_t first, uint64_t n, uint64_
     for (uint64_t i = m * m; i < n; ++i) random_in({0, 0}, {1, 0}, {0, 1});
 }
 
+// Each face's first face sample in first[t] (their count in first[T]): its expected share of
+// `remaining` by its area (area(t), of `total_area` in all), the fraction rounded at random.
+template <class Area>
+void face_sample_starts(const Surface& s, double remaining, double total_area, const DistanceParams& p, Area&& area, std::vector<uint64_t>& first) {
+    Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
+    first.assign(s.triangle_count + 1, 0);
+    for (size_t t = 0; t < s.triangle_count; ++t) {
+        const double expected = remaining * area(t) / total_area;
+        first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
+    }
+}
+
 // About `remaining` area-uniform points: each face gets its expected share, the fraction rounded
 // at random, then its points on the team (each face with its own generator: the same points
 // whatever the threads). Returns `every`, the picking stride among the face samples (0: none).
@@ -277,12 +298,8 @@ uint64_t sample_faces(const Surface& s, double remaining, const std::vector<doub
                       PickedFaceSamples* pick, uint64_t pick_count) {
     Samples& out = sink.out;
     const size_t base = out.points.size();
-    Random rounding{p.seed * 0x2545F4914F6CDD1DULL + s.triangle_count};
-    std::vector<uint64_t> first(s.triangle_count + 1, 0);  // each face's first sample
-    for (size_t t = 0; t < s.triangle_count; ++t) {
-        const double expected = remaining * areas[t] / out.area;
-        first[t + 1] = first[t] + uint64_t(expected + rounding.uniform());
-    }
+    std::vector<uint64_t> first;  // each face's first sample
+    face_sample_starts(s, remaining, out.area, p, [&](size_t t) { return areas[t]; }, first);
     out.points.resize(base + first.back());
     if (sink.with_faces) {
         sink.faces.resize(base + first.back());
@@ -300,12 +317,30 @@ uint64_t sample_faces(const Surface& s, double remaining, const std::vector<doub
         const size_t t0 = size_t(std::lower_bound(first.begin(), first.end() - 1, begin) - first.begin());
         const size_t t1 = size_t(std::lower_bound(first.begin(), first.end() - 1, end) - first.begin());
         for (size_t t = t0; t < t1; ++t)
-            if (first[t + 1] > first[t]) sample_face(s, t, first[t], first[t + 1] - first[t], p.seed, points, every, pick ? &pick->picked : nullptr);
+            if (first[t + 1] > first[t])
+                sample_face(s, t, first[t], first[t + 1] - first[t], p.seed, points + first[t], every, pick ? &pick->picked : nullptr);
     });
     return every;
 }
 
 } // namespace
+
+// out's points in Morton order (scratch.order: the permutation, when `with_faces`), each one's
+// face (scratch.faces, in the order made) carried along into out.faces when `with_faces`;
+// returns with_faces.
+static bool order_samples(Samples& out, MortonScratch& scratch, unsigned threads, bool with_faces) {
+    std::vector<uint32_t>& order = scratch.order;
+    order_morton(out.points, out.keys, out.extent, scratch, threads, with_faces ? &order : nullptr);
+    if (!with_faces) {
+        out.faces.clear();
+        return false;
+    }
+    out.faces.resize(order.size());
+    parallel_chunks(order.size(), threads, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out.faces[i] = scratch.faces[order[i]];
+    });
+    return true;
+}
 
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick,
                     uint64_t pick_count, bool with_faces) {
@@ -331,22 +366,156 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
     out.face = out.points.size() - out.vertex - out.edge;
 
     // Morton order, and each point's face (and pick) carried along
-    std::vector<uint32_t>& order = scratch.order;
-    order_morton(out.points, out.keys, out.extent, scratch, p.threads, with_faces ? &order : nullptr);
-    if (!with_faces) {
-        out.faces.clear();
-        return;
-    }
-    out.faces.resize(order.size());
-    parallel_chunks(order.size(), p.threads, [&](size_t, size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) out.faces[i] = scratch.faces[order[i]];
-    });
-    if (!pick) return;
+    if (!order_samples(out, scratch, p.threads, with_faces) || !pick) return;
+    const std::vector<uint32_t>& order = scratch.order;
     pick->of_point.resize(order.size());
     for (size_t i = 0; i < order.size(); ++i) {
         const bool picked = every && order[i] >= base && (order[i] - base) % every == 0;  // (index among the face samples)
         pick->of_point[i] = picked ? uint32_t((order[i] - base) / every) : PickedFaceSamples::kNotPicked;
     }
+}
+
+// The plan: which corner samples each vertex and which edge each edge (the first face and corner
+// that has it, as sample_vertices() and sample_edges() take them), each face's first face
+// sample, the faces in Morton order of their centroids, and the cuts between batches.
+SampleBatches::SampleBatches(const Surface& s, uint64_t target, const DistanceParams& p, uint64_t batch_samples, uint64_t pick_count)
+    : s_(s), p_(p) {
+    const size_t faces = s.triangle_count;
+    owns_.assign(faces, 0);
+    area = surface_area(s);
+    const double per_area = area > 0 ? double(target) / area : 0.0;
+    per_length_ = std::sqrt(per_area);
+    // the faces around each vertex, in face order (corner lists: 4 bytes a corner)
+    std::vector<uint32_t> start(size_t(s.vertex_count) + 1, 0), around(3 * faces);
+    for (size_t c = 0; c < 3 * faces; ++c) ++start[s.indices[c] + 1];
+    for (uint32_t v = 0; v < s.vertex_count; ++v) start[v + 1] += start[v];
+    {
+        std::vector<uint32_t> at(start.begin(), start.end() - 1);
+        for (size_t c = 0; c < 3 * faces; ++c) around[at[s.indices[c]]++] = uint32_t(c);
+    }
+    for (uint32_t v = 0; v < s.vertex_count; ++v)  // a used vertex: its first corner samples it
+        if (p.vertex_samples && start[v + 1] > start[v]) owns_[around[start[v]] / 3] |= uint8_t(1u << (around[start[v]] % 3)), ++vertex;
+    if (p.edge_samples && per_area > 0)
+        for (size_t t = 0; t < faces; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t a = s.indices[3 * t + size_t(k)], b = s.indices[3 * t + size_t(k + 1) % 3];
+                if (a == b) continue;  // (a point, no edge: no points along it)
+                // taken by an earlier corner of this face, or by an earlier face with both ends?
+                bool earlier = false;
+                for (int j = 0; j < k && !earlier; ++j) {
+                    const uint32_t x = s.indices[3 * t + size_t(j)], y = s.indices[3 * t + size_t(j + 1) % 3];
+                    earlier = (x == a && y == b) || (x == b && y == a);
+                }
+                for (uint32_t i = start[a]; i < start[a + 1] && !earlier; ++i) {
+                    const uint32_t f = around[i] / 3;
+                    if (f >= t) break;
+                    earlier = s.indices[3 * size_t(f)] == b || s.indices[3 * size_t(f) + 1] == b || s.indices[3 * size_t(f) + 2] == b;
+                }
+                if (earlier) continue;
+                owns_[t] |= uint8_t(8u << k);
+                edge += edge_points(detail::vertex(s, std::min(a, b)), detail::vertex(s, std::max(a, b)), per_length_, [](const V3&) {});
+            }
+    const double remaining = double(target) - double(vertex + edge);
+    if (p.face_samples && remaining > 0 && area > 0)
+        face_sample_starts(s, remaining, area, p, [&](size_t t) { return face_area(s, t); }, first_);
+    else
+        first_.assign(faces + 1, 0);
+    face = first_.back();
+    if (pick_count > 0 && face > 0) {
+        every_ = std::max<uint64_t>(1, uint64_t(std::llround(double(face) / double(pick_count))));
+        picked = (face + every_ - 1) / every_;
+    }
+    order_faces();
+    // the cuts: runs of faces in that order of about batch_samples samples each
+    cuts_.push_back(0);
+    uint64_t in_batch = 0;
+    for (size_t i = 0; i < faces; ++i) {
+        in_batch += samples_of(order_[i]);
+        if (in_batch >= batch_samples || i + 1 == faces) cuts_.push_back(i + 1), in_batch = 0;
+    }
+}
+
+uint64_t SampleBatches::samples_of(uint32_t t) const {
+    uint64_t n = first_[t + 1] - first_[t];
+    for (int k = 0; k < 3; ++k) {
+        if (owns_[t] >> k & 1u) ++n;
+        if (owns_[t] >> (3 + k) & 1u) {
+            const uint32_t a = s_.indices[3 * size_t(t) + size_t(k)], b = s_.indices[3 * size_t(t) + size_t(k + 1) % 3];
+            n += edge_points(detail::vertex(s_, std::min(a, b)), detail::vertex(s_, std::max(a, b)), per_length_, [](const V3&) {});
+        }
+    }
+    return n;
+}
+
+void SampleBatches::order_faces() {
+    const size_t faces = s_.triangle_count;
+    V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (size_t c = 0; c < 3 * faces; ++c) {
+        const V3 x = detail::vertex(s_, s_.indices[c]);
+        lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+        hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+    }
+    int index_bits = 1;
+    while (index_bits < 32 && (uint64_t(1) << index_bits) < faces) ++index_bits;
+    const int axis_bits = std::min(kMortonBits, (64 - index_bits) / 3);
+    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const double scale = extent > 0 ? double((1u << axis_bits) - 1) / extent : 0.0;
+    std::vector<uint64_t> words(faces), other;
+    for (size_t t = 0; t < faces; ++t) {
+        const V3 q = scale * ((1.0 / 3.0) * (corner(s_, t, 0) + corner(s_, t, 1) + corner(s_, t, 2)) - lo);
+        words[t] = (spread16(uint32_t(q.x)) << 2 | spread16(uint32_t(q.y)) << 1 | spread16(uint32_t(q.z))) << index_bits | t;
+    }
+    radix_sort(words, other, 3 * axis_bits, [index_bits](uint64_t w) { return w >> index_bits; }, p_.threads);
+    order_.resize(faces);
+    const uint64_t mask = (uint64_t(1) << index_bits) - 1;
+    for (size_t i = 0; i < faces; ++i) order_[i] = uint32_t(words[i] & mask);
+}
+
+void SampleBatches::make(size_t k, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick, bool with_faces) const {
+    with_faces = with_faces || pick;
+    out.points.clear();
+    scratch.faces.clear();
+    out.vertex = out.edge = out.face = 0;
+    out.area = 0;
+    std::vector<FaceSample> local_picks;
+    std::vector<uint32_t> pick_of;  // of each point made, its pick in local_picks or kNotPicked
+    for (size_t i = cuts_[k]; i < cuts_[k + 1]; ++i) {
+        const uint32_t t = order_[i];
+        out.area += face_area(s_, t);
+        auto add = [&](const V3& q) {
+            out.points.push_back(q);
+            if (with_faces) scratch.faces.push_back(t);
+            if (pick) pick_of.push_back(PickedFaceSamples::kNotPicked);
+        };
+        for (int c = 0; c < 3; ++c)
+            if (owns_[t] >> c & 1u) add(detail::vertex(s_, s_.indices[3 * size_t(t) + size_t(c)])), ++out.vertex;
+        for (int c = 0; c < 3; ++c)
+            if (owns_[t] >> (3 + c) & 1u) {
+                const uint32_t a = s_.indices[3 * size_t(t) + size_t(c)], b = s_.indices[3 * size_t(t) + size_t(c + 1) % 3];
+                out.edge += edge_points(detail::vertex(s_, std::min(a, b)), detail::vertex(s_, std::max(a, b)), per_length_, add);
+            }
+        const uint64_t n = first_[t + 1] - first_[t];
+        if (n == 0) continue;
+        const size_t base = out.points.size();
+        out.points.resize(base + n);
+        if (with_faces) scratch.faces.resize(base + n, t);
+        // this face's picks: the face samples numbered a multiple of every_
+        const uint64_t first_pick = every_ ? (first_[t] + every_ - 1) / every_ : 0, end_pick = every_ ? (first_[t + 1] + every_ - 1) / every_ : 0;
+        std::vector<FaceSample> face_picks(size_t(end_pick - first_pick));
+        sample_face(s_, t, first_[t], n, p_.seed, out.points.data() + base, pick ? every_ : 0, &face_picks, first_pick);
+        out.face += n;
+        if (!pick) continue;
+        pick_of.resize(base + n, PickedFaceSamples::kNotPicked);
+        for (uint64_t j = first_pick; j < end_pick; ++j) {
+            pick_of[base + (j * every_ - first_[t])] = uint32_t(local_picks.size());
+            local_picks.push_back(face_picks[size_t(j - first_pick)]);
+        }
+    }
+    if (!order_samples(out, scratch, p_.threads, with_faces) || !pick) return;
+    const std::vector<uint32_t>& order = scratch.order;
+    pick->picked.swap(local_picks);
+    pick->of_point.resize(order.size());
+    for (size_t i = 0; i < order.size(); ++i) pick->of_point[i] = pick_of[order[i]];
 }
 
 } // namespace tom::detail

@@ -86,4 +86,36 @@ struct PickedFaceSamples {
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch,
                     PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0, bool with_faces = true);
 
+// A surface's samples for one target count made a batch at a time, each about `batch_samples`
+// points: the samples of a run of faces in Morton order of their centroids (a compact part of
+// the surface, as the run search wants), each face with the vertices and edges it samples (the
+// first face that has each, as sample_surface() assigns them). Together the batches hold the
+// very points sample_surface() makes, in another order; and with `pick_count`, the same picks
+// (every every-th face sample by its number among them). About 13 bytes a face, where a whole
+// surface's samples take some 80 bytes a sample in flight.
+class SampleBatches {
+public:
+    SampleBatches(const Surface& s, uint64_t target, const DistanceParams& p, uint64_t batch_samples, uint64_t pick_count = 0);
+    size_t size() const { return cuts_.size() - 1; }
+    /// Batch k into `out` in Morton order (its buffers reused), the face of each point when
+    /// `with_faces`; with `pick`, the batch's picks (their numbers local to it) and of each point
+    /// its pick or kNotPicked.
+    void make(size_t k, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick = nullptr, bool with_faces = false) const;
+    uint64_t vertex = 0, edge = 0, face = 0, picked = 0;  ///< of all batches
+    double area = 0;
+
+private:
+    uint64_t samples_of(uint32_t t) const;
+    void order_faces();
+
+    Surface s_;
+    DistanceParams p_;
+    double per_length_ = 0;
+    uint64_t every_ = 0;             // the picking stride among the face samples (0: none)
+    std::vector<uint8_t> owns_;      // per face: bit k, corner k samples its vertex; bit 3 + k, edge k (corner k to k + 1) its points
+    std::vector<uint64_t> first_;    // per face: its first face sample's number (first_[faces]: their count)
+    std::vector<uint32_t> order_;    // the faces in Morton order of their centroids
+    std::vector<size_t> cuts_;       // batch k: order_[cuts_[k], cuts_[k + 1])
+};
+
 } // namespace tom::detail

@@ -63,6 +63,11 @@ struct DistanceParams {
     /// figures (the same exact distances); no attribute deviation (compare() with attributes
     /// takes the run search).
     bool compact_search = false;
+    /// A direction of more than 4 x this many samples is sampled and searched in batches of
+    /// about this many, each a compact part of the surface (its samples in flight take some 80
+    /// bytes each: a 2M-triangle report's 20M took 3.8 GB in all); the same samples, so the same
+    /// figures up to the order of their sums. 0: never in batches.
+    uint64_t batch_samples = uint64_t(1) << 20;
 };
 
 /// One direction: from the samples of one surface to the closest points of the other.
