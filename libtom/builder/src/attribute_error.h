@@ -49,6 +49,13 @@ public:
         const char* q = reinterpret_cast<const char*>(&quadric_[size_t(v) * stride_]);
         for (size_t byte = 0; byte < stride_ * sizeof(double); byte += 64) tom::detail::prefetch(q + byte);
     }
+    /// Frees the quadrics and values (every later cost is 0: inactive).
+    void release() noexcept {
+        TeamVector<double>().swap(quadric_);
+        std::vector<float>().swap(values_);
+        channels_ = 0;
+        stride_ = 0;
+    }
     /// v's quadric merges into u's (v -> u).
     void merge(uint32_t u, uint32_t v) noexcept;
 

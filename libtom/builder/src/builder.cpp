@@ -463,6 +463,23 @@ void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
     b.removed_target.reserve(b.n);
 }
 
+// What the substitutions no longer read goes before they run: the local copy's triangles (the
+// topology holds its own) and vertex streams other than normals (the attribute term holds its
+// scaled values); its positions and normals stay (the predicates read them). 12 bytes a
+// triangle of the build's peak, and more with texture coordinates or colours.
+void release_input_copy(LocalMesh& local) {
+    std::vector<uint32_t>().swap(local.mesh.indices);
+    for_each_attribute_stream(local.mesh, [](std::vector<float>& values, size_t, const char* name) {
+        if (std::string_view(name) != "normal") std::vector<float>().swap(values);
+    });
+}
+
+// The quadrics (about 270 bytes a vertex with normals) go before the output is assembled.
+void release_costs(Builder& b) {
+    detail::TeamVector<Quadric>().swap(b.quadric);
+    b.attributes.release();
+}
+
 // The record and the triangles' deaths back in the input's numbering.
 void to_input_numbering(Builder& b, const LocalMesh& local, detail::Team& team) {
     std::vector<uint8_t> removed(b.n);
@@ -594,11 +611,13 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
     b.attributes.init(local.mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
     find_pairs(b, params.pair_threshold, stats);
+    release_input_copy(local);
 
     if (params.strategy == Strategy::heap)
         run_heap(b);
     else
         run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), params.foresight, team, stats, params.progress);
+    release_costs(b);
 
     to_input_numbering(b, local, team);
     TomMesh out;
