@@ -137,6 +137,12 @@ struct Mesh3 {
     std::vector<uint32_t> triangle_of;   // record -> its triangle
     std::vector<uint32_t> slot;          // triangle -> its record
     explicit Mesh3(const Surface& s) {
+        build_hierarchy(s);
+        make_records(s);
+    }
+    // the leaf order and the four-way copy of CGAL's tree, which goes with its triangles before
+    // the records are made (they held some 150 bytes a triangle more at the peak)
+    void build_hierarchy(const Surface& s) {
         std::vector<Triangle> triangles;
         triangles.reserve(s.triangle_count);
         for (size_t t = 0; t < s.triangle_count; ++t)
@@ -149,23 +155,29 @@ struct Mesh3 {
             triangle_of.push_back(0);
         else
             each_leaf(root, [&](const Primitive& p) { triangle_of.push_back(uint32_t(p.id() - triangles.begin())); });
-        flat.reserve(triangles.size());
-        lines.reserve(triangles.size());
         slot.resize(triangles.size());
-        scale = std::sqrt(surface_area(s) / double(triangles.size()));
-        for (uint32_t i = 0; i < triangle_of.size(); ++i) {
-            const Triangle& t = triangles[triangle_of[i]];
-            flat.push_back(make_flat(v3(t[0]), v3(t[1]), v3(t[2])));
-            lines.push_back(edge_lines(flat.back()));
-            slot[triangle_of[i]] = i;
-        }
-        auto box = [this](const Part& part, V3& lo, V3& hi) {
-            if (part.count == 1)
-                lo = flat[part.first].lo, hi = flat[part.first].hi;
-            else
+        for (uint32_t i = 0; i < triangle_of.size(); ++i) slot[triangle_of[i]] = i;
+        auto box = [&](const Part& part, V3& lo, V3& hi) {
+            if (part.count == 1) {  // a leaf: its corners' box (as make_flat's)
+                const size_t t = triangle_of[part.first];
+                const V3 a = corner(s, t, 0), b = corner(s, t, 1), c = corner(s, t, 2);
+                lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
+                hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
+            } else {
                 lo = low(part.node->bbox()), hi = high(part.node->bbox());
+            }
         };
         wide.build(root, split, box);
+    }
+    // the Flat records and edge lines, in leaf order
+    void make_records(const Surface& s) {
+        flat.reserve(triangle_of.size());
+        lines.reserve(triangle_of.size());
+        scale = std::sqrt(surface_area(s) / double(triangle_of.size()));
+        for (const uint32_t t : triangle_of) {
+            flat.push_back(make_flat(corner(s, t, 0), corner(s, t, 1), corner(s, t, 2)));
+            lines.push_back(edge_lines(flat.back()));
+        }
     }
     double scale = 0;  // the side of a square of a triangle's mean area
     WideTree wide;
@@ -685,7 +697,7 @@ struct MetroReference::Impl {
     mutable std::deque<Forward> forward;  // by target count
     mutable std::vector<std::unique_ptr<Workspace>> idle;
     // (a small original's is made when first needed: a thread would cost more)
-    static constexpr size_t kOwnThreadTriangles = 4096;
+    static constexpr size_t kOwnThreadTriangles = 4096, kAwaitOriginalTriangles = size_t(1) << 19;
     Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a)
         : original(s), params(p), attributes(a), mesh(make_mesh(s, !p.compact_search)), compact(make_compact(s)), box(box_of(s)) {}
     // `early`: on a thread of its own from the start (else when first needed: a compact search's
@@ -751,6 +763,9 @@ struct MetroReference::Impl {
         if (params.compact_search && !deviation) return compare_compact(simplified, hints);
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
+        // a large level's structure is made once the original's is done: the two made at once
+        // held both their CGAL trees (a 10M-triangle report peaked at 8.7 GB)
+        if (simplified.triangle_count >= kAwaitOriginalTriangles) mesh.wait();
         const Mesh3 other(simplified);
         const Forward& f = forward_for(target);
         const bool normals = deviation && simplified_attributes.normals && attributes.normals,
