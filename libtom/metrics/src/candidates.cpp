@@ -149,15 +149,17 @@ EdgeLines edge_lines(const Flat& f) {
         if (!(len > 0)) continue;
         out = (1.0 / len) * out;
         if (dot(out, opposite - from) > 0) out = -1.0 * out;
-        lines.normal[k] = out;
-        lines.offset[k] = -dot(out, from);
+        lines.normals[k][0] = float(out.x), lines.normals[k][1] = float(out.y), lines.normals[k][2] = float(out.z);
+        lines.offset[k] = -dot(lines.normal(k), from);
     }
     return lines;
 }
 
 CandidateBound candidate_bound(const Flat& f, const EdgeLines& lines, V3 o, double spread) {
     CandidateBound b;
-    const V3 lo = f.lo - o, hi = f.hi - o;
+    V3 box_lo, box_hi;
+    flat_box(f, box_lo, box_hi);
+    const V3 lo = box_lo - o, hi = box_hi - o;
     float* c = b.c;
     c[0] = float(lo.x), c[1] = float(lo.y), c[2] = float(lo.z);
     c[3] = float(hi.x), c[4] = float(hi.y), c[5] = float(hi.z);
@@ -165,7 +167,7 @@ CandidateBound candidate_bound(const Flat& f, const EdgeLines& lines, V3 o, doub
     c[9] = float(f.offset + dot(f.normal, o));  // the plane through the triangle, which lies in the box
     for (int k = 0; k < 3; ++k) {
         float* m = c + 10 + 4 * k;
-        const V3 out = lines.normal[k];
+        const V3 out = lines.normal(k);
         m[0] = float(out.x), m[1] = float(out.y), m[2] = float(out.z), m[3] = float(lines.offset[k] + dot(out, o));
     }
     const double scale = std::max({spread, std::fabs(lo.x), std::fabs(lo.y), std::fabs(lo.z), std::fabs(hi.x), std::fabs(hi.y), std::fabs(hi.z)});

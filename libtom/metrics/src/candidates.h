@@ -35,11 +35,14 @@ struct CandidateBound {
 
 // The lines of a triangle's edges in its plane: unit normals in the plane pointing away from the
 // triangle, and offsets (the signed distance of p's projection beyond edge k is
-// normal[k].p + offset[k]; edge k runs from corner k to corner k + 1 of a, a + e0, a + e1).
-// All zero for a degenerate or sliver triangle, whose plane is not reliable.
+// normal(k).p + offset[k]; edge k runs from corner k to corner k + 1 of a, a + e0, a + e1).
+// All zero for a degenerate or sliver triangle, whose plane is not reliable. The normals are
+// floats (the bounds read them so) and each offset puts its float line through the edge's first
+// corner: 64 bytes a record where doubles took 96.
 struct EdgeLines {
-    V3 normal[3];
+    float normals[3][3];
     double offset[3];
+    V3 normal(int k) const { return {normals[k][0], normals[k][1], normals[k][2]}; }
 };
 EdgeLines edge_lines(const Flat& f);
 

@@ -19,7 +19,7 @@ inline V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
 
 // A target triangle as the search reads it: plane first (the cheapest lower bound), then corner
 // a, the edges from a, their Gram matrix with its inverse determinant and the inverse squared
-// lengths of the three edges (what distance2() needs), then the bounding box.
+// lengths of the three edges (what distance2() needs); its box is flat_box()'s.
 struct Flat {
     V3 normal;  // unit normal (zero for a degenerate triangle)
     double offset;
@@ -27,11 +27,20 @@ struct Flat {
     double d00, d01, d11;      // e0.e0, e0.e1, e1.e1
     double inverse;            // 1 / (d00 d11 - d01^2); NaN for a degenerate triangle (never inside)
     double i00, i11, i22;      // 1 / |e|^2 of each edge, e2 = c - b (0 for a zero-length one)
-    V3 lo, hi;
 };
 
 // The Gram determinant of the edges from a: (2 area)^2.
 inline double gram(const Flat& f) { return f.d00 * f.d11 - f.d01 * f.d01; }
+
+// The box of the corners a, a + e0, a + e1: the triangle's own box where the edges are exact
+// differences (of floats: a mesh's corners, unless their exponents lie some 29 apart), within a
+// rounding of it otherwise (which the bounds that read it are lowered by far more than). Made
+// when needed: 48 bytes a record less (a report holds millions).
+inline void flat_box(const Flat& f, V3& lo, V3& hi) {
+    const V3 b = f.a + f.e0, c = f.a + f.e1;
+    lo = {std::min({f.a.x, b.x, c.x}), std::min({f.a.y, b.y, c.y}), std::min({f.a.z, b.z, c.z})};
+    hi = {std::max({f.a.x, b.x, c.x}), std::max({f.a.y, b.y, c.y}), std::max({f.a.z, b.z, c.z})};
+}
 
 inline Flat make_flat(V3 a, V3 b, V3 c) {
     Flat f;
@@ -41,8 +50,6 @@ inline Flat make_flat(V3 a, V3 b, V3 c) {
     const double len = length(n);
     f.normal = len > 0 ? (1.0 / len) * n : V3{0, 0, 0};
     f.offset = -dot(f.normal, a);
-    f.lo = {std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-    f.hi = {std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
     f.d00 = dot(f.e0, f.e0), f.d01 = dot(f.e0, f.e1), f.d11 = dot(f.e1, f.e1);
     const double det = gram(f);
     f.inverse = len > 0 && det > 0 ? 1.0 / det : std::numeric_limits<double>::quiet_NaN();
