@@ -4,19 +4,21 @@
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
 # conversion and report times of tombuild, and one extraction through the C++, C and Python
 # APIs (scripts/bench-bindings.py). Stamped with the commit, the date and the CPU.
-# Usage: scripts/bench.sh [--quick] [--walk] [--scale] [OUT.md]
+# Usage: scripts/bench.sh [--quick] [--walk] [--scale | --large-report] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
 #   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test;
 #   --scale: also scripts/bench-scale.sh (a 10M-triangle conversion and a 2M report, about
-#   3 minutes and 7 GB)
+#   5 minutes and 3 GB); --large-report: --scale with the 10M-triangle mesh's report too
+#   (about 8 minutes more and 6 GB)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-quick=0; walk=0; scale=0
+quick=0; walk=0; scale=0; large_report=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1; shift ;;
     --walk) walk=1; shift ;;
     --scale) scale=1; shift ;;
+    --large-report) scale=1; large_report=--large-report; shift ;;
     *) break ;;
   esac
 done
@@ -59,7 +61,7 @@ folders_nocurve_s=$(echo "$(date +%s.%N) - $start" | bc)
 scale_table="$work/scale-table.txt"; : > "$scale_table"
 if [ $scale = 1 ]; then
   echo "bench: bench-scale" >&2
-  bash "$root/scripts/bench-scale.sh" > "$scale_table"
+  bash "$root/scripts/bench-scale.sh" $large_report > "$scale_table"
 fi
 walk_table="$work/walk-table.txt"; : > "$walk_table"
 if [ $walk = 1 ]; then
