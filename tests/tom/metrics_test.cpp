@@ -327,7 +327,7 @@ TEST_CASE("the compact search gives the run search's figures, with and without h
         sparse.max_samples = 4096;
         for (const tom::DistanceParams& params : {tom::DistanceParams{}, sparse}) {
             tom::DistanceParams compact_params = params;
-            compact_params.compact_search = true;
+            compact_params.compact_search_triangles = 1;  // (every surface: these are small)
             const tom::MetroReference run(surface(mesh), params);
             const tom::MetroReference compact(surface(mesh), compact_params);
             for (double fraction : {1.0, 0.3, 0.05, 0.005}) {

@@ -594,7 +594,7 @@ OneSidedDistance measure(const Samples& samples, const Mesh3& target, unsigned t
 }
 
 // One direction searched in a CompactTree, a descent for each sample from its hinted face and
-// the previous sample's nearest (DistanceParams::compact_search).
+// the previous sample's nearest (DistanceParams::compact_search_triangles).
 OneSidedDistance measure_compact(const Samples& samples, const CompactTree& target, unsigned threads,
                                  const std::function<uint32_t(uint32_t)>* hint, const char* which) {
     const size_t n = samples.points.size();
@@ -677,7 +677,7 @@ struct MetroReference::Impl {
     // compare() samples the original and searches its level meanwhile), shared by the references
     // made with with_params()
     std::shared_future<std::shared_ptr<const Mesh3>> mesh;
-    std::shared_future<std::shared_ptr<const CompactTree>> compact;  // (DistanceParams::compact_search; made when first needed)
+    std::shared_future<std::shared_ptr<const CompactTree>> compact;  // (DistanceParams::compact_search_triangles; made when first needed)
     Box box;  // of the original's corners
     mutable std::mutex lock;
     struct Forward {  // the original's samples for one target count, and the attribute samples picked from them
@@ -699,7 +699,11 @@ struct MetroReference::Impl {
     // (a small original's is made when first needed: a thread would cost more)
     static constexpr size_t kOwnThreadTriangles = 4096, kAwaitOriginalTriangles = size_t(1) << 19;
     Impl(const Surface& s, const DistanceParams& p, const SurfaceAttributes& a)
-        : original(s), params(p), attributes(a), mesh(make_mesh(s, !p.compact_search)), compact(make_compact(s)), box(box_of(s)) {}
+        : original(s), params(p), attributes(a), mesh(make_mesh(s, !compact_for(p, s))), compact(make_compact(s)), box(box_of(s)) {}
+    // whether `s`, searched, takes the compact tree (DistanceParams::compact_search_triangles)
+    static bool compact_for(const DistanceParams& p, const Surface& s) {
+        return p.compact_search_triangles > 0 && s.triangle_count >= p.compact_search_triangles;
+    }
     // `early`: on a thread of its own from the start (else when first needed: a compact search's
     // reference may never need it)
     static std::shared_future<std::shared_ptr<const Mesh3>> make_mesh(const Surface& s, bool early) {
@@ -760,7 +764,7 @@ struct MetroReference::Impl {
     Distance compare(const Surface& simplified, const SurfaceAttributes& simplified_attributes, AttributeDeviation* deviation,
                      const FaceHints* hints) const {
         validate(simplified, "simplified");
-        if (params.compact_search && !deviation) return compare_compact(simplified, hints);
+        if (params.compact_search_triangles > 0 && !deviation) return compare_compact(simplified, hints);
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
         // a large level's structure is made once the original's is done: the two made at once
@@ -827,19 +831,28 @@ struct MetroReference::Impl {
         return one_sided(sums, Counts::of(*f.batches));
     }
 
-    // compare() with DistanceParams::compact_search: the same samples, each searched on its own
+    // compare() with DistanceParams::compact_search_triangles, without the attribute deviation:
+    // the same samples, each surface searched in the structure its size calls for
     Distance compare_compact(const Surface& simplified, const FaceHints* hints) const {
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
-        const CompactTree other(simplified);
         const Forward& f = forward_for(target);
+        const std::function<uint32_t(uint32_t)>* forward_hint = hints ? &hints->original_to_simplified : nullptr;
+        const std::function<uint32_t(uint32_t)>* backward_hint = hints ? &hints->simplified_to_original : nullptr;
         Distance d;
-        d.forward = measure_compact(f.samples, other, params.threads, hints ? &hints->original_to_simplified : nullptr, "original_to_simplified");
+        if (compact_for(params, simplified))
+            d.forward = measure_compact(f.samples, CompactTree(simplified), params.threads, forward_hint, "original_to_simplified");
+        else
+            d.forward = measure(f.samples, Mesh3(simplified), params.threads, nullptr, nullptr, forward_hint, "original_to_simplified");
         std::unique_ptr<Workspace> work = borrow();
         sample_surface(simplified, backward_target, params, work->backward, work->scratch, nullptr, 0, hints != nullptr);
-        const std::shared_future<std::shared_ptr<const CompactTree>> original_tree = compact;  // (each caller its own copy)
-        d.backward = measure_compact(work->backward, *original_tree.get(), params.threads, hints ? &hints->simplified_to_original : nullptr,
-                                     "simplified_to_original");
+        if (compact_for(params, original)) {
+            const std::shared_future<std::shared_ptr<const CompactTree>> original_tree = compact;  // (each caller its own copy)
+            d.backward = measure_compact(work->backward, *original_tree.get(), params.threads, backward_hint, "simplified_to_original");
+        } else {
+            const std::shared_future<std::shared_ptr<const Mesh3>> original_mesh = mesh;
+            d.backward = measure(work->backward, *original_mesh.get(), params.threads, nullptr, nullptr, backward_hint, "simplified_to_original");
+        }
         give_back(std::move(work));
         d.hausdorff = std::max(d.forward.max, d.backward.max);
         d.diagonal = enlarged_union_diagonal(box, simplified);

@@ -252,7 +252,7 @@ static DistanceParams curve_distance_params(const ReportParams& params, size_t t
     const uint64_t floor = std::min(params.curve_min_samples, params.curve_samples);
     dp.max_samples = std::max<uint64_t>(1, std::min<uint64_t>(params.curve_samples, std::max<uint64_t>(floor, uint64_t(std::llround(wanted)))));
     dp.max_samples_per_sampled_face = params.curve_samples_per_level_face;
-    dp.compact_search = true;  // (a few thousand samples against up to the whole mesh)
+    dp.compact_search_triangles = uint64_t(1) << 18;  // (a few thousand samples against up to the whole mesh)
     return dp;
 }
 

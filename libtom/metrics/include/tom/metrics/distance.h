@@ -56,13 +56,15 @@ struct DistanceParams {
     /// forward direction's face samples (their nearest points serve both); where those are fewer
     /// than half that (vertices and long edges took the budget), face samples of its own
     double attribute_samples_per_face = 2.0;
-    /// Search each sample on its own in a compact tree over the surfaces' own arrays (about 16
-    /// bytes a triangle) instead of the run search's structure (about 330 bytes a triangle, made
-    /// in a CGAL tree): for a few thousand samples against large surfaces, as the error curve's,
-    /// where making that structure costs far more time and memory than the searches. The same
-    /// figures (the same exact distances); no attribute deviation (compare() with attributes
-    /// takes the run search).
-    bool compact_search = false;
+    /// A surface searched that has at least this many triangles (0: none) is searched sample by
+    /// sample in a compact tree over its own arrays (about 16 bytes a triangle) instead of the
+    /// run search's structure (about 270 bytes a triangle, made in a CGAL tree): for a few
+    /// thousand samples against large surfaces, as the error curve's (from 2^18 triangles), where
+    /// making that structure costs far more time and memory than the searches; below, the run
+    /// search is the faster (CAD parts' long thin triangles). The same figures (the same exact
+    /// distances); not with the attribute deviation (compare() with attributes takes the run
+    /// search).
+    uint64_t compact_search_triangles = 0;
     /// A direction of more than 4 x this many samples is sampled and searched in batches of
     /// about this many, each a compact part of the surface (its samples in flight take some 80
     /// bytes each: a 2M-triangle report's 20M took 3.8 GB in all); the same samples, so the same
