@@ -70,7 +70,8 @@ if as_json:
     print(json.dumps(out))
     sys.exit(0)
 c, n, r = out["with_curve"], out["without_curve"], out["report"]
-print(f"A generated sphere of {triangles:,} triangles as binary PLY (`scripts/bench-scale.sh {triangles} {report_triangles}`):\n")
+flag = " --large-report" if large else ""
+print(f"A generated sphere of {triangles:,} triangles as binary PLY (`scripts/bench-scale.sh{flag} {triangles} {report_triangles}`):\n")
 print("| measure | figure |\n|---|---|")
 print(f"| build / meshopt_simplify to 1% (tombench, same run) | {out['build_over_meshopt']:.2f}x ({bench['build_ms'] / 1000:.1f} s / {bench['meshopt_ms'] / 1000:.1f} s) |")
 for name, x in (("with the error curve", c), ("`--no-error-curve`", n)):

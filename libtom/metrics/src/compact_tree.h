@@ -3,9 +3,10 @@
 // few thousand points (the error curve's 4096 samples a direction against levels of up to
 // millions of triangles): triangles in Morton order of their centroids, split at the median
 // into nodes of one box each, leaves of up to kLeafTriangles. About 16 bytes a triangle where
-// the run search's Mesh3 holds some 330 (its Flat records, edge lines and a CGAL build), and
-// made in a radix sort and one pass: for so few points the structure, not the search, is the
-// cost. Internal to tom::metrics.
+// the run search's Mesh3 holds some 270 (its Flat records, edge lines and four-way tree, made
+// through a CGAL tree), and made in a radix sort and one pass: for so few points against a
+// large surface the structure, not the search, is the cost (DistanceParams::
+// compact_search_triangles says from what size). Internal to tom::metrics.
 //
 // Exact as the run search: the leaves' triangles are made into the same Flat records from the
 // same corners (make_flat), so a distance is the same double; among triangles at the same

@@ -75,7 +75,6 @@ inline float bits_float(uint32_t bits) {
     return f;
 }
 
-inline V3 v3(const Point& p) { return {p.x(), p.y(), p.z()}; }
 inline Point point(const Surface& s, uint32_t v) {
     const V3 p = vertex(s, v);
     return Point(p.x, p.y, p.z);
@@ -469,9 +468,6 @@ struct AttributeProbe {
     }
 };
 
-// One direction: the samples' distances to `target`; with `probe`, the attribute deviation at
-// its picked samples into `deviation`; with `hint` (face of the sampled surface -> a triangle of
-// `target` near it, or kNoRecord; `which` names it in errors), each search starts there too.
 // Of each sample, in order, the face `hint` gives for its own face (face of the sampled surface
 // -> a face of the target near it, or kNoRecord; asked once for each run of samples on one
 // face), checked against the target's `faces` (`which` names the hint in errors); empty
