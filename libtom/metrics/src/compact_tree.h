@@ -19,8 +19,7 @@
 #include <vector>
 
 #include "geometry.h"
-#include "morton.h"
-#include "radix_sort.h"
+#include "samples.h"
 #include "tom/metrics/distance.h"
 
 namespace tom::detail {
@@ -32,7 +31,7 @@ public:
 
     /// `s` must outlive the tree and have at least one triangle with indices in range.
     explicit CompactTree(const Surface& s) : s_(s) {
-        order_by_centroids();
+        order_ = faces_in_morton_order(s, 1);
         nodes_.reserve(2 * (s.triangle_count / kLeafTriangles + 1));
         add(0, uint32_t(s.triangle_count));
     }
@@ -100,32 +99,6 @@ private:
     static double box_d2(const Node& n, V3 p) {
         const double d = point_box_d2(p, {n.lo[0], n.lo[1], n.lo[2]}, {n.hi[0], n.hi[1], n.hi[2]});
         return d * (1.0 - 0x1p-40);
-    }
-
-    void order_by_centroids() {
-        const size_t n = s_.triangle_count;
-        V3 lo = {INFINITY, INFINITY, INFINITY}, hi = {-INFINITY, -INFINITY, -INFINITY};
-        for (size_t t = 0; t < n; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const V3 c = corner(uint32_t(t), k);
-                lo = {std::fmin(lo.x, c.x), std::fmin(lo.y, c.y), std::fmin(lo.z, c.z)};
-                hi = {std::fmax(hi.x, c.x), std::fmax(hi.y, c.y), std::fmax(hi.z, c.z)};
-            }
-        int index_bits = 1;
-        while (index_bits < 32 && (uint64_t(1) << index_bits) < n) ++index_bits;
-        const int axis_bits = std::min(16, (64 - index_bits) / 3);
-        const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-        const double scale = extent > 0 ? double((1u << axis_bits) - 1) / extent : 0.0;
-        std::vector<uint64_t> words(n), other;
-        for (size_t t = 0; t < n; ++t) {
-            const V3 c = (1.0 / 3.0) * (corner(uint32_t(t), 0) + corner(uint32_t(t), 1) + corner(uint32_t(t), 2));
-            const V3 q = scale * (c - lo);
-            words[t] = (spread16(uint32_t(q.x)) << 2 | spread16(uint32_t(q.y)) << 1 | spread16(uint32_t(q.z))) << index_bits | t;
-        }
-        radix_sort(words, other, 3 * axis_bits, [index_bits](uint64_t w) { return w >> index_bits; });
-        order_.resize(n);
-        const uint64_t mask = (uint64_t(1) << index_bits) - 1;
-        for (size_t i = 0; i < n; ++i) order_[i] = uint32_t(words[i] & mask);
     }
 
     // The subtree over order_[b, e), depth first; returns its node.

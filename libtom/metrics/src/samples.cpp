@@ -375,6 +375,31 @@ void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, 
     }
 }
 
+std::vector<uint32_t> faces_in_morton_order(const Surface& s, unsigned threads) {
+    const size_t faces = s.triangle_count;
+    V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
+    for (size_t c = 0; c < 3 * faces; ++c) {
+        const V3 x = vertex(s, s.indices[c]);
+        lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
+        hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
+    }
+    int index_bits = 1;
+    while (index_bits < 32 && (uint64_t(1) << index_bits) < faces) ++index_bits;
+    const int axis_bits = std::min(kMortonBits, (64 - index_bits) / 3);
+    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const double scale = extent > 0 ? double((1u << axis_bits) - 1) / extent : 0.0;
+    std::vector<uint64_t> words(faces), other;
+    for (size_t t = 0; t < faces; ++t) {
+        const V3 q = scale * ((1.0 / 3.0) * (corner(s, t, 0) + corner(s, t, 1) + corner(s, t, 2)) - lo);
+        words[t] = (spread16(uint32_t(q.x)) << 2 | spread16(uint32_t(q.y)) << 1 | spread16(uint32_t(q.z))) << index_bits | t;
+    }
+    radix_sort(words, other, 3 * axis_bits, [index_bits](uint64_t w) { return w >> index_bits; }, threads);
+    std::vector<uint32_t> order(faces);
+    const uint64_t mask = (uint64_t(1) << index_bits) - 1;
+    for (size_t i = 0; i < faces; ++i) order[i] = uint32_t(words[i] & mask);
+    return order;
+}
+
 // The plan: which corner samples each vertex and which edge each edge (the first face and corner
 // that has it, as sample_vertices() and sample_edges() take them), each face's first face
 // sample, the faces in Morton order of their centroids, and the cuts between batches.
@@ -425,7 +450,7 @@ SampleBatches::SampleBatches(const Surface& s, uint64_t target, const DistancePa
         every_ = std::max<uint64_t>(1, uint64_t(std::llround(double(face) / double(pick_count))));
         picked = (face + every_ - 1) / every_;
     }
-    order_faces();
+    order_ = faces_in_morton_order(s, p.threads);
     // the cuts: runs of faces in that order of about batch_samples samples each
     cuts_.push_back(0);
     uint64_t in_batch = 0;
@@ -447,37 +472,13 @@ uint64_t SampleBatches::samples_of(uint32_t t) const {
     return n;
 }
 
-void SampleBatches::order_faces() {
-    const size_t faces = s_.triangle_count;
-    V3 lo = {1e300, 1e300, 1e300}, hi = {-1e300, -1e300, -1e300};
-    for (size_t c = 0; c < 3 * faces; ++c) {
-        const V3 x = detail::vertex(s_, s_.indices[c]);
-        lo = {std::min(lo.x, x.x), std::min(lo.y, x.y), std::min(lo.z, x.z)};
-        hi = {std::max(hi.x, x.x), std::max(hi.y, x.y), std::max(hi.z, x.z)};
-    }
-    int index_bits = 1;
-    while (index_bits < 32 && (uint64_t(1) << index_bits) < faces) ++index_bits;
-    const int axis_bits = std::min(kMortonBits, (64 - index_bits) / 3);
-    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-    const double scale = extent > 0 ? double((1u << axis_bits) - 1) / extent : 0.0;
-    std::vector<uint64_t> words(faces), other;
-    for (size_t t = 0; t < faces; ++t) {
-        const V3 q = scale * ((1.0 / 3.0) * (corner(s_, t, 0) + corner(s_, t, 1) + corner(s_, t, 2)) - lo);
-        words[t] = (spread16(uint32_t(q.x)) << 2 | spread16(uint32_t(q.y)) << 1 | spread16(uint32_t(q.z))) << index_bits | t;
-    }
-    radix_sort(words, other, 3 * axis_bits, [index_bits](uint64_t w) { return w >> index_bits; }, p_.threads);
-    order_.resize(faces);
-    const uint64_t mask = (uint64_t(1) << index_bits) - 1;
-    for (size_t i = 0; i < faces; ++i) order_[i] = uint32_t(words[i] & mask);
-}
-
 void SampleBatches::make(size_t k, Samples& out, MortonScratch& scratch, PickedFaceSamples* pick, bool with_faces) const {
     with_faces = with_faces || pick;
     out.points.clear();
     scratch.faces.clear();
     out.vertex = out.edge = out.face = 0;
     out.area = 0;
-    std::vector<FaceSample> local_picks;
+    std::vector<FaceSample> local_picks, face_picks;  // the batch's picks; one face's
     std::vector<uint32_t> pick_of;  // of each point made, its pick in local_picks or kNotPicked
     for (size_t i = cuts_[k]; i < cuts_[k + 1]; ++i) {
         const uint32_t t = order_[i];
@@ -501,7 +502,7 @@ void SampleBatches::make(size_t k, Samples& out, MortonScratch& scratch, PickedF
         if (with_faces) scratch.faces.resize(base + n, t);
         // this face's picks: the face samples numbered a multiple of every_
         const uint64_t first_pick = every_ ? (first_[t] + every_ - 1) / every_ : 0, end_pick = every_ ? (first_[t + 1] + every_ - 1) / every_ : 0;
-        std::vector<FaceSample> face_picks(size_t(end_pick - first_pick));
+        face_picks.resize(size_t(end_pick - first_pick));
         sample_face(s_, t, first_[t], n, p_.seed, out.points.data() + base, pick ? every_ : 0, &face_picks, first_pick);
         out.face += n;
         if (!pick) continue;

@@ -86,6 +86,11 @@ struct PickedFaceSamples {
 void sample_surface(const Surface& s, uint64_t target, const DistanceParams& p, Samples& out, MortonScratch& scratch,
                     PickedFaceSamples* pick = nullptr, uint64_t pick_count = 0, bool with_faces = true);
 
+// The faces of s in Morton order of their centroids, over the box of its corners (a 2^16 grid a
+// side, coarser where the face index needs more than 16 of a word's 64 bits), ties by face;
+// `threads` as parallel_chunks. (The compact tree's leaves and the sample batches' runs.)
+std::vector<uint32_t> faces_in_morton_order(const Surface& s, unsigned threads);
+
 // A surface's samples for one target count made a batch at a time, each about `batch_samples`
 // points: the samples of a run of faces in Morton order of their centroids (a compact part of
 // the surface, as the run search wants), each face with the vertices and edges it samples (the
@@ -106,7 +111,6 @@ public:
 
 private:
     uint64_t samples_of(uint32_t t) const;
-    void order_faces();
 
     Surface s_;
     DistanceParams p_;
