@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, AddressSanitizer, UBSan) in build-fuzz/ and runs one, or
-# all in turn, for as long as asked, from its seed corpus (tests/fuzz/corpus/TARGET, plus seeds
-# made from the sample meshes when data/ holds them) with its format's dictionary.
+# all (as many side by side as there are cores), each for as long as asked, from its seed corpus
+# (tests/fuzz/corpus/TARGET, plus seeds made from the sample meshes when data/ holds them) with
+# its format's dictionary.
 # Usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]
 #        scripts/fuzz.sh list
 # A finding ends the run with a non-zero exit and leaves the input in build-fuzz/findings/.
@@ -41,6 +42,7 @@ seed() {
   case "$t" in
     reader_fuzz|capi_fuzz)
       if [ -x "$tools/tombuild" ] && [ ! -f "$corpus/grid64-32bit.tom" ]; then
+        mkdir -p "$build/seed-$t"  # a folder per target: runs side by side
         /usr/bin/python3 -c "
 n = 64
 print('OFF'); print(n * n, 2 * (n - 1) * (n - 1), 0)
@@ -48,8 +50,8 @@ for j in range(n):
     for i in range(n): print(i, j, (i * 7 + j * 3) % 5 * 0.1)
 for j in range(n - 1):
     for i in range(n - 1):
-        a = j * n + i; print(3, a, a + 1, a + n + 1); print(3, a, a + n + 1, a + n)" > "$build/grid64-32bit.off"
-        "$tools/tombuild" "$build/grid64-32bit.off" -o "$corpus" -q --index-size 32
+        a = j * n + i; print(3, a, a + 1, a + n + 1); print(3, a, a + n + 1, a + n)" > "$build/seed-$t/grid64-32bit.off"
+        "$tools/tombuild" "$build/seed-$t/grid64-32bit.off" -o "$corpus" -q --index-size 32
       fi ;;
     import_gltf_fuzz)
       if [ -f "$data/assimp/glTF2/draco/2CylinderEngine.gltf" ] && [ ! -f "$corpus/draco-embedded.gltf" ]; then
@@ -68,11 +70,18 @@ json.dump(d, open(sys.argv[3], 'w'))" "$data/assimp/glTF2/draco/2CylinderEngine.
   esac
 }
 
+# one target's run; its summary goes to $build/findings/TARGET.summary (printed by the caller, in
+# target order, so that runs side by side do not interleave their lines)
 run() {
   local t="$1"; shift
   seed "$t"
   mkdir -p "$build/findings/$t"
-  echo "fuzz: $t for $seconds s"
+  local status=0
+  { echo "fuzz: $t for $seconds s"; run_target "$t" "$@" || status=$?; } > "$build/findings/$t.summary" 2>&1
+  return $status
+}
+run_target() {
+  local t="$1"; shift
   # -malloc_limit_mb: an allocation of more than this from an input of a few KB is a finding
   "$build/tests/fuzz/$t" "$build/corpus/$t" -dict="$root/tests/fuzz/dict/$(dict_of "$t").dict" -max_total_time="$seconds" \
     -rss_limit_mb=2048 -malloc_limit_mb=512 -timeout=20 -max_len=65536 -print_final_stats=1 \
@@ -86,9 +95,17 @@ run() {
 export LSAN_OPTIONS="suppressions=$root/tests/fuzz/lsan.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 status=0
-if [ "$target" = all ]; then
-  for t in "${targets[@]}"; do run "$t" "$@" || status=1; done
-else
-  run "$target" "$@" || status=1
-fi
+# each libFuzzer run takes one core: "all" runs as many side by side as the machine has cores,
+# each for the full time asked
+if [ "$target" = all ]; then chosen=("${targets[@]}"); else chosen=("$target"); fi
+width=$(nproc)
+for ((first = 0; first < ${#chosen[@]}; first += width)); do
+  group=("${chosen[@]:first:width}")
+  pids=()
+  for t in "${group[@]}"; do run "$t" "$@" & pids+=($!); done
+  for k in "${!group[@]}"; do
+    wait "${pids[$k]}" || status=1
+    cat "$build/findings/${group[$k]}.summary"
+  done
+done
 exit $status
