@@ -32,6 +32,20 @@ build_and_test() {  # build_and_test FOLDER CMAKE_OPTIONS...
   (cd "$dir" && ctest --output-on-failure -j "$(nproc)" | tail -n 3)
 }
 
+# The private wine prefix, made once, quietly. wineboot can return before the prefix is
+# populated, or leave it half-made when interrupted: wait for its wineserver to exit, check that
+# the prefix holds kernel32.dll, and make it again once when it does not.
+make_wine_prefix() {
+  local dll="$WINEPREFIX/drive_c/windows/system32/kernel32.dll" attempt
+  for attempt in 1 2; do
+    [ -f "$dll" ] && return 0
+    rm -rf "$WINEPREFIX"
+    /usr/lib/wine/wine64 wineboot --init >/dev/null 2>&1 || true
+    /usr/lib/wine/wineserver64 -w || true
+  done
+  [ -f "$dll" ] || { echo "portable.sh: wineboot did not make a usable prefix in $WINEPREFIX (no kernel32.dll)" >&2; exit 1; }
+}
+
 if [ "$which" = both ] || [ "$which" = clang ]; then
   build_and_test clang -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++
 fi
@@ -39,6 +53,6 @@ if [ "$which" = both ] || [ "$which" = windows ]; then
   [ -x /usr/lib/wine/wine64 ] && command -v x86_64-w64-mingw32-g++-posix >/dev/null || {
     echo "portable.sh: mingw-w64 or wine64 is missing: run scripts/install-deps.sh" >&2; exit 1; }
   export WINEPREFIX="$out/wine" WINEDEBUG=-all WINEDLLOVERRIDES="mscoree,mshtml="
-  [ -d "$WINEPREFIX" ] || /usr/lib/wine/wine64 wineboot --init >/dev/null 2>&1 || true  # the prefix, made once, quietly
+  make_wine_prefix
   build_and_test windows -DCMAKE_TOOLCHAIN_FILE="$root/cmake/mingw-w64-x86_64.cmake"
 fi
