@@ -42,7 +42,6 @@ seed() {
   case "$t" in
     reader_fuzz|capi_fuzz)
       if [ -x "$tools/tombuild" ] && [ ! -f "$corpus/grid64-32bit.tom" ]; then
-        mkdir -p "$build/seed-$t"  # a folder per target: runs side by side
         /usr/bin/python3 -c "
 n = 64
 print('OFF'); print(n * n, 2 * (n - 1) * (n - 1), 0)
@@ -50,8 +49,8 @@ for j in range(n):
     for i in range(n): print(i, j, (i * 7 + j * 3) % 5 * 0.1)
 for j in range(n - 1):
     for i in range(n - 1):
-        a = j * n + i; print(3, a, a + 1, a + n + 1); print(3, a, a + n + 1, a + n)" > "$build/seed-$t/grid64-32bit.off"
-        "$tools/tombuild" "$build/seed-$t/grid64-32bit.off" -o "$corpus" -q --index-size 32
+        a = j * n + i; print(3, a, a + 1, a + n + 1); print(3, a, a + n + 1, a + n)" > "$build/grid64-32bit.off"
+        "$tools/tombuild" "$build/grid64-32bit.off" -o "$corpus" -q --index-size 32
       fi ;;
     import_gltf_fuzz)
       if [ -f "$data/assimp/glTF2/draco/2CylinderEngine.gltf" ] && [ ! -f "$corpus/draco-embedded.gltf" ]; then
@@ -70,11 +69,10 @@ json.dump(d, open(sys.argv[3], 'w'))" "$data/assimp/glTF2/draco/2CylinderEngine.
   esac
 }
 
-# one target's run; its summary goes to $build/findings/TARGET.summary (printed by the caller, in
-# target order, so that runs side by side do not interleave their lines)
+# one target's run, from its seeded corpus; its summary goes to $build/findings/TARGET.summary
+# (printed by the caller, in target order, so that runs side by side do not interleave their lines)
 run() {
   local t="$1"; shift
-  seed "$t"
   mkdir -p "$build/findings/$t"
   local status=0
   { echo "fuzz: $t for $seconds s"; run_target "$t" "$@" || status=$?; } > "$build/findings/$t.summary" 2>&1
@@ -98,6 +96,7 @@ status=0
 # each libFuzzer run takes one core: "all" runs as many side by side as the machine has cores,
 # each for the full time asked
 if [ "$target" = all ]; then chosen=("${targets[@]}"); else chosen=("$target"); fi
+for t in "${chosen[@]}"; do seed "$t"; done  # one after another: two targets make the same seed file
 width=$(nproc)
 for ((first = 0; first < ${#chosen[@]}; first += width)); do
   group=("${chosen[@]:first:width}")
