@@ -42,6 +42,7 @@ Frame frame(D3 p0, D3 p1, D3 p2) {
 void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team& team) {
     channels_ = 0;
     values_.clear();
+    normals_ = nullptr;
     quadric_.clear();
     const uint32_t n = mesh.vertex_count(), m = mesh.triangle_count();
     if (!(weight > 0) || n == 0 || m == 0) return;
@@ -93,8 +94,13 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     // normal weight that keeps the geometric error of a hard-edged CAD mesh below
     // meshopt_simplify's, and the UV weight past which the texture displacement stops falling.
     constexpr double normal_scale = 0.015, uv_weight = 0.3, color_scale = 0.1;
-    values_.resize(size_t(n) * size_t(channels_));
-    for (uint32_t v = 0; v < n; ++v) {
+    if (channels_ == 3 && normals) {
+        normals_ = mesh.normals.data();
+        normal_factor_ = weight * normal_scale * h;  // (weight * normal_scale * h) * normal below: the same value
+    } else {
+        values_.resize(size_t(n) * size_t(channels_));
+    }
+    for (uint32_t v = 0; v < n && !normals_; ++v) {
         float* out = &values_[size_t(v) * size_t(channels_)];
         int k = 0;
         if (normals)
@@ -107,7 +113,6 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
     if (!accumulate) return;
     stride_ = 11 + 4 * size_t(channels_);
     zero_on_team(team, quadric_, size_t(n) * stride_);
-    const float* values = values_.data();
     double* quadric = quadric_.data();
     auto scatter = [&](auto channel_count) {  // the channel count a constant where it is common: unrolled sums, the same in the same order
         constexpr int kC = decltype(channel_count)::value;
@@ -120,10 +125,12 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
             double q[kMaxStride] = {};
             const double w = f.area;
             q[0] = w;
+            float scaled[3][kMaxChannels];
+            const float* a[3] = {values(c[0], scaled[0]), values(c[1], scaled[1]), values(c[2], scaled[2])};
             for (int j = 0; j < channels; ++j) {
-                const double a0 = values[size_t(c[0]) * size_t(channels) + size_t(j)];
-                const double d1 = values[size_t(c[1]) * size_t(channels) + size_t(j)] - a0;
-                const double d2 = values[size_t(c[2]) * size_t(channels) + size_t(j)] - a0;
+                const double a0 = a[0][j];
+                const double d1 = a[1][j] - a0;
+                const double d2 = a[2][j] - a0;
                 const D3 g = {d1 * f.r1.x + d2 * f.r2.x, d1 * f.r1.y + d2 * f.r2.y, d1 * f.r1.z + d2 * f.r2.z};
                 const double d = a0 - dot(g, f.p0);
                 // sum over channels of w (g.p + d)^2 = p^T (w g g^T) p + 2 (w d g).p + w d^2
@@ -161,11 +168,12 @@ double AttributeError::triangle_error(const float* positions, uint32_t i0, uint3
     const D3 pu = at(positions, u);
     const D3 rel = sub(pu, f.p0);
     const double l1 = dot(rel, f.r1), l2 = dot(rel, f.r2);  // the field's barycentric weights of corners 1 and 2 at p_u
+    float scaled[4][kMaxChannels];
+    const float *a0 = values(i0, scaled[0]), *a1 = values(i1, scaled[1]), *a2 = values(i2, scaled[2]), *au = values(u, scaled[3]);
     double e = 0;
     for (int j = 0; j < channels_; ++j) {
-        const double a0 = values_[size_t(i0) * size_t(channels_) + size_t(j)];
-        const double field = a0 + l1 * (values_[size_t(i1) * size_t(channels_) + size_t(j)] - a0) + l2 * (values_[size_t(i2) * size_t(channels_) + size_t(j)] - a0);
-        const double r = field - values_[size_t(u) * size_t(channels_) + size_t(j)];
+        const double field = a0[j] + l1 * (double(a1[j]) - a0[j]) + l2 * (double(a2[j]) - a0[j]);
+        const double r = field - au[j];
         e += r * r;
     }
     return e;

@@ -26,7 +26,9 @@ public:
     /// surface length), normals and colours by the mean edge length, each by a measured relative
     /// weight (see the .cpp); all by `weight`.
     /// Inactive (every cost 0) when weight <= 0 or the mesh has none of the streams.
-    /// `team` shares the accumulation (bit-identical sums whatever its size).
+    /// `team` shares the accumulation (bit-identical sums whatever its size). With normals alone
+    /// the costs read `mesh.normals` (6 bytes a triangle less than a scaled copy), which must
+    /// then stay as they are until release().
     void init(const Mesh& mesh, float weight, bool accumulate, Team& team);
     bool active() const noexcept { return channels_ > 0; }
     int channels() const noexcept { return channels_; }
@@ -36,7 +38,8 @@ public:
     double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept {
         if (quadric_.empty()) return 0.0;
         const double* q = &quadric_[size_t(v) * stride_];
-        const float* a = &values_[size_t(u) * size_t(channels_)];
+        float scaled[kMaxChannels];
+        const float* a = values(u, scaled);
         switch (channels_) {  // the common layouts unrolled (the same sums in the same order)
         case 3: return evaluate<3>(q, position_u, a);        // normals
         case 5: return evaluate<5>(q, position_u, a);        // normals, TEXCOORD_0
@@ -53,6 +56,7 @@ public:
     void release() noexcept {
         TeamVector<double>().swap(quadric_);
         std::vector<float>().swap(values_);
+        normals_ = nullptr;
         channels_ = 0;
         stride_ = 0;
     }
@@ -64,6 +68,14 @@ public:
     double triangle_error(const float* positions, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t u) const noexcept;
 
 private:
+    // u's scaled attributes: its row of values_, or, with normals alone, made in `scratch` from
+    // the mesh's normals with the same operations in the same order as values_ would hold them
+    const float* values(uint32_t u, float* scratch) const noexcept {
+        if (!normals_) return &values_[size_t(u) * size_t(channels_)];
+        for (int j = 0; j < 3; ++j) scratch[j] = float(normal_factor_ * normals_[3 * size_t(u) + size_t(j)]);
+        return scratch;
+    }
+
     // v's quadric q at position p with attributes a, per unit area; C channels (0: channels_)
     template <int C>
     double evaluate(const double* q, const float* p, const float* a) const noexcept {
@@ -80,10 +92,13 @@ private:
     }
 
     int channels_ = 0;
-    std::vector<float> values_;    // channels_ per vertex, scaled
+    std::vector<float> values_;    // channels_ per vertex, scaled; empty with normals alone:
+    const float* normals_ = nullptr;  // then the mesh's normals (3 per vertex), which init()'s
+    double normal_factor_ = 0;        // caller keeps while it evaluates, scaled by this factor
     TeamVector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
     size_t stride_ = 0;
-    static constexpr size_t kMaxStride = 11 + 4 * 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
+    static constexpr int kMaxChannels = 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
+    static constexpr size_t kMaxStride = 11 + 4 * size_t(kMaxChannels);
 };
 
 } // namespace tom::detail

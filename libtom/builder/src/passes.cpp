@@ -16,8 +16,10 @@
 
 #include "passes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "radix_sort.h"
 #include "substitution.h"
@@ -34,11 +36,11 @@ inline uint32_t cost_bits(const Candidate& c) {
     return bits;
 }
 
-// Splits [0, count) in order: make(i) goes to `first` where which(i) is 1, to `second` where it
-// is 2, nowhere where 0. The team counts and then places fixed blocks, so the order is the same
-// whatever its size.
-template <class T, class Which, class Make>
-void split_in_order(detail::Team& team, size_t count, Which&& which, Make&& make, std::vector<T>& first, std::vector<T>& second) {
+// Splits [0, count) in order: make(i) goes to the first list where which(i) is 1, to the second
+// where it is 2, nowhere where 0; place(ones, twos) returns where the two lists start. The team
+// counts and then places fixed blocks, so the order is the same whatever its size.
+template <class T, class Which, class Make, class Place>
+void split_in_order_to(detail::Team& team, size_t count, Which&& which, Make&& make, Place&& place_lists) {
     constexpr size_t kBlock = 8192;
     std::vector<size_t> place(2 * ((count + kBlock - 1) / kBlock));  // per block: its first places in first and second
     team.blocks(count, kBlock, [&](unsigned, size_t begin, size_t end) {
@@ -56,8 +58,9 @@ void split_in_order(detail::Team& team, size_t count, Which&& which, Make&& make
         ones += std::exchange(place[k], ones);
         twos += std::exchange(place[k + 1], twos);
     }
-    first.resize(ones);
-    second.resize(twos);
+    const std::pair<T*, T*> lists = place_lists(ones, twos);
+    T* const first = lists.first;
+    T* const second = lists.second;
     team.blocks(count, kBlock, [&](unsigned, size_t begin, size_t end) {
         size_t one = place[2 * (begin / kBlock)], two = place[2 * (begin / kBlock) + 1];
         for (size_t i = begin; i < end; ++i) {
@@ -65,6 +68,16 @@ void split_in_order(detail::Team& team, size_t count, Which&& which, Make&& make
             if (w == 1) first[one++] = make(i);
             else if (w == 2) second[two++] = make(i);
         }
+    });
+}
+
+// split_in_order_to() into two vectors
+template <class T, class Which, class Make>
+void split_in_order(detail::Team& team, size_t count, Which&& which, Make&& make, std::vector<T>& first, std::vector<T>& second) {
+    split_in_order_to<T>(team, count, which, make, [&](size_t ones, size_t twos) {
+        first.resize(ones);
+        second.resize(twos);
+        return std::pair<T*, T*>(first.data(), second.data());
     });
 }
 
@@ -77,19 +90,24 @@ void sort_candidates(std::vector<Candidate>& items, std::vector<Candidate>& tmp,
 }
 
 // The candidates of a pass in the order the loop takes them: the cheapest `keep` (at least: whole
-// buckets) sorted, then the others in their original order. Sorted in two steps, as the loop
-// reaches them: sort_cheapest() sorts the cheapest `first` (at least) to the front of `items` and
-// moves the others, in order, to `rest`, returning the last bucket of the cheapest `keep`;
-// sort_next(), once the loop has passed the front, appends the rest up to that bucket, sorted,
-// and then the others. For the part the loop reaches this is the order of one full sort (buckets
-// follow costs; equal costs share a bucket and keep their order); a pass rarely needs more than
-// twice its quota, since independence rejects some candidates. Stable, deterministic.
-uint32_t sort_cheapest(std::vector<Candidate>& items, size_t first, size_t keep, std::vector<Candidate>& tmp, std::vector<Candidate>& rest,
+// buckets) sorted, then the others in their original order. One list, sorted in two steps as
+// the loop reaches them: sort_cheapest() puts the candidates make(i) for i in [0, count) where
+// has(i) in `items`, the cheapest `first` (at least) sorted at the front and the others after
+// them in order, and returns the last bucket of the cheapest `keep`; sort_next(), once the loop
+// has passed the front, sorts the tail up to that bucket in place, the others staying after it
+// in order. For the part the loop reaches this is the order of one full sort (buckets follow
+// costs; equal costs share a bucket and keep their order); a pass rarely needs more than twice
+// its quota, since independence rejects some candidates. Stable, deterministic. The candidates
+// are never held twice: the scratch is the size of the part being sorted, which keeps a large
+// mesh's first passes (10^7 triangles: the peak of the build) about 10 bytes a triangle lower.
+template <class Has, class Make>
+uint32_t sort_cheapest(size_t count, Has&& has, Make&& make, size_t first, size_t keep, std::vector<Candidate>& items, size_t& front,
                        detail::Team& team) {
     std::vector<uint32_t> hists(size_t(team.size()) * 2048, 0);  // per team thread (counts: their sum is the same)
-    team.blocks(items.size(), 8192, [&](unsigned worker, size_t begin, size_t end) {
+    team.blocks(count, 8192, [&](unsigned worker, size_t begin, size_t end) {
         uint32_t* hist = &hists[size_t(worker) * 2048];
-        for (size_t i = begin; i < end; ++i) ++hist[cost_bucket(items[i])];
+        for (size_t i = begin; i < end; ++i)
+            if (has(i)) ++hist[cost_bucket(make(i))];
     });
     uint32_t limit_first = 2047, limit_keep = 2047;
     size_t sum = 0;
@@ -103,18 +121,32 @@ uint32_t sort_cheapest(std::vector<Candidate>& items, size_t first, size_t keep,
         }
     }
     limit_first = std::min(limit_first, limit_keep);
-    split_in_order(team, items.size(), [&](size_t i) { return cost_bucket(items[i]) <= limit_first ? 1 : 2; }, [&](size_t i) { return items[i]; }, tmp, rest);
-    items.swap(tmp);
-    sort_candidates(items, tmp, team);
+    std::vector<Candidate> head, tmp;
+    split_in_order_to<Candidate>(team, count, [&](size_t i) { return has(i) ? (cost_bucket(make(i)) <= limit_first ? 1 : 2) : 0; }, make,
+                                 [&](size_t ones, size_t twos) {
+                                     head.resize(ones);
+                                     items.resize(ones + twos);
+                                     return std::pair<Candidate*, Candidate*>(head.data(), items.data() + ones);
+                                 });
+    sort_candidates(head, tmp, team);
+    std::copy(head.begin(), head.end(), items.begin());
+    front = head.size();
     return limit_keep;
 }
-void sort_next(std::vector<Candidate>& items, std::vector<Candidate>& rest, uint32_t limit_keep, std::vector<Candidate>& tmp, detail::Team& team) {
-    std::vector<Candidate> next, others;
-    split_in_order(team, rest.size(), [&](size_t i) { return cost_bucket(rest[i]) <= limit_keep ? 1 : 2; }, [&](size_t i) { return rest[i]; }, next, others);
+void sort_next(std::vector<Candidate>& items, size_t& front, uint32_t limit_keep, detail::Team& team) {
+    size_t next_count = 0;
+    for (size_t i = front; i < items.size(); ++i) next_count += cost_bucket(items[i]) <= limit_keep;
+    std::vector<Candidate> next, tmp;
+    next.reserve(next_count);
+    size_t others_end = front;  // the others move up, in order, then to the end
+    for (size_t i = front; i < items.size(); ++i) {
+        if (cost_bucket(items[i]) <= limit_keep) next.push_back(items[i]);
+        else items[others_end++] = items[i];
+    }
+    std::copy_backward(items.begin() + ptrdiff_t(front), items.begin() + ptrdiff_t(others_end), items.end());
     sort_candidates(next, tmp, team);
-    items.insert(items.end(), next.begin(), next.end());
-    items.insert(items.end(), others.begin(), others.end());
-    rest.clear();
+    std::copy(next.begin(), next.end(), items.begin() + ptrdiff_t(front));
+    front = items.size();
 }
 
 // Runs f(i, scratch) for i in [0, count) on the team's threads (the caller's with `own`, each
@@ -159,9 +191,8 @@ struct PassState {
 
 // The current pass's candidates in the order the loop takes them (see sort_cheapest).
 struct PassCandidates {
-    std::vector<Candidate> sorted;  // the front, sorted; grows as the loop reaches its end
-    std::vector<Candidate> rest;    // the others, in vertex order
-    std::vector<Candidate> tmp;     // sort scratch
+    std::vector<Candidate> items;  // [0, front) sorted; the others after them, in vertex order
+    size_t front = 0;              // grows to items.size() as the loop reaches its end
     uint32_t limit_keep = 0;
     size_t quota = 0;     // substitutions the pass may apply
     size_t executed = 0;  // vertices the pass removed so far
@@ -235,16 +266,16 @@ private:
     // 2. The vertices with a best substitution; the cheapest 4 x quota are enough to fill a pass
     // (the cheapest 2 x quota sorted now, the others when the loop gets there).
     void collect_candidates() {
-        split_in_order(team_, s_.live.size(), [&](size_t i) { return int(s_.has[s_.live[i]]); }, [&](size_t i) { return s_.best[s_.live[i]]; },
-                       c_.sorted, c_.rest);
         c_.quota = std::max<size_t>(1, size_t(std::ceil(double(fraction_) * s_.alive_count)));
-        c_.limit_keep = sort_cheapest(c_.sorted, c_.quota * 2, c_.quota * 4, c_.tmp, c_.rest, team_);
+        c_.limit_keep = sort_cheapest(
+            s_.live.size(), [&](size_t i) { return s_.has[s_.live[i]] != 0; }, [&](size_t i) { return s_.best[s_.live[i]]; }, c_.quota * 2, c_.quota * 4,
+            c_.items, c_.front, team_);
         c_.executed = 0;
     }
 
     // 3. The loop over the candidates; when none went through, once more over all of them.
     void substitute_pass() {
-        for (int attempt = 0; attempt < 2 && c_.executed == 0 && !c_.sorted.empty(); ++attempt) {
+        for (int attempt = 0; attempt < 2 && c_.executed == 0 && !c_.items.empty(); ++attempt) {
             if (attempt == 1) take_all_candidates();
             begin_foresight();
             for (size_t ci = 0; c_.executed < c_.quota; ++ci) {
@@ -258,22 +289,22 @@ private:
     }
 
     void take_all_candidates() {
-        c_.sorted.insert(c_.sorted.end(), c_.rest.begin(), c_.rest.end());
-        c_.rest.clear();
-        sort_candidates(c_.sorted, c_.tmp, team_);
-        c_.quota = c_.sorted.size();
+        std::vector<Candidate> tmp;
+        sort_candidates(c_.items, tmp, team_);
+        c_.front = c_.items.size();
+        c_.quota = c_.items.size();
     }
 
     // false when the loop has passed every candidate; sorts more of them when it reaches the front's end
     bool reach(size_t ci) {
-        if (ci < c_.sorted.size()) return true;
-        if (c_.rest.empty()) return false;
-        sort_next(c_.sorted, c_.rest, c_.limit_keep, c_.tmp, team_);
+        if (ci < c_.front) return true;
+        if (c_.front == c_.items.size()) return false;
+        sort_next(c_.items, c_.front, c_.limit_keep, team_);
         return true;
     }
 
     void try_candidate(size_t ci) {
-        const Candidate c = c_.sorted[ci];
+        const Candidate c = c_.items[ci];
         if (s_.pass_mark[c.v] == s_.pass || s_.pass_mark[c.u] == s_.pass) return;  // not independent of this pass's earlier ones
         if (kCollapseRules[b_.classes.kind[c.v]].with_partner)
             collapse_seam(c);
@@ -438,7 +469,7 @@ private:
         ++stats_.foreseen_chunks;
         ahead_.chunk_begin = ci;
         const size_t length = std::min({size_t(kChunkMax), size_t(s_.alive_count / 64), std::max<size_t>(32, (c_.quota - c_.executed) * 5 / 4)});
-        ahead_.chunk_end = std::min(c_.sorted.size(), ci + length);
+        ahead_.chunk_end = std::min(c_.front, ci + length);
         const size_t pending = ahead_.merges.size(), begin = ahead_.chunk_begin, end = ahead_.chunk_end;
         parallel_for(team_, pending + (end - begin), b_.scratch, helpers_, [&](size_t i, Scratch& sc) {
             if (i < pending) {
@@ -448,9 +479,9 @@ private:
             const size_t k = i - pending;
             // the reads of the candidates a little ahead started now (the chunk's vertices lie
             // anywhere in the mesh: its cost order, not its layout)
-            if (begin + k + 8 < end) b_.prefetch(c_.sorted[begin + k + 8].v);
-            if (begin + k + 4 < end) topo_.prefetch_fan(c_.sorted[begin + k + 4].v);
-            foresee(c_.sorted[begin + k], ahead_.chunk_entries[k], sc);
+            if (begin + k + 8 < end) b_.prefetch(c_.items[begin + k + 8].v);
+            if (begin + k + 4 < end) topo_.prefetch_fan(c_.items[begin + k + 4].v);
+            foresee(c_.items[begin + k], ahead_.chunk_entries[k], sc);
         });
         ahead_.merges.clear();
     }
@@ -492,12 +523,12 @@ private:
     // Starts the loads of the candidates two and four ahead (with the foresight's lists, the
     // next one's triangles and ring all at once instead of down its corner list).
     void prefetch_ahead(size_t ci) const {
-        const std::vector<Candidate>& sorted = c_.sorted;
-        if (ci + 4 < sorted.size()) {
+        const Candidate* sorted = c_.items.data();  // the part in its final order: [0, front)
+        if (ci + 4 < c_.front) {
             b_.prefetch(sorted[ci + 4].v);
             topo_.prefetch_splice(sorted[ci + 4].v, sorted[ci + 4].u);
         }
-        if (ci + 2 >= sorted.size()) return;
+        if (ci + 2 >= c_.front) return;
         const Foresight* next = ahead_.on && ci + 2 < ahead_.chunk_end ? &ahead_.chunk_entries[ci + 2 - ahead_.chunk_begin] : nullptr;
         if (!next || next->fan == kRingUnknown) {
             topo_.prefetch_fan(sorted[ci + 2].v);
