@@ -12,6 +12,7 @@
 #include <set>
 #include <new>
 #include <thread>
+#include <utility>
 
 #include <poll.h>
 #include <sys/resource.h>
@@ -172,13 +173,12 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
         std::string details, tables;
         nlohmann::ordered_json json_meshes = nlohmann::json::array();
         for (size_t mi = 0; mi < imported.meshes.size(); ++mi) {
-            const tom::Mesh& mesh = imported.meshes[mi];
             const tom::CleanStats& clean = cleans[mi];
             tom::BuildStats stats;
             const auto build_start = std::chrono::steady_clock::now();
             stage_name = imported.meshes.size() > 1 ? "build mesh " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size()) : "build";
             stage.show(stage_name, 0);
-            built.push_back(tom::build(mesh, params, &stats));
+            built.push_back(tom::build(std::move(imported.meshes[mi]), params, &stats));  // frees the input as it goes: a lower peak
             stage_name = opt.report || !report_path.empty() ? "report" : "error curve";
             if (imported.meshes.size() > 1) stage_name += " " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size());
             if (!opt.no_error_curve || opt.report || !report_path.empty()) stage.show(stage_name, 0);
@@ -186,6 +186,8 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             times.build += build_seconds;
             const auto measure_start = std::chrono::steady_clock::now();
             tom::TomMesh& t = built.back();
+            const bool measured = opt.report || !report_path.empty() || !opt.no_error_curve;
+            const tom::Mesh mesh = measured ? tom::original_mesh(t) : tom::Mesh();  // the input again, exactly
             if (opt.report || !report_path.empty()) {
                 tools::ReportContext ctx;
                 ctx.file = job.input;

@@ -262,3 +262,49 @@ TEST_CASE("a single triangle and a lone quad build and extract", "[builder][edge
     const tom::TomMesh q = tom::build(quad);
     test::check_invariants({"quad", quad, false, 0}, q);
 }
+
+TEST_CASE("a mesh moved into the builder builds the same bytes, and original_mesh gives it back exactly", "[builder][determinism][samples]") {
+    int with_parts = 0, with_texcoords = 0;
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        INFO(nm.name);
+        tom::Mesh input = nm.mesh;
+        REQUIRE_NOTHROW(tom::clean_mesh(input));
+        with_parts += !input.parts.empty();
+        with_texcoords += !input.texcoords.empty();
+        for (const tom::BuildParams& bp : {all_params().front(), all_params().back()}) {  // passes with quadrics, the heap with the memoryless predicate
+            const tom::TomMesh kept = tom::build(input, bp);
+            tom::Mesh moved = input;
+            const tom::TomMesh taken = tom::build(std::move(moved), bp);
+            CHECK(moved.positions.empty());
+            CHECK(moved.indices.empty());
+            CHECK(tom::serialize({taken}) == tom::serialize({kept}));
+            const tom::Mesh back = tom::original_mesh(taken);
+            CHECK(back.name == input.name);
+            CHECK(back.material == input.material);
+            CHECK(back.positions == input.positions);
+            CHECK(back.normals == input.normals);
+            CHECK(back.texcoords == input.texcoords);
+            CHECK(back.colors == input.colors);
+            CHECK(back.texcoords1 == input.texcoords1);
+            CHECK(back.tangents == input.tangents);
+            CHECK(back.indices == input.indices);
+            REQUIRE(back.parts.size() == input.parts.size());
+            for (size_t p = 0; p < back.parts.size(); ++p) {
+                CHECK(back.parts[p].first_triangle == input.parts[p].first_triangle);
+                CHECK(back.parts[p].triangle_count == input.parts[p].triangle_count);
+                CHECK(back.parts[p].material == input.parts[p].material);
+            }
+        }
+    }
+    CHECK(with_parts >= 1);  // the cases original_mesh must get right beyond positions
+    CHECK(with_texcoords >= 1);
+}
+
+TEST_CASE("original_mesh refuses a TomMesh without its map to the input", "[builder][edge]") {
+    tom::TomMesh built = tom::build(test::generated_meshes()[1].mesh);
+    built.original_triangle.clear();  // as a TomMesh made other than by build()
+    CHECK_THROWS_WITH(tom::original_mesh(built), Catch::Contains("has no map to its input"));
+    built = tom::build(test::generated_meshes()[1].mesh);
+    built.original_index[0] = built.vertex_count();
+    CHECK_THROWS_WITH(tom::original_mesh(built), Catch::Contains("not a permutation"));
+}

@@ -363,13 +363,41 @@ void gather_vertex_streams(const From& from, To& to, const std::vector<uint32_t>
     for_each_attribute_stream(to, [&](std::vector<float>& dst, size_t width, const char*) { gather(*sources[stream++], dst, width); });
 }
 
+// vertex_new: the inverse of the permutation vertex_old
+std::vector<uint32_t> inverse_order(const std::vector<uint32_t>& vertex_old, detail::Team& team) {
+    std::vector<uint32_t> vertex_new(vertex_old.size());
+    team.blocks(vertex_old.size(), kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) vertex_new[vertex_old[i]] = uint32_t(i);
+    });
+    return vertex_new;
+}
+
+// The local order of the triangles `indices` (input numbering): by their lowest new vertex
+// (vertex_new: input vertex -> local), a counting sort, stable. Returns local -> input triangle.
+// Cheap to make again, so the build keeps it only while it needs it.
+std::vector<uint32_t> local_triangle_order(const std::vector<uint32_t>& indices, const std::vector<uint32_t>& vertex_new, detail::Team& team) {
+    const size_t m = indices.size() / 3, n = vertex_new.size();
+    std::vector<uint32_t> first_vertex(m), start(n + 1, 0);
+    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+            const uint32_t* c = &indices[3 * t];
+            first_vertex[t] = std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
+        }
+    });
+    for (size_t t = 0; t < m; ++t) ++start[first_vertex[t] + 1];
+    for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    std::vector<uint32_t> triangle_old(m);
+    for (uint32_t t = 0; t < uint32_t(m); ++t) triangle_old[start[first_vertex[t]]++] = t;
+    return triangle_old;
+}
+
 // The mesh the build runs on: the input with its vertices in Morton order of their positions
-// and its triangles ordered by their first-numbered vertex (stable; corners and winding kept).
-// Input vertex orders can be arbitrary (a triangle's corners far apart in the vertex range), and
-// the passes would then miss the cache on almost every neighbour's quadric and corner list. vertex_old[i] / triangle_old[t]: the input vertex / triangle at position i / t; lo, hi:
-// the positions' bounding box (zero for no vertex), which the codes are taken in.
-Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std::vector<uint32_t>& triangle_old, float lo[3], float hi[3],
-                          detail::Team& team) {
+// and its triangles ordered by their first-numbered vertex (local_triangle_order; corners and
+// winding kept). Input vertex orders can be arbitrary (a triangle's corners far apart in the
+// vertex range), and the passes would then miss the cache on almost every neighbour's quadric
+// and corner list. vertex_old[i]: the input vertex at position i; lo, hi: the positions'
+// bounding box (zero for no vertex), which the codes are taken in.
+Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, float lo[3], float hi[3], detail::Team& team) {
     const uint32_t n = in.vertex_count(), m = in.triangle_count();
     std::fill(lo, lo + 3, 0.0f);
     std::fill(hi, hi + 3, 0.0f);
@@ -398,27 +426,14 @@ Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std
         std::vector<uint32_t> tmp;
         detail::radix_sort(vertex_old, tmp, 30, [&](uint32_t v) { return code[v]; }, &team);
     }
-    std::vector<uint32_t> vertex_new(n);
-    team.blocks(n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
-        for (uint32_t i = uint32_t(begin); i < uint32_t(end); ++i) vertex_new[vertex_old[i]] = i;
-    });
+    code = std::vector<uint32_t>();
+    const std::vector<uint32_t> vertex_new = inverse_order(vertex_old, team);
 
     Mesh out;
     out.name = in.name;
     out.material = in.material;
     gather_vertex_streams(in, out, vertex_old, team);
-    // triangles by their lowest new vertex (counting sort, stable)
-    std::vector<uint32_t> first_vertex(m), start(size_t(n) + 1, 0);
-    team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
-        for (size_t t = begin; t < end; ++t) {
-            const uint32_t* c = &in.indices[3 * t];
-            first_vertex[t] = std::min(vertex_new[c[0]], std::min(vertex_new[c[1]], vertex_new[c[2]]));
-        }
-    });
-    for (uint32_t t = 0; t < m; ++t) ++start[first_vertex[t] + 1];
-    for (uint32_t i = 0; i < n; ++i) start[i + 1] += start[i];
-    triangle_old.resize(m);
-    for (uint32_t t = 0; t < m; ++t) triangle_old[start[first_vertex[t]]++] = t;
+    const std::vector<uint32_t> triangle_old = local_triangle_order(in.indices, vertex_new, team);
     out.indices.resize(in.indices.size());
     team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
         for (size_t t = begin; t < end; ++t)
@@ -430,7 +445,8 @@ Mesh reorder_for_locality(const Mesh& in, std::vector<uint32_t>& vertex_old, std
 // The input reordered for locality, with what maps it back.
 struct LocalMesh {
     Mesh mesh;
-    std::vector<uint32_t> vertex_old, triangle_old;  // local vertex / triangle -> input's
+    std::vector<uint32_t> vertex_old;  // local vertex -> input's (the triangles' map is made again at the end)
+    bool sole_copy = false;            // the input's vertex streams are gone: the output takes these
     float bounds_min[3], bounds_max[3];
     std::vector<float> normals;  // vertex normals computed for the memoryless predicate, when the mesh has none
 };
@@ -459,19 +475,29 @@ void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
     b.topo.build(b.n, mesh.indices);  // the triangles around each vertex, from classification to the last substitution
     b.removed.assign(b.n, 0);
     b.scratch.stamp.assign(b.n, 0);
-    b.removed_order.reserve(b.n);
+    b.removed_order.reserve(b.n);  // reserved: grown by doubling, a large build's would end at up to twice this
     b.removed_target.reserve(b.n);
 }
 
 // What the substitutions no longer read goes before they run: the local copy's triangles (the
-// topology holds its own) and vertex streams other than normals (the attribute term holds its
-// scaled values); its positions and normals stay (the predicates read them). 12 bytes a
-// triangle of the build's peak, and more with texture coordinates or colours.
+// topology holds its own) and, unless they are the only copy, its vertex streams other than
+// normals (the attribute term holds its scaled values); its positions and normals stay (the
+// predicates read them). 12 bytes a triangle of the build's peak, and more with texture
+// coordinates or colours.
 void release_input_copy(LocalMesh& local) {
     std::vector<uint32_t>().swap(local.mesh.indices);
+    if (local.sole_copy) return;
     for_each_attribute_stream(local.mesh, [](std::vector<float>& values, size_t, const char* name) {
         if (std::string_view(name) != "normal") std::vector<float>().swap(values);
     });
+}
+
+// A moved-in input's vertex streams go once the local copy holds them: 12 bytes a triangle of
+// the peak with normals alone (the input keeps its triangles, which the output is ordered by).
+void release_input_streams(Mesh& input, LocalMesh& local) {
+    std::vector<float>().swap(input.positions);
+    for_each_attribute_stream(input, [](std::vector<float>& values, size_t, const char*) { std::vector<float>().swap(values); });
+    local.sole_copy = true;
 }
 
 // The quadrics (about 270 bytes a vertex with normals) go before the output is assembled.
@@ -480,8 +506,10 @@ void release_costs(Builder& b) {
     b.attributes.release();
 }
 
-// The record and the triangles' deaths back in the input's numbering.
-void to_input_numbering(Builder& b, const LocalMesh& local, detail::Team& team) {
+// The record and the triangles' deaths back in the input's numbering (vertex_new: the inverse
+// of local.vertex_old; triangles: the input's).
+void to_input_numbering(Builder& b, const LocalMesh& local, const std::vector<uint32_t>& vertex_new, const std::vector<uint32_t>& triangles,
+                        detail::Team& team) {
     std::vector<uint8_t> removed(b.n);
     team.blocks(b.n, kRowBlock, [&](unsigned, size_t begin, size_t end) {
         for (size_t i = begin; i < end; ++i) removed[local.vertex_old[i]] = b.removed[i];
@@ -489,9 +517,10 @@ void to_input_numbering(Builder& b, const LocalMesh& local, detail::Team& team) 
     b.removed.swap(removed);
     for (uint32_t& v : b.removed_order) v = local.vertex_old[v];
     for (uint32_t& v : b.removed_target) v = local.vertex_old[v];
+    const std::vector<uint32_t> triangle_old = local_triangle_order(triangles, vertex_new, team);
     std::vector<uint32_t> death(b.m);
     team.blocks(b.m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
-        for (size_t t = begin; t < end; ++t) death[local.triangle_old[t]] = b.topo.death_step[t];
+        for (size_t t = begin; t < end; ++t) death[triangle_old[t]] = b.topo.death_step[t];
     });
     b.topo.death_step.swap(death);
 }
@@ -514,11 +543,27 @@ void order_vertices(const Builder& b, TomMesh& out, std::vector<uint32_t>& new_i
     for (uint32_t j = 0; j < removed_count; ++j) out.substitute[n - 1 - j] = new_index[b.removed_target[j]];
 }
 
+// The output's vertex streams: the input's rows in the total order, from the local copy when
+// it is the only one (vertex_new: input vertex -> local).
+void gather_output_streams(const Mesh& input, const LocalMesh& local, const std::vector<uint32_t>& vertex_new, TomMesh& out, detail::Team& team) {
+    if (!local.sole_copy) {
+        gather_vertex_streams(input, out, out.original_index, team);
+        return;
+    }
+    std::vector<uint32_t> order(out.original_index.size());
+    team.blocks(order.size(), kRowBlock, [&](unsigned, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) order[i] = vertex_new[out.original_index[i]];
+    });
+    gather_vertex_streams(local.mesh, out, order, team);
+}
+
 // The triangles by the resolution at which they die: triangle t is alive at resolution
 // r >= key(t), key = n - step for a triangle killed by substitution `step` (its removed vertex
 // gets index n-1-step), s for the survivors. Counting sort by key, stable in input order; with
 // parts, then by part (stable), so each part's range is sorted by death on its own.
-void order_triangles(const Builder& b, const Mesh& input, const std::vector<uint32_t>& new_index, TomMesh& out, detail::Team& team) {
+// input_bits: the input's attribute_bits (its streams may be gone by now).
+void order_triangles(const Builder& b, const Mesh& input, uint32_t input_bits, const std::vector<uint32_t>& new_index, TomMesh& out,
+                     detail::Team& team) {
     const uint32_t n = b.n, m = b.m, s = out.min_vertex_count;
     const std::vector<uint32_t>& death = b.topo.death_step;
     std::vector<uint32_t> bucket(n + 2, 0);
@@ -538,7 +583,7 @@ void order_triangles(const Builder& b, const Mesh& input, const std::vector<uint
         for (const uint32_t t : out.original_triangle) by_part[start[part_of[t]]++] = t;
         out.original_triangle.swap(by_part);
         out.parts = input.parts;  // same ranges: each part keeps its triangle count
-        for (Part& part : out.parts) part.attributes &= attribute_bits(input);  // a stream may have been dropped since import
+        for (Part& part : out.parts) part.attributes &= input_bits;  // a stream may have been dropped since import
     }
     team.blocks(m, kRowBlock, [&](unsigned, size_t begin, size_t end) {
         for (size_t slot = begin; slot < end; ++slot)
@@ -597,11 +642,15 @@ static void check_order(const TomMesh& out) {
                                    ", not an earlier vertex (a defect of the builder)");
 }
 
-TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) {
+// The build of `input`; with `owned` (== &input, moved in by the caller) its vertex streams are
+// freed once the local copy holds them, and the output comes from that copy: the same bytes.
+static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& params, BuildStats* stats_out) {
     BuildStats stats;
     detail::Team team(thread_count(params.threads));
+    const uint32_t input_bits = attribute_bits(input);
     LocalMesh local;
-    local.mesh = reorder_for_locality(input, local.vertex_old, local.triangle_old, local.bounds_min, local.bounds_max, team);
+    local.mesh = reorder_for_locality(input, local.vertex_old, local.bounds_min, local.bounds_max, team);
+    if (owned) release_input_streams(*owned, local);
     Builder b;
     set_up(b, local, params);
 
@@ -619,15 +668,16 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
         run_passes(b, std::min(1.0f, std::max(1e-4f, params.pass_fraction)), params.foresight, team, stats, params.progress);
     release_costs(b);
 
-    to_input_numbering(b, local, team);
+    const std::vector<uint32_t> vertex_new = inverse_order(local.vertex_old, team);
+    to_input_numbering(b, local, vertex_new, input.indices, team);
     TomMesh out;
     out.name = input.name;
     out.material = input.material;
     std::vector<uint32_t> new_index;
     order_vertices(b, out, new_index);
     check_order(out);
-    gather_vertex_streams(input, out, out.original_index, team);
-    order_triangles(b, input, new_index, out, team);
+    gather_output_streams(input, local, vertex_new, out, team);
+    order_triangles(b, input, input_bits, new_index, out, team);
     std::copy(local.bounds_min, local.bounds_min + 3, out.bounds_min);
     std::copy(local.bounds_max, local.bounds_max + 3, out.bounds_max);
     mark_seam_pairs(b, out);
@@ -635,6 +685,49 @@ TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_ou
     stats.substitutions = uint32_t(b.removed_order.size());
     if (stats_out) *stats_out = stats;
     return out;
+}
+
+TomMesh build(const Mesh& input, const BuildParams& params, BuildStats* stats_out) { return build_from(input, nullptr, params, stats_out); }
+
+TomMesh build(Mesh&& input, const BuildParams& params, BuildStats* stats_out) {
+    TomMesh out = build_from(input, &input, params, stats_out);
+    input = Mesh();  // moved from: left empty, whatever the build freed
+    return out;
+}
+
+Mesh original_mesh(const TomMesh& tom) {
+    const uint32_t n = tom.vertex_count(), m = tom.triangle_count();
+    if (tom.original_index.size() != n || tom.original_triangle.size() != m)
+        throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "' has no map to its input (only a TomMesh from build() has one)");
+    Mesh mesh;
+    mesh.name = tom.name;
+    mesh.material = tom.material;
+    auto scatter = [&](const std::vector<float>& src, std::vector<float>& dst, size_t width) {
+        if (src.size() != size_t(n) * width) return;
+        dst.resize(src.size());
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t v = tom.original_index[i];
+            if (v >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_index is not a permutation");
+            std::memcpy(&dst[size_t(v) * width], &src[size_t(i) * width], width * sizeof(float));
+        }
+    };
+    scatter(tom.positions, mesh.positions, 3);
+    std::vector<const std::vector<float>*> sources;
+    for_each_attribute_stream(tom, [&](const std::vector<float>& values, size_t, const char*) { sources.push_back(&values); });
+    size_t stream = 0;
+    for_each_attribute_stream(mesh, [&](std::vector<float>& dst, size_t width, const char*) { scatter(*sources[stream++], dst, width); });
+    mesh.indices.resize(size_t(m) * 3);
+    for (uint32_t slot = 0; slot < m; ++slot) {
+        const uint32_t t = tom.original_triangle[slot];
+        if (t >= m) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_triangle is not a permutation");
+        for (size_t k = 0; k < 3; ++k) {
+            const uint32_t c = tom.triangles[3 * size_t(slot) + k];
+            if (c >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': a triangle's corner is past the vertices");
+            mesh.indices[3 * size_t(t) + k] = tom.original_index[c];
+        }
+    }
+    mesh.parts = tom.parts;  // the same ranges: each part's triangles keep their place and count
+    return mesh;
 }
 
 } // namespace tom

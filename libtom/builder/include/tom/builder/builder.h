@@ -106,6 +106,19 @@ struct TomMesh {
 /// No substitution flips a triangle. Runs until no legal substitution is left.
 TomMesh build(const Mesh& mesh, const BuildParams& params = {}, BuildStats* stats = nullptr);
 
+/// The same build of a mesh the caller gives up: its vertex streams are freed as soon as the
+/// builder has its own copy, which lowers the build's peak by about 12 bytes a triangle (a mesh
+/// with normals alone). The result is byte-identical; `mesh` is left empty. To go on using
+/// the input (a report, an error curve), take it back with original_mesh().
+TomMesh build(Mesh&& mesh, const BuildParams& params = {}, BuildStats* stats = nullptr);
+
+/// The mesh `tom` was built from, exactly (after clean_mesh()): every stream in the input's
+/// vertex order, the triangles in its order with their corners and winding, its parts and
+/// material. Only the parts' `attributes` can differ: they keep just the streams the input had.
+/// \throw std::invalid_argument when `tom` has no map to its input (a TomMesh not made by
+///        build(), such as one read from a file).
+Mesh original_mesh(const TomMesh& tom);
+
 const char* to_string(Predicate p) noexcept;
 const char* to_string(Strategy s) noexcept;
 
