@@ -89,7 +89,7 @@ void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan) {
             if (is_free(i)) ratio[count++] = m * p.error[i] * pow_neg(x[i], m) / x[i] / p.per_tri_ms[i];
         std::nth_element(ratio.begin(), ratio.begin() + ptrdiff_t(count / 2), ratio.begin() + ptrdiff_t(count));
         const double lambda0 = count ? ratio[count / 2] : 0.0;
-        const double gap0 = dual_bound(p, plan.drawn, lambda0) - plan.benefit;
+        const double gap0 = dual_bound(p, plan.drawn, lambda0, false) - plan.benefit;
         double error_sum = 0;
         for (size_t i = 0; i < N; ++i)
             if (is_free(i)) error_sum += p.error[i] * pow_neg(x[i], m);

@@ -82,11 +82,119 @@ void solve_exact(const Problem& p, const SelectParams& params, Plan& plan) {
     const double lambda = mu > 0 ? std::pow(mu, -(p.m + 1.0)) : 0.0;
     certify(p, plan, lambda);
     if (mu > 0 && b > a) {  // the other end of the bracket may certify tighter
-        const double ub = dual_bound(p, plan.drawn, std::pow(b, -(p.m + 1.0)));
+        const double ub = dual_bound(p, plan.drawn, std::pow(b, -(p.m + 1.0)), false);
         if (ub < plan.upper_bound) {
             plan.upper_bound = ub;
             plan.gap = std::max(0.0, (ub - plan.benefit) / std::max(std::abs(ub), 1e-300));
         }
+    }
+}
+
+// --- with a menu: the multiple-choice problem ---------------------------------------------------
+//
+// At a multiplier l each object takes its best way and resolution, argmax_j,n b_ij(n) - l c_ij(n)
+// (the Lagrangian relaxation of the multiple-choice problem); the cost of that choice does not
+// grow with l, but jumps where an object changes its way. Bisection on log l brackets the
+// budget: the plan is the choice at the bracket's feasible end, whose ways are then kept while
+// the resolutions are solved exactly for the whole budget (the fixed-way problem is the concave
+// one above, so this only adds benefit). Its certificate is min g(l) over the bracket's ends: the
+// gap left is the relaxation's duality gap, at most about one object's change of way.
+
+namespace {
+
+// Each drawn object's best way and resolution at l; returns their cost.
+double choose_at(const Problem& p, const Plan& plan, double lambda, std::vector<uint32_t>& way, std::vector<double>& n) {
+    double cost = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+        if (!plan.drawn[i]) continue;
+        double best = -INFINITY, best_cost = 0;
+        for (uint32_t j = 0; j < p.way_count(i); ++j) {
+            const double x = best_resolution(p.way(i, j), lambda), c = p.cost(i, j, x);
+            const double value = p.benefit(i, j, x) - lambda * c;
+            if (value > best || (value == best && c < best_cost)) {  // ties: the cheaper way
+                best = value;
+                best_cost = c;
+                way[i] = j;
+                n[i] = x;
+            }
+        }
+        cost += best_cost;
+    }
+    return cost;
+}
+
+// The resolutions for fixed ways that meet the budget (bisection on l; the fixed-way problem is
+// concave, so this is its optimum), starting from a feasible multiplier `feasible`.
+void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline& deadline) {
+    auto cost_at = [&](double lambda) {
+        double c = 0;
+        for (size_t i = 0; i < p.size(); ++i)
+            if (plan.drawn[i]) c += p.cost(i, plan.way[i], best_resolution(p.way(i, plan.way[i]), lambda));
+        return c;
+    };
+    double hi = feasible, lo = hi;
+    if (cost_at(0) <= p.budget_ms) {
+        hi = 0;
+    } else {
+        for (int k = 0; k < 200 && cost_at(lo) <= p.budget_ms; ++k) lo *= 0.5;
+        for (int it = 0; it < 200 && hi > lo * (1 + 1e-9); ++it) {
+            const double mid = std::sqrt(lo * hi);
+            (cost_at(mid) <= p.budget_ms ? hi : lo) = mid;
+            ++plan.iterations;
+            if ((it & 7) == 7 && deadline.expired()) {
+                plan.deadline_hit = true;
+                break;
+            }
+        }
+    }
+    for (size_t i = 0; i < p.size(); ++i)
+        if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
+}
+
+} // namespace
+
+void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan) {
+    const Deadline deadline(params.deadline_ms);
+    std::vector<uint32_t> way(p.size(), 0);
+    std::vector<double> n(p.size(), 0);
+    auto take = [&]() {
+        for (size_t i = 0; i < p.size(); ++i)
+            if (plan.drawn[i]) plan.way[i] = way[i], plan.triangles[i] = n[i];
+    };
+    if (choose_at(p, plan, 0.0, way, n) <= p.budget_ms) {  // the budget does not bind: the best ways at full resolution
+        take();
+        evaluate(p, plan);
+        certify(p, plan, 0.0, true);
+        return;
+    }
+    // bracket: cost(lo) > budget >= cost(hi); the minima fit (the over-budget policy saw to it)
+    double lo = 1, hi = 1;
+    if (choose_at(p, plan, hi, way, n) <= p.budget_ms) {
+        for (int k = 0; k < 400 && choose_at(p, plan, lo, way, n) <= p.budget_ms; ++k) lo *= 0.5;
+        hi = 2 * lo;
+    } else {
+        for (int k = 0; k < 400 && choose_at(p, plan, hi, way, n) > p.budget_ms; ++k) hi *= 2;
+        lo = 0.5 * hi;
+    }
+    const double tolerance = std::max(1e-12, params.tolerance * 1e-3);
+    for (int it = 0; it < 200 && hi > lo * (1 + tolerance); ++it) {
+        const double mid = std::sqrt(lo * hi);
+        (choose_at(p, plan, mid, way, n) <= p.budget_ms ? hi : lo) = mid;
+        ++plan.iterations;
+        if ((it & 7) == 7 && deadline.expired()) {
+            plan.deadline_hit = true;
+            break;
+        }
+    }
+    choose_at(p, plan, hi, way, n);
+    take();
+    spend_budget(p, plan, hi, deadline);
+    evaluate(p, plan);
+    certify(p, plan, hi, true);
+    const double ub = dual_bound(p, plan.drawn, lo, true);
+    if (ub < plan.upper_bound) {
+        plan.upper_bound = ub;
+        plan.gap = std::max(0.0, (ub - plan.benefit) / std::max(std::abs(ub), 1e-300));
     }
 }
 

@@ -101,4 +101,127 @@ void solve_greedy(const Problem& p, const SelectParams&, Plan& plan) {
     fit_to_budget(p, plan);  // the minima fit (the policy saw to it): this only guards rounding
 }
 
+// --- with a menu: Funkhouser's tuples (object, level, algorithm) ------------------------------
+//
+// Each way has its ladder (the same steps); an object's state is a way and a step. A move is a
+// step up or down its ladder, or a change of way to the step of the other ladder nearest its
+// cost from above (up) or below (down); an object's best move goes on the heap, valued as
+// above (benefit per ms), a change that costs nothing more and gains first. From the previous
+// frame's ways and resolutions, down while over budget, then up while the moves fit.
+
+namespace {
+
+struct State {
+    uint32_t way = 0;
+    int step = 0;
+};
+
+struct Move {
+    double value = -INFINITY;  // gain (up) or -loss (down) per ms; -inf: none
+    State to;
+    double extra = 0;          // the move's cost: > 0 up, < 0 down
+};
+
+struct MenuLadder {
+    const Problem& p;
+    Way way(size_t i, uint32_t j) const { return p.way(i, j); }
+    static double level(const Way& w, int k) { return std::min(w.hi, w.lo * std::pow(kStep, k)); }
+    static int top(const Way& w) { return w.hi > w.lo ? int(std::ceil(std::log(w.hi / w.lo) / std::log(kStep) - 1e-12)) : 0; }
+    static int nearest_below(const Way& w, double n) {
+        if (n <= w.lo) return 0;
+        return std::min(top(w), int(std::floor(std::log(n / w.lo) / std::log(kStep) + 1e-9)));
+    }
+    double cost(size_t i, State s) const { return p.cost(i, s.way, level(way(i, s.way), s.step)); }
+    double benefit(size_t i, State s) const { return p.benefit(i, s.way, level(way(i, s.way), s.step)); }
+
+    // the best move up (gain > 0) or down (saving > 0) of object i from s
+    Move best_move(size_t i, State s, bool up) const {
+        const double c0 = cost(i, s), b0 = benefit(i, s);
+        Move best;
+        auto consider = [&](State to) {
+            const double extra = cost(i, to) - c0, gain = benefit(i, to) - b0;
+            double value;
+            if (up) {
+                if (!(gain > 0)) return;
+                value = extra > 0 ? gain / extra : INFINITY;  // costs nothing more: first
+            } else {
+                if (!(extra < 0)) return;
+                value = gain / -extra;  // -loss per ms saved (a gain: the best)
+            }
+            if (value > best.value) best = {value, to, extra};
+        };
+        const Way w = way(i, s.way);
+        if (up && s.step < top(w)) consider({s.way, s.step + 1});
+        if (!up && s.step > 0) consider({s.way, s.step - 1});
+        for (uint32_t j = 0; j < p.way_count(i); ++j) {
+            if (j == s.way) continue;
+            const Way other = way(i, j);
+            // the other ladder's step nearest c0: the first above it (up) or the last below (down)
+            auto cost_of = [&](int k) { return p.cost(i, j, level(other, k)); };
+            int k = 0;
+            while (k < top(other) && cost_of(k) <= c0) ++k;
+            const bool above = cost_of(k) > c0;   // k: the first step dearer than now, or the top
+            const int at_most = above ? k - 1 : k;  // the last step as cheap as now or cheaper (-1: none)
+            if (up) {
+                if (above) consider({j, k});
+                if (at_most >= 0) consider({j, at_most});  // a gain that costs nothing more
+            } else {
+                int below = at_most;
+                while (below >= 0 && cost_of(below) >= c0) --below;
+                if (below >= 0) consider({j, below});
+            }
+        }
+        return best;
+    }
+};
+
+} // namespace
+
+void solve_greedy_menu(const Problem& p, const SelectParams&, Plan& plan) {
+    const size_t n = p.size();
+    const MenuLadder ladder{p};
+    std::vector<State> state(n);
+    double cost = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!plan.drawn[i]) continue;
+        const uint32_t j = p.previous_way.size() == n && p.previous_way[i] < p.way_count(i) ? p.previous_way[i] : 0;
+        state[i] = {j, MenuLadder::nearest_below(p.way(i, j), p.previous[i])};
+        cost += ladder.cost(i, state[i]);
+    }
+    auto less = [](const Entry& x, const Entry& y) { return x.first < y.first || (x.first == y.first && x.second > y.second); };
+    std::vector<Entry>& heap = plan.work_heap;
+    std::vector<Move> moves(n);
+    // phase: down while over budget (up = false), then up while the moves fit
+    for (const bool up : {false, true}) {
+        heap.clear();
+        for (size_t i = 0; i < n; ++i) {
+            if (!plan.drawn[i]) continue;
+            moves[i] = ladder.best_move(i, state[i], up);
+            if (moves[i].value > -INFINITY) heap.push_back({moves[i].value, uint32_t(i)});
+        }
+        std::make_heap(heap.begin(), heap.end(), less);
+        while (!heap.empty() && (up || cost > p.budget_ms)) {
+            std::pop_heap(heap.begin(), heap.end(), less);
+            const uint32_t i = heap.back().second;
+            heap.pop_back();
+            const Move mv = moves[i];
+            if (up && cost + mv.extra > p.budget_ms) continue;  // does not fit: this object stays
+            state[i] = mv.to;
+            cost += mv.extra;
+            ++plan.iterations;
+            moves[i] = ladder.best_move(i, state[i], up);
+            if (moves[i].value > -INFINITY) {
+                heap.push_back({moves[i].value, i});
+                std::push_heap(heap.begin(), heap.end(), less);
+            }
+        }
+    }
+    for (size_t i = 0; i < n; ++i)
+        if (plan.drawn[i]) {
+            plan.way[i] = state[i].way;
+            plan.triangles[i] = MenuLadder::level(p.way(i, state[i].way), state[i].step);
+        }
+    fit_to_budget(p, plan);  // the minima fit (the policy saw to it): this only guards rounding
+}
+
 } // namespace tcr::detail

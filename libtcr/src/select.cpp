@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <stdexcept>
 
 #include "solver.h"
 
@@ -42,6 +43,36 @@ void Problem::resize(size_t n) {
 
 double Problem::benefit(size_t i, double n) const noexcept { return importance[i] - error[i] * pow_neg(n, m); }
 
+Way Problem::way(size_t i, uint32_t j) const noexcept {
+    if (j == 0) return {m, error[i], per_tri_ms[i], setup_ms[i], lo[i], hi[i]};
+    return ways[way_begin[i] + j - 1];
+}
+
+double Problem::benefit(size_t i, uint32_t j, double n) const noexcept {
+    if (j == 0) return benefit(i, n);
+    const Way& w = ways[way_begin[i] + j - 1];
+    return importance[i] - w.error * pow_neg(n, w.m);
+}
+
+double Problem::cost(size_t i, uint32_t j, double n) const noexcept {
+    if (j == 0) return cost(i, n);
+    const Way& w = ways[way_begin[i] + j - 1];
+    return w.setup_ms + w.per_tri_ms * n;
+}
+
+void Problem::check_menu() const {
+    if (!has_menu()) return;
+    if (way_begin.size() != size() + 1 || way_begin.front() != 0 || way_begin.back() != ways.size())
+        throw std::invalid_argument("tcr::Problem: way_begin needs size() + 1 entries from 0 to ways.size()");
+    for (size_t i = 0; i < size(); ++i)
+        if (way_begin[i + 1] < way_begin[i]) throw std::invalid_argument("tcr::Problem: way_begin decreases at object " + std::to_string(i));
+    for (size_t k = 0; k < ways.size(); ++k) {
+        const Way& w = ways[k];
+        if (!(w.per_tri_ms > 0) || !(w.setup_ms >= 0) || !(w.error >= 0) || !(w.m > 0) || !(w.lo >= 1) || !(w.hi >= w.lo))
+            throw std::invalid_argument("tcr::Problem: way " + std::to_string(k) + " needs per_tri_ms > 0, setup_ms >= 0, error >= 0, m > 0, 1 <= lo <= hi");
+    }
+}
+
 double update_stress(double stress, double measured_ms, double target_ms, double a, double load_min, double load_max) noexcept {
     if (!(target_ms > 0) || !(measured_ms > 0)) return stress;
     const double load = measured_ms / target_ms;
@@ -62,28 +93,41 @@ double variable_budget(const Problem& p, const std::vector<uint8_t>& drawn) noex
 void evaluate(const Problem& p, Plan& plan) noexcept {
     plan.cost_ms = 0;
     plan.benefit = 0;
+    const bool ways = p.has_menu() && plan.way.size() == p.size();
     for (size_t i = 0; i < p.size(); ++i)
         if (plan.drawn[i]) {
-            plan.cost_ms += p.cost(i, plan.triangles[i]);
-            plan.benefit += p.benefit(i, plan.triangles[i]);
+            const uint32_t j = ways ? plan.way[i] : 0;
+            plan.cost_ms += p.cost(i, j, plan.triangles[i]);
+            plan.benefit += p.benefit(i, j, plan.triangles[i]);
         }
     plan.feasible = plan.cost_ms <= p.budget_ms * (1 + 1e-12) + 1e-12;
 }
 
-void certify(const Problem& p, Plan& plan, double lambda) noexcept {
-    plan.upper_bound = dual_bound(p, plan.drawn, lambda);
+void certify(const Problem& p, Plan& plan, double lambda, bool ways) noexcept {
+    plan.upper_bound = dual_bound(p, plan.drawn, lambda, ways);
     const double denom = std::max(std::abs(plan.upper_bound), 1e-300);
     plan.gap = std::max(0.0, (plan.upper_bound - plan.benefit) / denom);
 }
 
 } // namespace detail
 
-double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda) noexcept {
+double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda) noexcept { return detail::dual_bound(p, drawn, lambda, p.has_menu()); }
+
+double detail::dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda, bool ways) noexcept {
     // g(l) = sum_i max_{lo<=n<=hi} [b_i(n) - l c_i(n)] + l budget: an upper bound for l >= 0
     lambda = std::max(0.0, lambda);
     double g = lambda * p.budget_ms;
     for (size_t i = 0; i < p.size(); ++i) {
         if (!drawn[i]) continue;
+        if (ways && p.has_menu()) {  // the best way at l
+            double best = -INFINITY;
+            for (uint32_t j = 0; j < p.way_count(i); ++j) {
+                const double n = best_resolution(p.way(i, j), lambda);
+                best = std::max(best, p.benefit(i, j, n) - lambda * p.cost(i, j, n));
+            }
+            g += best;
+            continue;
+        }
         double n;
         if (p.error[i] <= 0)
             n = lambda > 0 ? p.lo[i] : p.hi[i];
@@ -97,39 +141,53 @@ double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double la
 }
 
 bool fit_to_budget(const Problem& p, Plan& plan) noexcept {
+    const bool ways = p.has_menu() && plan.way.size() == p.size();
+    auto way_of = [&](size_t i) { return p.way(i, ways ? plan.way[i] : 0); };
     double lo_cost = 0, extra = 0;
     for (size_t i = 0; i < p.size(); ++i)
         if (plan.drawn[i]) {
-            lo_cost += p.cost(i, p.lo[i]);
-            extra += p.per_tri_ms[i] * (plan.triangles[i] - p.lo[i]);
+            const Way w = way_of(i);
+            lo_cost += w.setup_ms + w.per_tri_ms * w.lo;
+            extra += w.per_tri_ms * (plan.triangles[i] - w.lo);
         }
     if (lo_cost > p.budget_ms) return false;
     if (lo_cost + extra <= p.budget_ms) return true;
     const double theta = (p.budget_ms - lo_cost) / extra * (1.0 - 1e-12);
     for (size_t i = 0; i < p.size(); ++i)
-        if (plan.drawn[i]) plan.triangles[i] = p.lo[i] + theta * (plan.triangles[i] - p.lo[i]);
+        if (plan.drawn[i]) {
+            const Way w = way_of(i);
+            plan.triangles[i] = w.lo + theta * (plan.triangles[i] - w.lo);
+        }
     return true;
 }
 
 namespace {
 
+// The least object i can cost: at its lo, in its cheapest way (way 0 alone unless `menu`).
+double min_cost(const Problem& p, size_t i, bool menu) noexcept {
+    double c = p.cost(i, p.lo[i]);
+    if (menu)
+        for (uint32_t j = 1; j < p.way_count(i); ++j) c = std::min(c, p.cost(i, j, p.way(i, j).lo));
+    return c;
+}
+
 // Leaves out the objects of least importance per ms at minimum until the minima fit.
-void drop_least_valuable(const Problem& p, Plan& plan) {
+void drop_least_valuable(const Problem& p, bool menu, Plan& plan) {
     std::vector<uint32_t>& order = plan.work_index;
     order.resize(p.size());
     double total = 0;
     for (size_t i = 0; i < p.size(); ++i) {
         order[i] = uint32_t(i);
-        total += p.cost(i, p.lo[i]);
+        total += min_cost(p, i, menu);
     }
     std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
-        const double vx = p.importance[x] / std::max(1e-300, p.cost(x, p.lo[x])), vy = p.importance[y] / std::max(1e-300, p.cost(y, p.lo[y]));
+        const double vx = p.importance[x] / std::max(1e-300, min_cost(p, x, menu)), vy = p.importance[y] / std::max(1e-300, min_cost(p, y, menu));
         return vx < vy || (vx == vy && x < y);
     });
     for (uint32_t i : order) {
         if (total <= p.budget_ms) break;
         plan.drawn[i] = 0;
-        total -= p.cost(i, p.lo[i]);
+        total -= min_cost(p, i, menu);
     }
 }
 
@@ -165,8 +223,11 @@ void apply_hysteresis(const Problem& p, double band, Plan& plan) {
 
 void select(SelectorKind kind, const Problem& p, const SelectParams& params, Plan& plan) {
     const size_t n = p.size();
+    p.check_menu();
+    const bool menu = p.has_menu() && (kind == SelectorKind::exact || kind == SelectorKind::greedy);
     plan.triangles.resize(n);
     plan.drawn.assign(n, 1);
+    plan.way.assign(n, 0);
     plan.work_a.resize(n);
     plan.work_b.resize(n);
     plan.work_c.resize(n);
@@ -175,24 +236,33 @@ void select(SelectorKind kind, const Problem& p, const SelectParams& params, Pla
     plan.iterations = 0;
     plan.deadline_hit = false;
     double lo_cost = 0;
-    for (size_t i = 0; i < n; ++i) lo_cost += p.cost(i, p.lo[i]);
+    for (size_t i = 0; i < n; ++i) lo_cost += min_cost(p, i, menu);
     if (lo_cost > p.budget_ms) {
         if (params.policy == OverBudgetPolicy::keep_minimum) {
-            for (size_t i = 0; i < n; ++i) plan.triangles[i] = p.lo[i];
+            for (size_t i = 0; i < n; ++i) {
+                plan.way[i] = menu ? cheapest_way(p, i) : 0;
+                plan.triangles[i] = p.way(i, plan.way[i]).lo;
+            }
             evaluate(p, plan);
             return;
         }
-        drop_least_valuable(p, plan);
+        drop_least_valuable(p, menu, plan);
     }
     for (size_t i = 0; i < n; ++i) plan.triangles[i] = p.lo[i];
     switch (kind) {
-    case SelectorKind::exact: solve_exact(p, params, plan); break;
+    case SelectorKind::exact:
+        if (menu) solve_exact_menu(p, params, plan);
+        else solve_exact(p, params, plan);
+        break;
     case SelectorKind::barrier: solve_barrier(p, params, plan); break;
-    case SelectorKind::greedy: solve_greedy(p, params, plan); break;
+    case SelectorKind::greedy:
+        if (menu) solve_greedy_menu(p, params, plan);
+        else solve_greedy(p, params, plan);
+        break;
     case SelectorKind::static_size: solve_size_heuristic(p, params, 1.0, plan); break;
     case SelectorKind::stress: solve_size_heuristic(p, params, params.stress, plan); break;
     }
-    if (params.hysteresis > 0) apply_hysteresis(p, params.hysteresis, plan);
+    if (params.hysteresis > 0 && !menu) apply_hysteresis(p, params.hysteresis, plan);  // (a menu's ways: greedy starts from the previous frame)
     evaluate(p, plan);
     // the certificate holds for any plan with these drawn objects: recompute the gap for the final one
     if (!std::isnan(plan.upper_bound)) plan.gap = std::max(0.0, (plan.upper_bound - plan.benefit) / std::max(std::abs(plan.upper_bound), 1e-300));

@@ -29,6 +29,21 @@ inline double clamp(double x, double lo, double hi) noexcept { return x < lo ? l
 /// The unconstrained maximiser coefficient: n_i(l) = C_i l^(-1/(m+1)), C_i = (m A_i / a_i)^(1/(m+1)).
 inline double closed_form_coefficient(const Problem& p, size_t i) noexcept { return root_m1(p.m * p.error[i] / p.per_tri_ms[i], p.m); }
 
+/// The best resolution of way w at multiplier l: argmax over [lo, hi] of -A n^-m - l a n.
+inline double best_resolution(const Way& w, double lambda) noexcept {
+    if (w.error <= 0) return lambda > 0 ? w.lo : w.hi;
+    if (lambda <= 0) return w.hi;
+    return clamp(root_m1(w.m * w.error / (lambda * w.per_tri_ms), w.m), w.lo, w.hi);
+}
+
+/// Object i's way of least cost at its lo (the lowest such j).
+inline uint32_t cheapest_way(const Problem& p, size_t i) noexcept {
+    uint32_t best = 0;
+    for (uint32_t j = 1; j < p.way_count(i); ++j)
+        if (p.cost(i, j, p.way(i, j).lo) < p.cost(i, best, p.way(i, best).lo)) best = j;
+    return best;
+}
+
 struct Deadline {
     std::chrono::steady_clock::time_point end;
     bool active = false;
@@ -45,12 +60,17 @@ struct Deadline {
 double variable_budget(const Problem& p, const std::vector<uint8_t>& drawn) noexcept;
 /// Recomputes plan.cost_ms, plan.benefit and plan.feasible from plan.triangles.
 void evaluate(const Problem& p, Plan& plan) noexcept;
-/// Sets plan.upper_bound and plan.gap from the dual bound at `lambda`.
-void certify(const Problem& p, Plan& plan, double lambda) noexcept;
+/// Sets plan.upper_bound and plan.gap from the dual bound at `lambda`: over every way of a menu
+/// with `ways` (exact on a menu), over way 0 alone otherwise (the problem the others solve).
+void certify(const Problem& p, Plan& plan, double lambda, bool ways = false) noexcept;
+/// dual_bound() over every way of a menu (`ways`) or over way 0 alone.
+double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda, bool ways) noexcept;
 
 void solve_exact(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_greedy(const Problem& p, const SelectParams& params, Plan& plan);
+void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan);
+void solve_greedy_menu(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_size_heuristic(const Problem& p, const SelectParams& params, double stress, Plan& plan);
 
 } // namespace tcr::detail

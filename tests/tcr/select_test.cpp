@@ -121,25 +121,6 @@ TEST_CASE("certificates never lie: no random feasible plan beats the upper bound
     }
 }
 
-TEST_CASE("greedy reaches at least half the optimum", "[tcr][select]") {
-    std::mt19937 rng(17);
-    for (int trial = 0; trial < 30; ++trial) {
-        const tcr::Problem p = random_problem(rng, 12, 1.0, 0.02 + 0.5 * (trial % 5) / 4.0);
-        std::vector<double> coverage;
-        const tcr::SelectParams sp = params_for(p, coverage);
-        tcr::Plan greedy, exact;
-        tcr::select(tcr::SelectorKind::greedy, p, sp, greedy);
-        tcr::select(tcr::SelectorKind::exact, p, sp, exact);
-        // benefit above the all-minimum plan, so "half" is meaningful for negative accuracies
-        double base = 0;
-        for (size_t i = 0; i < p.size(); ++i) base += p.benefit(i, p.lo[i]);
-        INFO("trial " << trial << " greedy " << greedy.benefit - base << " optimum " << exact.benefit - base);
-        CHECK(greedy.feasible);
-        CHECK(greedy.benefit - base >= 0.5 * (exact.benefit - base));
-        CHECK(greedy.benefit <= exact.upper_bound + 1e-9 * std::abs(exact.upper_bound));
-    }
-}
-
 TEST_CASE("every selector keeps every feasible instance within budget", "[tcr][select]") {
     std::mt19937 rng(23);
     for (int trial = 0; trial < 40; ++trial) {
@@ -263,4 +244,240 @@ TEST_CASE("the stress factor follows the TOM paper's load band", "[tcr][stress]"
     CHECK(tcr::update_stress(1.0, 130, 100) == Approx(1.4));  // load 1.3 > 1.0: stress
     CHECK(tcr::update_stress(1.0, 80, 100) == Approx(1.0));   // inside the band
     CHECK(tcr::update_stress(2.0, 0, 100) == Approx(2.0));    // no measurement yet
+}
+
+// --- menus: a way per object besides its level (Funkhouser's rendering algorithms, imposters) ---
+
+namespace {
+
+// random_problem's objects drawn smooth-shaded (way 0, m as given), each with up to three other
+// ways: flat shading (Funkhouser's m = 1 on polygons: twice the error, 0.7 of the cost), a
+// texture (half the error, 1.4 of the cost, more set-up) and an imposter (two triangles, a fixed
+// error worth `imposter_share` of the object's range of accuracy, the set-up of a refresh)
+tcr::Problem random_menu_problem(std::mt19937& rng, size_t n, double m, double budget_share) {
+    std::uniform_real_distribution<double> u(0, 1);
+    tcr::Problem p = random_problem(rng, n, m, 1.0);
+    p.way_begin.assign(1, 0);
+    double lo_cost = 0, hi_cost = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const tcr::Way base = p.way(i, 0);
+        if (u(rng) < 0.8) p.ways.push_back({1.0, 2.0 * base.error / std::pow(base.lo, m - 1.0), 0.7 * base.per_tri_ms, base.setup_ms, base.lo, base.hi});
+        if (u(rng) < 0.6) p.ways.push_back({m, 0.5 * base.error, 1.4 * base.per_tri_ms, base.setup_ms + 0.02, base.lo, base.hi});
+        if (u(rng) < 0.5) {
+            const double imposter_error = (0.05 + 0.5 * u(rng)) * base.error * std::pow(base.lo, -m) * 4.0;  // benefit I - this at n = 2
+            p.ways.push_back({1.0, imposter_error * 2.0, base.per_tri_ms, 0.05 + 0.1 * u(rng), 2, 2});
+        }
+        p.way_begin.push_back(uint32_t(p.ways.size()));
+        double cheapest = INFINITY, dearest = 0;
+        for (uint32_t j = 0; j < p.way_count(i); ++j) {
+            const tcr::Way w = p.way(i, j);
+            cheapest = std::min(cheapest, p.cost(i, j, w.lo));
+            dearest = std::max(dearest, p.cost(i, j, w.hi));
+        }
+        lo_cost += cheapest;
+        hi_cost += dearest;
+    }
+    p.budget_ms = lo_cost + budget_share * (hi_cost - lo_cost);
+    return p;
+}
+
+// The best benefit over every way of every object on a dense geometric grid of resolutions.
+double brute_force_menu(const tcr::Problem& p, int steps) {
+    const size_t n = p.size();
+    double best = -INFINITY;
+    std::function<void(size_t, double, double)> rec = [&](size_t i, double c, double b) {
+        if (c > p.budget_ms) return;
+        if (i == n) {
+            best = std::max(best, b);
+            return;
+        }
+        for (uint32_t j = 0; j < p.way_count(i); ++j) {
+            const tcr::Way w = p.way(i, j);
+            const int count = w.hi > w.lo ? steps : 0;
+            for (int s = 0; s <= count; ++s) {
+                const double x = w.lo * std::pow(w.hi / w.lo, count ? double(s) / count : 0.0);
+                rec(i + 1, c + p.cost(i, j, x), b + p.benefit(i, j, x));
+            }
+        }
+    };
+    rec(0, 0, 0);
+    return best;
+}
+
+double plan_benefit(const tcr::Problem& p, const tcr::Plan& plan) {
+    double b = 0;
+    for (size_t i = 0; i < p.size(); ++i)
+        if (plan.drawn[i]) b += p.benefit(i, plan.way[i], plan.triangles[i]);
+    return b;
+}
+
+} // namespace
+
+TEST_CASE("menus: exact's certificate bounds the brute-force optimum over every way, and its plan comes within a small gap", "[tcr][select][menu]") {
+    std::mt19937 rng(37);
+    int at_optimum = 0, trials = 0, switched = 0;
+    for (double m : {1.0, 2.0})
+        for (int trial = 0; trial < 16; ++trial) {
+            const tcr::Problem p = random_menu_problem(rng, 3, m, 0.03 + 0.5 * (trial % 4) / 3.0);
+            const double brute = brute_force_menu(p, 60);
+            std::vector<double> coverage;
+            const tcr::SelectParams sp = params_for(p, coverage);
+            tcr::Plan plan;
+            tcr::select(tcr::SelectorKind::exact, p, sp, plan);
+            INFO("m " << m << " trial " << trial << ": benefit " << plan.benefit << " brute " << brute << " bound " << plan.upper_bound << " gap " << plan.gap);
+            REQUIRE(plan.feasible);
+            CHECK(plan.cost_ms <= p.budget_ms * (1 + 1e-9));
+            CHECK(plan.benefit == Approx(plan_benefit(p, plan)).epsilon(1e-12));
+            CHECK(plan.upper_bound >= brute - 1e-9 * std::abs(brute));  // the relaxation's bound holds over every way
+            const double range = std::abs(plan.upper_bound);
+            CHECK(plan.benefit >= brute - 0.02 * range);  // within 2% of the bound's size of the optimum
+            at_optimum += plan.benefit >= brute - 1e-6 * range;
+            for (size_t i = 0; i < p.size(); ++i) switched += plan.way[i] != 0;
+            ++trials;
+        }
+    CHECK(at_optimum >= trials * 3 / 4);  // the duality gap is usually closed by the fixed-way solve
+    CHECK(switched > 0);                  // the menu was used
+}
+
+TEST_CASE("menus: exact never does worse than without the menu, and picks a way that dominates", "[tcr][select][menu]") {
+    std::mt19937 rng(41);
+    int better = 0;
+    for (int trial = 0; trial < 20; ++trial) {
+        const tcr::Problem p = random_menu_problem(rng, 20, 1.0, 0.02 + 0.4 * (trial % 5) / 4.0);
+        tcr::Problem plain = p;
+        plain.way_begin.clear();
+        plain.ways.clear();
+        std::vector<double> coverage;
+        const tcr::SelectParams sp = params_for(p, coverage);
+        tcr::Plan with, without;
+        tcr::select(tcr::SelectorKind::exact, p, sp, with);
+        tcr::select(tcr::SelectorKind::exact, plain, sp, without);
+        INFO("trial " << trial << " with " << with.benefit << " without " << without.benefit << " gap " << with.gap);
+        CHECK(with.feasible);
+        CHECK(with.benefit >= without.benefit - 1e-3 * std::abs(without.benefit) - with.gap * std::abs(with.upper_bound));
+        better += with.benefit > without.benefit * (1 + 1e-9);
+    }
+    CHECK(better >= 10);
+    // a copy of way 0 at half the cost: every object must take it
+    std::mt19937 rng2(43);
+    tcr::Problem p = random_problem(rng2, 10, 1.0, 0.3);
+    p.way_begin.assign(1, 0);
+    for (size_t i = 0; i < p.size(); ++i) {
+        tcr::Way w = p.way(i, 0);
+        w.per_tri_ms *= 0.5;
+        w.setup_ms *= 0.5;
+        p.ways.push_back(w);
+        p.way_begin.push_back(uint32_t(p.ways.size()));
+    }
+    std::vector<double> coverage;
+    const tcr::SelectParams sp = params_for(p, coverage);
+    for (tcr::SelectorKind k : {tcr::SelectorKind::exact, tcr::SelectorKind::greedy}) {
+        tcr::Plan plan;
+        tcr::select(k, p, sp, plan);
+        INFO(tcr::selector_name(k));
+        for (size_t i = 0; i < p.size(); ++i) CHECK(plan.way[i] == 1);
+    }
+}
+
+TEST_CASE("greedy reaches at least half the optimum, over levels and over levels and ways", "[tcr][select][menu]") {
+    std::mt19937 rng(47);
+    int switched = 0;
+    for (const bool menu : {false, true})
+        for (int trial = 0; trial < 30; ++trial) {
+            const double share = 0.02 + 0.5 * (trial % 5) / 4.0;
+            const tcr::Problem p = menu ? random_menu_problem(rng, 12, 1.0, share) : random_problem(rng, 12, 1.0, share);
+            std::vector<double> coverage;
+            const tcr::SelectParams sp = params_for(p, coverage);
+            tcr::Plan greedy, exact;
+            tcr::select(tcr::SelectorKind::greedy, p, sp, greedy);
+            tcr::select(tcr::SelectorKind::exact, p, sp, exact);
+            // benefit above every object at its cheapest way's minimum, so "half" is meaningful
+            // for negative accuracies
+            double base = 0;
+            for (size_t i = 0; i < p.size(); ++i) {
+                uint32_t cheapest = 0;
+                for (uint32_t j = 1; j < p.way_count(i); ++j)
+                    if (p.cost(i, j, p.way(i, j).lo) < p.cost(i, cheapest, p.way(i, cheapest).lo)) cheapest = j;
+                base += p.benefit(i, cheapest, p.way(i, cheapest).lo);
+            }
+            INFO((menu ? "menu" : "levels") << " trial " << trial << " greedy " << greedy.benefit - base << " exact " << exact.benefit - base);
+            CHECK(greedy.feasible);
+            CHECK(greedy.benefit == Approx(plan_benefit(p, greedy)).epsilon(1e-12));
+            CHECK(greedy.benefit - base >= 0.5 * (exact.benefit - base));
+            CHECK(greedy.benefit <= exact.upper_bound + 1e-9 * std::abs(exact.upper_bound));
+            for (size_t i = 0; i < p.size(); ++i) {
+                const tcr::Way w = p.way(i, greedy.way[i]);
+                CHECK(greedy.triangles[i] >= w.lo * (1 - 1e-12));
+                CHECK(greedy.triangles[i] <= w.hi * (1 + 1e-12));
+                switched += greedy.way[i] != 0;
+            }
+        }
+    CHECK(switched > 0);  // the menu was used
+}
+
+TEST_CASE("menus: static, stress and barrier keep way 0 and plan as without the menu", "[tcr][select][menu]") {
+    std::mt19937 rng(53);
+    const tcr::Problem p = random_menu_problem(rng, 15, 1.0, 0.3);
+    tcr::Problem plain = p;
+    plain.way_begin.clear();
+    plain.ways.clear();
+    std::vector<double> coverage;
+    const tcr::SelectParams sp = params_for(p, coverage);
+    for (tcr::SelectorKind k : {tcr::SelectorKind::static_size, tcr::SelectorKind::stress, tcr::SelectorKind::barrier}) {
+        tcr::Plan with, without;
+        tcr::select(k, p, sp, with);
+        tcr::select(k, plain, sp, without);
+        INFO(tcr::selector_name(k));
+        CHECK(with.feasible == without.feasible);
+        for (size_t i = 0; i < p.size(); ++i) {
+            CHECK(with.way[i] == 0);
+            CHECK(with.triangles[i] == without.triangles[i]);
+        }
+    }
+}
+
+TEST_CASE("menus: a malformed menu is refused with what is wrong", "[tcr][select][menu]") {
+    std::mt19937 rng(59);
+    tcr::Problem p = random_menu_problem(rng, 4, 1.0, 0.3);
+    std::vector<double> coverage;
+    const tcr::SelectParams sp = params_for(p, coverage);
+    tcr::Plan plan;
+    tcr::Problem short_index = p;
+    short_index.way_begin.pop_back();
+    CHECK_THROWS_WITH(tcr::select(tcr::SelectorKind::exact, short_index, sp, plan), Catch::Contains("size() + 1 entries"));
+    tcr::Problem bad_way = p;
+    bad_way.ways.push_back({1.0, 1.0, 0.0, 0.0, 1, 2});
+    bad_way.way_begin.back() = uint32_t(bad_way.ways.size());
+    CHECK_THROWS_WITH(tcr::select(tcr::SelectorKind::exact, bad_way, sp, plan), Catch::Contains("per_tri_ms > 0"));
+}
+
+TEST_CASE("menus: exact spends the budget that a change of way leaves", "[tcr][select][menu]") {
+    // two objects; for each, a set-up heavy way of a tenth of the error: at the multiplier where
+    // the first changes its way, the cost jumps past the budget, and the feasible side leaves
+    // a share of it unspent unless the resolutions are solved again for the ways kept
+    tcr::Problem p;
+    p.m = 1.0;
+    p.resize(2);
+    for (size_t i = 0; i < 2; ++i) {
+        p.importance[i] = 1000;
+        p.error[i] = 1e5 * double(i + 1);
+        p.per_tri_ms[i] = 1e-3;
+        p.setup_ms[i] = 0;
+        p.lo[i] = 10;
+        p.hi[i] = 1e5;
+    }
+    p.way_begin = {0, 1, 2};
+    p.ways = {{1.0, 1e4, 1e-3, 4.0, 10, 1e5}, {1.0, 2e4, 1e-3, 4.0, 10, 1e5}};
+    for (double budget : {3.0, 5.0, 7.0, 9.0, 12.0}) {
+        p.budget_ms = budget;
+        const double brute = brute_force_menu(p, 4000);
+        std::vector<double> coverage;
+        const tcr::SelectParams sp = params_for(p, coverage);
+        tcr::Plan plan;
+        tcr::select(tcr::SelectorKind::exact, p, sp, plan);
+        INFO("budget " << budget << ": benefit " << plan.benefit << " brute " << brute << " cost " << plan.cost_ms << " ways " << plan.way[0] << plan.way[1]);
+        CHECK(plan.cost_ms == Approx(budget).epsilon(1e-6));  // nothing left unspent (no object is at hi)
+        CHECK(plan.benefit >= brute - 1e-6 * std::abs(brute));
+        CHECK(plan.upper_bound >= brute - 1e-9 * std::abs(brute));
+    }
 }

@@ -11,6 +11,12 @@
 // Lagrangian's maximiser is closed form per object, n_i(l) = clamp((m A_i / (l a_i))^(1/(m+1))),
 // and g(l) = sum max_n [b_i(n) - l c_i(n)] + l budget >= optimum for every l >= 0: every
 // certificate (upper bound, gap) reported here comes from such a g(l), so it never lies.
+//
+// With a menu (Funkhouser & Sequin, section 4: the tuple object, level, rendering algorithm),
+// each object also has other ways to be drawn, each with its own accuracy exponent, error
+// coefficient, costs and range: b_ij(n) = I_i - A_ij n^-m_ij, c_ij(n) = s_ij + a_ij n. One way
+// per object is chosen, a multiple-choice problem: g(l) takes the best way per object and stays
+// an upper bound, but no longer meets the optimum, and exact reports the remaining duality gap.
 
 #include <cstddef>
 #include <cstdint>
@@ -38,6 +44,16 @@ enum class OverBudgetPolicy {
     keep_minimum,         ///< draw everything at its minimum; the plan is then over budget and says so
 };
 
+/// One way to draw an object besides its first (Problem's own fields): a rendering algorithm,
+/// an imposter. The importance is the object's; everything else is the way's own.
+struct Way {
+    double m = 1.0;          ///< accuracy exponent
+    double error = 0;        ///< A_ij >= 0
+    double per_tri_ms = 0;   ///< a_ij > 0
+    double setup_ms = 0;     ///< s_ij >= 0
+    double lo = 1, hi = 1;   ///< triangle range, 1 <= lo <= hi (an imposter: its quad or depth mesh)
+};
+
 /// One frame's problem, struct of arrays over the visible objects.
 struct Problem {
     double m = 1.0;                  ///< accuracy exponent: 1/2, 1 or 2
@@ -48,11 +64,25 @@ struct Problem {
     std::vector<double> setup_ms;    ///< s_i >= 0
     std::vector<double> lo, hi;      ///< triangle range, 1 <= lo_i <= hi_i
     std::vector<double> previous;    ///< previous frame's triangles, 0 when none
+    /// The menu (optional). Object i's ways are 0, the fields above with exponent m, and
+    /// j = 1 .. way_begin[i + 1] - way_begin[i], ways[way_begin[i] + j - 1]. Empty way_begin:
+    /// no menu (way 0 only); otherwise size() + 1 non-decreasing entries ending at ways.size().
+    std::vector<uint32_t> way_begin;
+    std::vector<Way> ways;
+    std::vector<uint32_t> previous_way;  ///< the ways of `previous` (greedy's start; empty: 0)
 
     size_t size() const noexcept { return importance.size(); }
     void resize(size_t n);
     double benefit(size_t i, double n) const noexcept;  ///< b_i(n)
     double cost(size_t i, double n) const noexcept { return setup_ms[i] + per_tri_ms[i] * n; }
+
+    bool has_menu() const noexcept { return !way_begin.empty(); }
+    uint32_t way_count(size_t i) const noexcept { return has_menu() ? 1 + way_begin[i + 1] - way_begin[i] : 1; }
+    Way way(size_t i, uint32_t j) const noexcept;                     ///< way j of object i (0: its own fields)
+    double benefit(size_t i, uint32_t j, double n) const noexcept;    ///< b_ij(n)
+    double cost(size_t i, uint32_t j, double n) const noexcept;       ///< c_ij(n)
+    /// \throw std::invalid_argument when the menu's arrays do not fit together
+    void check_menu() const;
 };
 
 struct SelectParams {
@@ -69,6 +99,7 @@ struct SelectParams {
 struct Plan {
     std::vector<double> triangles;   ///< chosen n_i (continuous; the runtime rounds down to a resolution)
     std::vector<uint8_t> drawn;      ///< 0 for objects left out by the over-budget policy
+    std::vector<uint32_t> way;       ///< the way chosen for each object (0 without a menu)
     double cost_ms = 0;              ///< sum of c_i over drawn objects
     double benefit = 0;              ///< sum of b_i over drawn objects
     double upper_bound = 0;          ///< certified: no feasible plan (same drawn set) has more benefit; NaN if none
@@ -86,14 +117,18 @@ struct Plan {
 /// Computes a plan for `p` with the chosen selector. Allocates only when `plan` must grow.
 /// Every selector returns a plan with cost_ms <= budget_ms whenever one exists (a plan of only
 /// minimum resolutions fits); otherwise the policy decides.
+/// With a menu: exact and greedy choose the way and the resolution of every object (the minima
+/// that must fit are then each object's cheapest way at its lo); static, stress and barrier keep
+/// every object's way 0, as without a menu.
 void select(SelectorKind kind, const Problem& p, const SelectParams& params, Plan& plan);
 
 /// The dual bound g(l) for the drawn objects of `plan` (see above), and the l that the plan's
-/// marginal costs suggest; used by tests and by selectors for their certificates.
+/// marginal costs suggest; used by tests and by selectors for their certificates. With a menu,
+/// each object's best way at l: a bound on every plan, whatever its ways.
 double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda) noexcept;
 
-/// Scales every drawn n_i toward lo_i by one factor so the plan fits the budget (closed form).
-/// \return false when even the minima do not fit.
+/// Scales every drawn n_i toward lo_i by one factor so the plan fits the budget (closed form),
+/// each in its way (plan.way; none: way 0). \return false when even the minima do not fit.
 bool fit_to_budget(const Problem& p, Plan& plan) noexcept;
 
 /// The TOM paper's stress feedback: load = measured / target; stress x (1 - a) below the band,
