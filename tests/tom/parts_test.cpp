@@ -264,6 +264,35 @@ TEST_CASE("parts: through the .tom file, glTF (a primitive per part) and OBJ + M
         check_parts(m, tom::build(m));
     }
 
+    SECTION("OBJ: a group without a material gets a default entry of the .mtl, not a name it lacks") {
+        tom::TomMesh unassigned = built;
+        unassigned.parts[0].material = -1;
+        const std::vector<uint8_t> b = tom::serialize({unassigned}, scene);
+        const tom::File f = tom::File::from_bytes(b.data(), b.size(), "unassigned.tom");
+        const tom::MeshView& w = f.mesh(0);
+        tom::ExportPart part;
+        part.mesh = &w;
+        part.indices.resize(size_t(w.triangle_count) * 3);
+        part.draws.resize(2);
+        const tom::Extracted e = tom::extract_parts(w, w.vertex_count, part.indices.data(), part.indices.size(), part.draws.data());
+        part.vertex_count = e.vertex_count;
+        part.indices.resize(size_t(e.triangle_count) * 3);
+        const std::string obj = (dir / "unassigned.obj").string();
+        tom::export_meshes(obj, {part}, f.scene());
+        std::ifstream obj_in(obj), mtl_in(dir / "unassigned.mtl");
+        const std::string obj_text((std::istreambuf_iterator<char>(obj_in)), std::istreambuf_iterator<char>());
+        const std::string mtl_text((std::istreambuf_iterator<char>(mtl_in)), std::istreambuf_iterator<char>());
+        CHECK(obj_text.find("usemtl default\n") != std::string::npos);
+        CHECK(obj_text.find("(null)") == std::string::npos);
+        CHECK(mtl_text.find("newmtl default\n") != std::string::npos);
+        tom::ImportResult back = tom::import_file(obj);
+        CHECK(back.warnings.empty());  // every usemtl is defined
+        REQUIRE(back.meshes.size() == 1);
+        CHECK(back.meshes[0].parts.size() == 2);
+        REQUIRE(back.scene.materials.size() == 2);
+        CHECK((back.scene.materials[0].name == "default" || back.scene.materials[1].name == "default"));
+    }
+
     SECTION("OBJ: a missing .mtl is a warning naming it, and the groups are still parts") {
         const std::string obj = (dir / "lonely.obj").string();
         std::ofstream(obj) << "mtllib nowhere.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n";

@@ -81,13 +81,30 @@ std::vector<std::string> material_names(const Scene& scene, int count) {
     return names;
 }
 
-std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, const std::string& texture_dir, const std::string& obj_path) {
+// Whether a group of the parts has no material (-1).
+bool any_without_material(const std::vector<ExportPart>& parts) {
+    for (const ExportPart& part : parts)
+        for (const PartDraw& d : groups_of(part))
+            if (d.material < 0 && d.index_count > 0) return true;
+    return false;
+}
+
+// A name not among `names`: `base`, or base_2, base_3, ...
+std::string unused_name(const std::string& base, const std::vector<std::string>& names) {
+    std::string name = base;
+    for (int k = 2; std::find(names.begin(), names.end(), name) != names.end(); ++k) name = base + "_" + std::to_string(k);
+    return name;
+}
+
+// The .mtl of `names`: the scene's first `stored` materials, then default entries (the
+// materials the scene lacks, the groups without one).
+std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, size_t stored, const std::string& texture_dir, const std::string& obj_path) {
     namespace fs = std::filesystem;
     const fs::path out_dir = fs::absolute(fs::path(obj_path)).parent_path();
     std::string out = "# written by libtom\n";
     for (size_t k = 0; k < names.size(); ++k) {
         append(out, "\nnewmtl %s\n", names[k].c_str());
-        if (k >= scene.materials.size()) {
+        if (k >= scene.materials.size() || k >= stored) {
             out += "Kd 0.8 0.8 0.8\n";
             continue;
         }
@@ -110,6 +127,8 @@ std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, 
     return out;
 }
 
+// `materials`: a name per material index, and, when a group has none, a last one for those
+// (OBJ has no "no material" once a usemtl has been given).
 std::string obj_text(const std::vector<ExportPart>& parts, const std::vector<std::string>& materials, const std::string& mtl_name) {
     const Streams s = common_streams(parts);
     std::string out;
@@ -143,7 +162,7 @@ std::string obj_text(const std::vector<ExportPart>& parts, const std::vector<std
         append(out, "o %.*s\n", int(part.mesh->name.size()), part.mesh->name.data());
         for (const PartDraw& group : groups_of(part)) {
             if (group.index_count == 0) continue;
-            if (!materials.empty()) append(out, "usemtl %s\n", group.material >= 0 ? materials[size_t(group.material)].c_str() : "(null)");
+            if (!materials.empty()) append(out, "usemtl %s\n", (group.material >= 0 ? materials[size_t(group.material)] : materials.back()).c_str());
             for (size_t t = group.first_index; t + 2 < size_t(group.first_index) + group.index_count; t += 3) {
                 out += 'f';
                 for (int k = 0; k < 3; ++k) {
@@ -213,10 +232,12 @@ void export_meshes(const std::string& path, const std::vector<ExportPart>& parts
     const std::string ext = extension_of(path);
     std::string bytes;
     if (ext == "obj") {
-        const std::vector<std::string> materials = material_names(scene, max_material(parts) + 1);
+        std::vector<std::string> materials = material_names(scene, max_material(parts) + 1);
+        const size_t stored = materials.size();
+        if (!materials.empty() && any_without_material(parts)) materials.push_back(unused_name("default", materials));
         const std::filesystem::path mtl = std::filesystem::path(path).replace_extension(".mtl");
         if (!materials.empty()) {
-            const std::string text = mtl_text(scene, materials, texture_dir, path);
+            const std::string text = mtl_text(scene, materials, stored, texture_dir, path);
             write_bytes_atomically(mtl.string(), text.data(), text.size());
         }
         bytes = obj_text(parts, materials, mtl.filename().string());
