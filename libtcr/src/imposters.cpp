@@ -215,4 +215,52 @@ Switching switching_distances(const Setting& s, double max_distance) {
     return out;
 }
 
+double view_angle(const Capture& c, const double eye[3]) {
+    double a[3], b[3], aa = 0, bb = 0, ab = 0;
+    for (int k = 0; k < 3; ++k) {
+        a[k] = c.eye[k] - c.centre[k];
+        b[k] = eye[k] - c.centre[k];
+        aa += a[k] * a[k];
+        bb += b[k] * b[k];
+        ab += a[k] * b[k];
+    }
+    if (aa <= 0.0 || bb <= 0.0) return 0.0;
+    return std::acos(std::max(-1.0, std::min(1.0, ab / std::sqrt(aa * bb))));
+}
+
+double surface_distance(const Capture& c, const double eye[3]) {
+    double dd = 0;
+    for (int k = 0; k < 3; ++k) dd += (eye[k] - c.centre[k]) * (eye[k] - c.centre[k]);
+    return std::max(1e-9, std::sqrt(dd) - c.radius);
+}
+
+namespace {
+
+// The capture's distortion at surface distance d and angle theta from its viewpoint.
+double distortion_at(const Capture& c, double d, double theta) {
+    if (theta >= kPi / 2.0) return 2.0 * std::atan(c.radius / d);  // its back: the whole object is wrong
+    if (c.method == Method::meshed_imposter) return meshed_imposter_distortion(c.k, c.radius, d, c.polygons, theta);
+    return simple_imposter_distortion(d, c.radius, theta);
+}
+
+} // namespace
+
+double distortion_from(const Capture& c, const double eye[3]) { return distortion_at(c, surface_distance(c, eye), view_angle(c, eye)); }
+
+double lifetime(const Capture& c, double d, double bound, double speed, double min_distance) {
+    // the worst viewpoint after walking w: nearer by w (down to min_distance) and around by the
+    // reachable angle, both growing with w, and the distortion with both
+    auto worst = [&](double w) { return distortion_at(c, std::max(min_distance, d - w), reachable_angle(d, c.radius, w, min_distance)); };
+    if (worst(0.0) > bound) return 0.0;
+    // far enough to reach 90 degrees at min_distance: beyond it nothing changes
+    const double far = (d - min_distance) + (c.radius + min_distance) * kPi;
+    if (worst(far) <= bound) return kInfinity;
+    double lo = 0.0, hi = far;
+    for (int it = 0; it < 200 && hi - lo > 1e-12 * far; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (worst(mid) <= bound ? lo : hi) = mid;
+    }
+    return lo / speed;
+}
+
 } // namespace tcr::imposters

@@ -129,3 +129,52 @@ TEST_CASE("the paper's example: polygons below 15 m, meshed imposters beyond, si
     big.radius = 10;
     CHECK(im::switching_distances(big).meshed_imposters_above > w.meshed_imposters_above);
 }
+
+TEST_CASE("a captured imposter: its angle, its distortion seen from elsewhere, by hand", "[tcr][imposters][capture]") {
+    im::Capture c;
+    c.eye[0] = 10;  // captured from 10 m along +x of a 1 m object at the origin
+    const double side[3] = {0, 10, 0}, behind[3] = {-10, 0, 0}, halfway[3] = {10 * std::cos(kPi / 6), 10 * std::sin(kPi / 6), 0}, nearer[3] = {5, 0, 0};
+    CHECK(im::view_angle(c, c.eye) == Approx(0).margin(1e-12));
+    CHECK(im::view_angle(c, side) == Approx(kPi / 2));
+    CHECK(im::view_angle(c, halfway) == Approx(kPi / 6));
+    CHECK(im::surface_distance(c, side) == Approx(9));
+    // from its own viewpoint a capture is exact; from the side the whole object is wrong:
+    // 2 atan(r / d) = 2 atan(1 / 9) = 0.221 rad; from behind no better
+    CHECK(im::distortion_from(c, c.eye) == Approx(0).margin(1e-12));
+    CHECK(im::distortion_from(c, side) == Approx(2 * std::atan(1.0 / 9.0)));
+    CHECK(im::distortion_from(c, behind) == Approx(2 * std::atan(1.0 / 9.0)));
+    // at 30 degrees, 4.3's weighting: (1 - cos 60) / 2 x the whole angle + (1 + cos 60) / 2 x gamma_min
+    CHECK(im::distortion_from(c, halfway) == Approx(0.25 * 2 * std::atan(1.0 / 9.0) + 0.75 * im::gamma_min(9, 1, kPi / 6)));
+    // nearer along the capture's own line: still exact in angle (theta 0)
+    CHECK(im::distortion_from(c, nearer) == Approx(0).margin(1e-12));
+    // a meshed imposter of N polygons at 30 degrees: ((1 - cos 60) + (1 + cos 60) k sin 30 / 2N) 2 atan(1/9)
+    im::Capture meshed = c;
+    meshed.method = im::Method::meshed_imposter;
+    meshed.polygons = 50;
+    CHECK(im::distortion_from(meshed, halfway) == Approx((0.5 + 1.5 * 5.0 * 0.5 / 100.0) * 2 * std::atan(1.0 / 9.0)));
+}
+
+TEST_CASE("a captured imposter's lifetime: the paper's example lasts its T where the model switches to it", "[tcr][imposters][capture][paper]") {
+    const im::Setting s = im::paper_example();  // T = 1 s at v = 1 m/s, D = 1 mrad
+    const im::Switching w = im::switching_distances(s);
+    im::Capture c;
+    c.radius = s.radius;
+    // at the distance from which simple imposters meet the bound for T, one lasts T; nearer, less
+    const double at = w.simple_imposters_above;
+    CHECK(im::lifetime(c, at, s.distortion, s.speed, s.min_distance) >= s.lifetime * (1 - 1e-6));
+    CHECK(im::lifetime(c, at * 0.995, s.distortion, s.speed, s.min_distance) < s.lifetime);
+    CHECK(im::lifetime(c, at * 2, s.distortion, s.speed, s.min_distance) > im::lifetime(c, at, s.distortion, s.speed, s.min_distance));
+    // twice the speed, half the lifetime
+    CHECK(im::lifetime(c, at, s.distortion, 2 * s.speed, s.min_distance) == Approx(0.5 * im::lifetime(c, at, s.distortion, s.speed, s.min_distance)));
+    // the same for a meshed imposter of the polygons Table 1 gives at 20 m
+    im::Capture meshed = c;
+    meshed.method = im::Method::meshed_imposter;
+    meshed.k = s.k;
+    meshed.polygons = im::polygons_needed(s, im::Method::meshed_imposter, 20);
+    CHECK(im::lifetime(meshed, 20, s.distortion, s.speed, s.min_distance) >= s.lifetime * (1 - 1e-6));
+    meshed.polygons *= 0.5;  // half of them: the bound breaks sooner
+    CHECK(im::lifetime(meshed, 20, s.distortion, s.speed, s.min_distance) < s.lifetime);
+    // a bound the capture never meets: no lifetime; one it always meets: forever
+    CHECK(im::lifetime(c, 0.5, 1e-9, s.speed, s.min_distance) > 0);  // a tiny bound: exact at its own viewpoint, so a short life
+    CHECK(im::lifetime(c, 0.5, 10.0, s.speed, s.min_distance) == INFINITY);
+}

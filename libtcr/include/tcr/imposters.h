@@ -115,4 +115,30 @@ struct Switching {
 };
 Switching switching_distances(const Setting& s, double max_distance = 1000.0);
 
+// --- reuse of a captured imposter (sections 4.3, 4.4 and 5.2 turned around) -----------------------
+
+/// An imposter of an object (centre, radius) captured from a viewpoint: a simple imposter, or a
+/// meshed one over a depth mesh of `polygons` polygons.
+struct Capture {
+    Method method = Method::simple_imposter;  ///< simple_imposter or meshed_imposter
+    double eye[3] = {0, 0, 0};                ///< the viewpoint it was rendered from
+    double centre[3] = {0, 0, 0};
+    double radius = 1.0;
+    double polygons = 2;                      ///< the depth mesh's polygons (meshed imposters)
+    double k = 5.0;                           ///< the object's D_rel = k / N, for the depth mesh
+};
+
+/// theta of section 4: the angle at the object's centre between the capture's viewpoint and `eye`.
+double view_angle(const Capture& c, const double eye[3]);
+/// The distance from `eye` to the object's surface (its sphere), at least 1e-9.
+double surface_distance(const Capture& c, const double eye[3]);
+/// The capture seen from `eye`: its distortion (4.3 or 4.4) at theta = view_angle and the
+/// current surface distance; beyond 90 degrees the imposter shows its back, the whole angle.
+double distortion_from(const Capture& c, const double eye[3]);
+/// How long the capture lasts for a viewer at surface distance d walking at `speed`: the least
+/// time after which the worst viewpoint it can reach (section 5.2: nearer by the distance
+/// walked, down to min_distance, and around by reachable_angle) sees more than `bound`. 0 when
+/// even the capture's own viewpoint does; infinity when no walk ever does.
+double lifetime(const Capture& c, double d, double bound, double speed, double min_distance);
+
 } // namespace tcr::imposters
