@@ -107,18 +107,10 @@ double choose_at(const Problem& p, const Plan& plan, double lambda, std::vector<
     double cost = 0;
     for (size_t i = 0; i < p.size(); ++i) {
         if (!plan.drawn[i]) continue;
-        double best = -INFINITY, best_cost = 0;
-        for (uint32_t j = 0; j < p.way_count(i); ++j) {
-            const double x = best_resolution(p.way(i, j), lambda), c = p.cost(i, j, x);
-            const double value = p.benefit(i, j, x) - lambda * c;
-            if (value > best || (value == best && c < best_cost)) {  // ties: the cheaper way
-                best = value;
-                best_cost = c;
-                way[i] = j;
-                n[i] = x;
-            }
-        }
-        cost += best_cost;
+        const WayChoice best = best_way_at(p, i, lambda);
+        way[i] = best.way;
+        n[i] = best.n;
+        cost += best.cost;
     }
     return cost;
 }
@@ -126,26 +118,17 @@ double choose_at(const Problem& p, const Plan& plan, double lambda, std::vector<
 // The resolutions for fixed ways that meet the budget (bisection on l; the fixed-way problem is
 // concave, so this is its optimum), starting from a feasible multiplier `feasible`.
 void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline& deadline) {
-    auto cost_at = [&](double lambda) {
+    auto fits = [&](double lambda) {
         double c = 0;
         for (size_t i = 0; i < p.size(); ++i)
             if (plan.drawn[i]) c += p.cost(i, plan.way[i], best_resolution(p.way(i, plan.way[i]), lambda));
-        return c;
+        return c <= p.budget_ms;
     };
-    double hi = feasible, lo = hi;
-    if (cost_at(0) <= p.budget_ms) {
-        hi = 0;
-    } else {
-        for (int k = 0; k < 200 && cost_at(lo) <= p.budget_ms; ++k) lo *= 0.5;
-        for (int it = 0; it < 200 && hi > lo * (1 + 1e-9); ++it) {
-            const double mid = std::sqrt(lo * hi);
-            (cost_at(mid) <= p.budget_ms ? hi : lo) = mid;
-            ++plan.iterations;
-            if ((it & 7) == 7 && deadline.expired()) {
-                plan.deadline_hit = true;
-                break;
-            }
-        }
+    double hi = 0;
+    if (!fits(0)) {
+        double lo = feasible;
+        for (int k = 0; k < 200 && fits(lo); ++k) lo *= 0.5;
+        hi = bisect_multiplier(lo, feasible, 1e-9, fits, deadline, plan);
     }
     for (size_t i = 0; i < p.size(); ++i)
         if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
@@ -177,15 +160,7 @@ void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan) 
         lo = 0.5 * hi;
     }
     const double tolerance = std::max(1e-12, params.tolerance * 1e-3);
-    for (int it = 0; it < 200 && hi > lo * (1 + tolerance); ++it) {
-        const double mid = std::sqrt(lo * hi);
-        (choose_at(p, plan, mid, way, n) <= p.budget_ms ? hi : lo) = mid;
-        ++plan.iterations;
-        if ((it & 7) == 7 && deadline.expired()) {
-            plan.deadline_hit = true;
-            break;
-        }
-    }
+    hi = bisect_multiplier(lo, hi, tolerance, [&](double lambda) { return choose_at(p, plan, lambda, way, n) <= p.budget_ms; }, deadline, plan);
     choose_at(p, plan, hi, way, n);
     take();
     spend_budget(p, plan, hi, deadline);

@@ -15,16 +15,26 @@ namespace {
 
 constexpr double kStep = 1.25;
 
+// The ladder over [lo, hi]: the resolution of step k (0 = lo), capped at hi; the top step; the
+// step at or just below n. (Bounds, not a Way: the plain greedy's hot loop reads its arrays.)
+namespace greedy_ladder {
+double level(double lo, double hi, int k) { return std::min(hi, lo * std::pow(kStep, k)); }
+int top(double lo, double hi) { return hi > lo ? int(std::ceil(std::log(hi / lo) / std::log(kStep) - 1e-12)) : 0; }
+int nearest_below(double lo, double hi, double n) {
+    if (n <= lo) return 0;
+    return std::min(top(lo, hi), int(std::floor(std::log(n / lo) / std::log(kStep) + 1e-9)));
+}
+double level(const Way& w, int k) { return level(w.lo, w.hi, k); }
+int top(const Way& w) { return top(w.lo, w.hi); }
+int nearest_below(const Way& w, double n) { return nearest_below(w.lo, w.hi, n); }
+} // namespace greedy_ladder
+
+// Object i's ladder in its one way.
 struct Ladder {
     const Problem& p;
-    double level(size_t i, int k) const {  // resolution of step k (0 = lo), capped at hi
-        return std::min(p.hi[i], p.lo[i] * std::pow(kStep, k));
-    }
-    int top(size_t i) const { return p.hi[i] > p.lo[i] ? int(std::ceil(std::log(p.hi[i] / p.lo[i]) / std::log(kStep) - 1e-12)) : 0; }
-    int nearest_below(size_t i, double n) const {
-        if (n <= p.lo[i]) return 0;
-        return std::min(top(i), int(std::floor(std::log(n / p.lo[i]) / std::log(kStep) + 1e-9)));
-    }
+    double level(size_t i, int k) const { return greedy_ladder::level(p.lo[i], p.hi[i], k); }
+    int top(size_t i) const { return greedy_ladder::top(p.lo[i], p.hi[i]); }
+    int nearest_below(size_t i, double n) const { return greedy_ladder::nearest_below(p.lo[i], p.hi[i], n); }
 };
 
 using Entry = std::pair<double, uint32_t>;  // value, object
@@ -111,6 +121,8 @@ void solve_greedy(const Problem& p, const SelectParams&, Plan& plan) {
 
 namespace {
 
+using namespace greedy_ladder;
+
 struct State {
     uint32_t way = 0;
     int step = 0;
@@ -125,12 +137,6 @@ struct Move {
 struct MenuLadder {
     const Problem& p;
     Way way(size_t i, uint32_t j) const { return p.way(i, j); }
-    static double level(const Way& w, int k) { return std::min(w.hi, w.lo * std::pow(kStep, k)); }
-    static int top(const Way& w) { return w.hi > w.lo ? int(std::ceil(std::log(w.hi / w.lo) / std::log(kStep) - 1e-12)) : 0; }
-    static int nearest_below(const Way& w, double n) {
-        if (n <= w.lo) return 0;
-        return std::min(top(w), int(std::floor(std::log(n / w.lo) / std::log(kStep) + 1e-9)));
-    }
     double cost(size_t i, State s) const { return p.cost(i, s.way, level(way(i, s.way), s.step)); }
     double benefit(size_t i, State s) const { return p.benefit(i, s.way, level(way(i, s.way), s.step)); }
 
@@ -185,7 +191,7 @@ void solve_greedy_menu(const Problem& p, const SelectParams&, Plan& plan) {
     for (size_t i = 0; i < n; ++i) {
         if (!plan.drawn[i]) continue;
         const uint32_t j = p.previous_way.size() == n && p.previous_way[i] < p.way_count(i) ? p.previous_way[i] : 0;
-        state[i] = {j, MenuLadder::nearest_below(p.way(i, j), p.previous[i])};
+        state[i] = {j, greedy_ladder::nearest_below(p.way(i, j), p.previous[i])};
         cost += ladder.cost(i, state[i]);
     }
     auto less = [](const Entry& x, const Entry& y) { return x.first < y.first || (x.first == y.first && x.second > y.second); };
@@ -219,7 +225,7 @@ void solve_greedy_menu(const Problem& p, const SelectParams&, Plan& plan) {
     for (size_t i = 0; i < n; ++i)
         if (plan.drawn[i]) {
             plan.way[i] = state[i].way;
-            plan.triangles[i] = MenuLadder::level(p.way(i, state[i].way), state[i].step);
+            plan.triangles[i] = greedy_ladder::level(p.way(i, state[i].way), state[i].step);
         }
     fit_to_budget(p, plan);  // the minima fit (the policy saw to it): this only guards rounding
 }

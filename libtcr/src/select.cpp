@@ -120,12 +120,7 @@ double detail::dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, d
     for (size_t i = 0; i < p.size(); ++i) {
         if (!drawn[i]) continue;
         if (ways && p.has_menu()) {  // the best way at l
-            double best = -INFINITY;
-            for (uint32_t j = 0; j < p.way_count(i); ++j) {
-                const double n = best_resolution(p.way(i, j), lambda);
-                best = std::max(best, p.benefit(i, j, n) - lambda * p.cost(i, j, n));
-            }
-            g += best;
+            g += best_way_at(p, i, lambda).value;
             continue;
         }
         double n;
@@ -165,10 +160,9 @@ namespace {
 
 // The least object i can cost: at its lo, in its cheapest way (way 0 alone unless `menu`).
 double min_cost(const Problem& p, size_t i, bool menu) noexcept {
-    double c = p.cost(i, p.lo[i]);
-    if (menu)
-        for (uint32_t j = 1; j < p.way_count(i); ++j) c = std::min(c, p.cost(i, j, p.way(i, j).lo));
-    return c;
+    if (!menu) return p.cost(i, p.lo[i]);
+    const uint32_t j = cheapest_way(p, i);
+    return p.cost(i, j, p.way(i, j).lo);
 }
 
 // Leaves out the objects of least importance per ms at minimum until the minima fit.

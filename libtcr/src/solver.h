@@ -36,6 +36,22 @@ inline double best_resolution(const Way& w, double lambda) noexcept {
     return clamp(root_m1(w.m * w.error / (lambda * w.per_tri_ms), w.m), w.lo, w.hi);
 }
 
+/// Object i's best way and resolution at multiplier l: argmax over its ways j and n of
+/// b_ij(n) - l c_ij(n), `value` that maximum (ties: the cheaper way, then the lower j).
+struct WayChoice {
+    uint32_t way = 0;
+    double n = 0, value = -INFINITY, cost = 0;
+};
+inline WayChoice best_way_at(const Problem& p, size_t i, double lambda) noexcept {
+    WayChoice best;
+    for (uint32_t j = 0; j < p.way_count(i); ++j) {
+        const double x = best_resolution(p.way(i, j), lambda), c = p.cost(i, j, x);
+        const double value = p.benefit(i, j, x) - lambda * c;
+        if (value > best.value || (value == best.value && c < best.cost)) best = {j, x, value, c};
+    }
+    return best;
+}
+
 /// Object i's way of least cost at its lo (the lowest such j).
 inline uint32_t cheapest_way(const Problem& p, size_t i) noexcept {
     uint32_t best = 0;
@@ -55,6 +71,23 @@ struct Deadline {
     }
     bool expired() const noexcept { return active && std::chrono::steady_clock::now() >= end; }
 };
+
+/// Geometric bisection of a multiplier bracket [lo, hi] (infeasible at lo, feasible at hi) down
+/// to hi <= lo (1 + tolerance), 200 steps at most, stopping at the deadline (checked every 8);
+/// counts plan.iterations and sets plan.deadline_hit. \return the feasible end.
+template <class Feasible>
+double bisect_multiplier(double lo, double hi, double tolerance, Feasible&& feasible, const Deadline& deadline, Plan& plan) {
+    for (int it = 0; it < 200 && hi > lo * (1 + tolerance); ++it) {
+        const double mid = std::sqrt(lo * hi);
+        (feasible(mid) ? hi : lo) = mid;
+        ++plan.iterations;
+        if ((it & 7) == 7 && deadline.expired()) {
+            plan.deadline_hit = true;
+            break;
+        }
+    }
+    return hi;
+}
 
 /// Budget left for the drawn objects' per-triangle costs: budget minus their setup costs.
 double variable_budget(const Problem& p, const std::vector<uint8_t>& drawn) noexcept;

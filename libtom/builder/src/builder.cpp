@@ -699,23 +699,13 @@ Mesh original_mesh(const TomMesh& tom) {
     const uint32_t n = tom.vertex_count(), m = tom.triangle_count();
     if (tom.original_index.size() != n || tom.original_triangle.size() != m)
         throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "' has no map to its input (only a TomMesh from build() has one)");
+    for (const uint32_t v : tom.original_index)
+        if (v >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_index is not a permutation");
     Mesh mesh;
     mesh.name = tom.name;
     mesh.material = tom.material;
-    auto scatter = [&](const std::vector<float>& src, std::vector<float>& dst, size_t width) {
-        if (src.size() != size_t(n) * width) return;
-        dst.resize(src.size());
-        for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t v = tom.original_index[i];
-            if (v >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_index is not a permutation");
-            std::memcpy(&dst[size_t(v) * width], &src[size_t(i) * width], width * sizeof(float));
-        }
-    };
-    scatter(tom.positions, mesh.positions, 3);
-    std::vector<const std::vector<float>*> sources;
-    for_each_attribute_stream(tom, [&](const std::vector<float>& values, size_t, const char*) { sources.push_back(&values); });
-    size_t stream = 0;
-    for_each_attribute_stream(mesh, [&](std::vector<float>& dst, size_t width, const char*) { scatter(*sources[stream++], dst, width); });
+    detail::Team team(1);
+    gather_vertex_streams(tom, mesh, inverse_order(tom.original_index, team), team);  // input vertex v is sorted vertex new_index[v]
     mesh.indices.resize(size_t(m) * 3);
     for (uint32_t slot = 0; slot < m; ++slot) {
         const uint32_t t = tom.original_triangle[slot];
