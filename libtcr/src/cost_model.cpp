@@ -167,6 +167,12 @@ CostModel read_cost_model(const std::string& path) {
         else if (key == "t_pix_ms") m.t_pix_ms = value;
         else if (key == "safety_ms") m.safety_ms = value;
         else if (key == "noise_rel") m.noise_rel = value;
+        else if (key == "flat_t_tri_ms") m.flat_t_tri_ms = value;
+        else if (key == "flat_t_vert_ms") m.flat_t_vert_ms = value;
+        else if (key == "flat_t_pix_ms") m.flat_t_pix_ms = value;
+        else if (key == "imposter_t_setup_ms") m.imposter_t_setup_ms = value;
+        else if (key == "imposter_t_pix_ms") m.imposter_t_pix_ms = value;
+        else if (key == "refresh_t_setup_ms") m.refresh_t_setup_ms = value;
         else throw tom::ParseError(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
     }
     return m;
@@ -180,6 +186,8 @@ void write_cost_model(const std::string& path, const CostModel& m, const std::st
     out.precision(9);
     out << "t_init_ms " << m.t_init_ms << "\nt_final_ms " << m.t_final_ms << "\nt_setup_ms " << m.t_setup_ms << "\nt_tri_ms " << m.t_tri_ms
         << "\nt_vert_ms " << m.t_vert_ms << "\nt_pix_ms " << m.t_pix_ms << "\nsafety_ms " << m.safety_ms << "\nnoise_rel " << m.noise_rel << "\n";
+    out << "flat_t_tri_ms " << m.flat_t_tri_ms << "\nflat_t_vert_ms " << m.flat_t_vert_ms << "\nflat_t_pix_ms " << m.flat_t_pix_ms << "\nimposter_t_setup_ms "
+        << m.imposter_t_setup_ms << "\nimposter_t_pix_ms " << m.imposter_t_pix_ms << "\nrefresh_t_setup_ms " << m.refresh_t_setup_ms << "\n";
     if (!out) throw tom::IoError("cannot write calibration file '" + path + "'");
 }
 

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 
+#include "tcr/imposters.h"
 #include "tom/error_curve.h"
 
 namespace tcr {
@@ -32,7 +33,60 @@ double scale_of(const float t[16]) {
     return s;
 }
 
+// The eye of a world -> eye transform: -R^T t.
+void eye_of(const float view[16], double eye[3]) {
+    for (int k = 0; k < 3; ++k) eye[k] = -(double(view[k * 4]) * view[12] + double(view[k * 4 + 1]) * view[13] + double(view[k * 4 + 2]) * view[14]);
+}
+
+// The object's bounding sphere in world space: the box centre transformed, half the diagonal scaled.
+void world_sphere(const float t[16], const Box& box, double diagonal, double centre[3], double& radius) {
+    double c[3];
+    for (int k = 0; k < 3; ++k) c[k] = 0.5 * (double(box.min[k]) + box.max[k]);
+    for (int k = 0; k < 3; ++k) centre[k] = t[k] * c[0] + t[4 + k] * c[1] + t[8 + k] * c[2] + t[12 + k];
+    radius = 0.5 * diagonal * scale_of(t);
+}
+
+double distance3(const double a[3], const double b[3]) { return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])); }
+
+uint32_t power_of_two_at_least(double x, uint32_t lo, uint32_t hi) {
+    uint32_t side = lo;
+    while (side < hi && double(side) < x) side *= 2;
+    return side;
+}
+
 } // namespace
+
+const char* representation_name(Representation r) noexcept {
+    switch (r) {
+    case Representation::smooth: return "smooth";
+    case Representation::flat: return "flat";
+    case Representation::simple_imposter: return "imposter";
+    }
+    return "?";
+}
+
+void imposter_camera(const ImposterState& s, float view[16], float projection[16]) noexcept {
+    double dir[3], d = 0;
+    for (int k = 0; k < 3; ++k) dir[k] = double(s.centre[k]) - s.eye[k], d += dir[k] * dir[k];
+    d = std::sqrt(std::max(d, 1e-30));
+    const float up_y[3] = {0, 1, 0}, up_x[3] = {1, 0, 0};
+    look_at(s.eye, s.centre, std::abs(dir[1]) > 0.99 * d ? up_x : up_y, view);  // an up not along the view
+    const double half = std::asin(std::min(0.999, double(s.radius) / d));
+    perspective(float(2.0 * half), 1.0f, float(std::max(d - s.radius, 1e-3 * d)), float(d + s.radius), projection);
+}
+
+void imposter_quad(const ImposterState& s, float corners[12]) noexcept {
+    float view[16], projection[16];
+    imposter_camera(s, view, projection);
+    // the frustum's half side at the centre's distance: d tan(half angle) = 1 / P[5] x d
+    double d = 0;
+    for (int k = 0; k < 3; ++k) d += (double(s.centre[k]) - s.eye[k]) * (double(s.centre[k]) - s.eye[k]);
+    const double h = std::sqrt(d) / double(projection[5]);
+    const double right[3] = {view[0], view[4], view[8]}, up[3] = {view[1], view[5], view[9]};
+    const double su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
+    for (int c = 0; c < 4; ++c)
+        for (int k = 0; k < 3; ++k) corners[3 * c + k] = float(s.centre[k] + h * (su[c] * right[k] + sv[c] * up[k]));
+}
 
 Runtime::Runtime(const CostModel& model, SelectorKind selector) : model_(model), selector_(selector) {}
 
@@ -74,8 +128,16 @@ uint32_t Runtime::add_object(const tom::MeshView& mesh, const float transform[16
     return uint32_t(objects_.size() - 1);
 }
 
-void Runtime::set_transform(uint32_t id, const float transform[16]) noexcept { std::copy(transform, transform + 16, objects_[id].transform); }
+void Runtime::set_transform(uint32_t id, const float transform[16]) noexcept {
+    Object& o = objects_[id];
+    if (!std::equal(transform, transform + 16, o.transform)) o.imposter.valid = false;  // a capture of where it was
+    std::copy(transform, transform + 16, o.transform);
+}
 void Runtime::set_weight(uint32_t id, float weight) noexcept { objects_[id].weight = weight; }
+
+void Runtime::clear_imposters() noexcept {
+    for (Object& o : objects_) o.imposter = ImposterState();
+}
 
 double Runtime::c_for(const Object& o, double m, double fixed_c) const noexcept { return o.has_curve ? o.c_by_m[m_index(m)] : fixed_c; }
 
@@ -138,19 +200,212 @@ uint32_t Runtime::resolution_for(const Object& o, double triangles) const noexce
     return v;
 }
 
+// Object k's ways beyond way 0 (the levels, smooth-shaded, already in problem_): the levels
+// flat-shaded; its imposter as captured, while the capture's distortion from here is within the
+// bound; a new capture from here. An imposter's benefit is that of its projected error: the
+// captured level's, the distortion (Pasman & Jansen 4.3) and the texture's magnification; a
+// refresh costs its render into the texture spread over the capture's expected lifetime
+// (section 5.2 at the viewer's speed), and the whole of it in the frame's prediction.
+void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double radians_per_px) {
+    const Object& o = objects_[id];
+    const ObjectResult& r = results_[id];
+    const Menu& menu = params.menu;
+    const double I = problem_.importance[k];
+    const uint32_t parts = tom::part_count(*o.mesh);
+    const Representation previous = r.representation;
+    uint32_t previous_way = 0;
+    auto push = [&](const Way& w, WayKind kind) {
+        problem_.ways.push_back(w);
+        way_kinds_.push_back(kind);
+        const uint32_t j = uint32_t(problem_.ways.size() - problem_.way_begin[k]);
+        if (previous == kind.representation && (previous_way == 0 || !kind.refresh)) previous_way = j;
+    };
+    if (menu.flat && model_.has_flat()) {
+        Way w;
+        w.m = problem_.m;
+        w.per_tri_ms = std::max(1e-12, (model_.flat_t_tri_ms + model_.flat_t_vert_ms * o.vertices_per_triangle) * r.inside_share);
+        const double fill = model_.flat_t_pix_ms * r.coverage_px;
+        w.hi = problem_.hi[k];
+        w.lo = std::min(w.hi, std::max(o.min_triangles, fill / w.per_tri_ms));
+        w.setup_ms = model_.t_setup_ms * parts + std::max(0.0, fill - w.per_tri_ms * w.lo);
+        w.error = problem_.error[k] * menu.flat_error_factor;
+        push(w, {Representation::flat, false, 0, 0, 0});
+    }
+    double centre[3], radius;
+    world_sphere(o.transform, o.box, o.diagonal, centre, radius);
+    const double from_centre = distance3(eye_, centre);
+    if (menu.imposters && model_.has_imposters() && radius > 0 && from_centre > menu.min_distance_radii * radius && r.size_px >= 2) {
+        // an imposter's quad is two triangles: A n^-m at n = 2 is I e
+        auto imposter_way = [&](double cost_ms, double error_px) {
+            Way w;
+            w.m = problem_.m;
+            w.lo = w.hi = 2;
+            w.per_tri_ms = 1e-12;
+            w.setup_ms = std::max(0.0, cost_ms - 2e-12);
+            w.error = I * error_px * std::pow(2.0, problem_.m);
+            return w;
+        };
+        const double needed_px = 2.0 * std::asin(std::min(1.0, radius / from_centre)) / radians_per_px;  // the sphere's angular diameter
+        const double quad_ms = model_.imposter_ms(r.coverage_px);
+        imposters::Capture capture;
+        capture.radius = radius;
+        for (int c = 0; c < 3; ++c) capture.eye[c] = eye_[c], capture.centre[c] = centre[c];
+        const double bound_rad = menu.imposter_max_px * radians_per_px;
+        const ImposterState& kept = o.imposter;
+        if (kept.valid) {
+            imposters::Capture old = capture;
+            for (int c = 0; c < 3; ++c) old.eye[c] = kept.eye[c];
+            const double distortion_px = imposters::distortion_from(old, eye_) / radians_per_px;
+            if (distortion_px <= menu.imposter_max_px) {
+                const double level_px = projected_error_px(o, r, tom::active_triangle_count(*o.mesh, kept.vertices));
+                const double magnified_px = 0.5 * std::max(0.0, needed_px / kept.texture_px - 1.0);
+                const double e = level_px + distortion_px + magnified_px;
+                push(imposter_way(quad_ms, e), {Representation::simple_imposter, false, e, kept.texture_px, kept.vertices});
+            }
+        }
+        // a new capture from here: the level of capture_error_px, a texture holding the sphere
+        const uint32_t vertices = resolution_for(o, triangles_for_error(id, menu.capture_error_px));
+        const uint32_t triangles = tom::active_triangle_count(*o.mesh, vertices);
+        const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
+        const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
+        Object& mo = objects_[id];
+        const double d = from_centre - radius;
+        if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d) {  // Pasman's lifetime changes slowly with distance
+            mo.lifetime_distance = d;
+            mo.lifetime_s = speed_ > 0 ? imposters::lifetime(capture, d, bound_rad, speed_, (menu.min_distance_radii - 1.0) * radius) : INFINITY;
+        }
+        const double interval_s = menu.frame_interval_s > 0 ? menu.frame_interval_s : 1e-3 * params.budget_ms;
+        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, mo.lifetime_s / interval_s));
+        const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
+        push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
+        way_kinds_.back().full_ms = quad_ms + refresh_ms;
+    }
+    problem_.previous_way[k] = previous_way;
+}
+
+// The resolution and prediction of object `id` (k-th visible) drawn its way `way` with about
+// `triangles`; \return its predicted time.
+double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
+    const Object& o = objects_[id];
+    ObjectResult& r = results_[id];
+    const WayKind kind = way == 0 ? WayKind{Representation::smooth, false, 0, 0, 0} : way_kinds_[problem_.way_begin[k] + way - 1];
+    const double parts = double(tom::part_count(*o.mesh));
+    r.representation = kind.representation;
+    r.refresh = kind.refresh;
+    if (kind.representation == Representation::simple_imposter) {
+        r.vertices = kind.vertices;
+        r.triangles = kind.refresh ? tom::active_triangle_count(*o.mesh, kind.vertices) : 0;
+        r.error_px = kind.error_px;
+        r.predicted_ms = correction_ * (kind.refresh ? kind.full_ms : model_.imposter_ms(r.coverage_px));
+        return r.predicted_ms;
+    }
+    r.vertices = resolution_for(o, triangles);
+    r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
+    r.predicted_ms = correction_ * (kind.representation == Representation::flat ? model_.flat_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts)
+                                                                                 : model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts));
+    r.error_px = projected_error_px(o, r, r.triangles);
+    return r.predicted_ms;
+}
+
+// A plan spreads refreshes over their lifetimes; the frame pays each whole. While that tips it
+// over the budget, the refresh that costs the most becomes its kept capture (when one is within
+// the bound) or the captured level drawn smooth.
+void Runtime::repair_refreshes(double budget_ms, double& predicted) {
+    for (;;) {
+        if (predicted <= budget_ms) return;
+        size_t worst = SIZE_MAX;
+        for (size_t k = 0; k < visible_ids_.size(); ++k) {
+            const ObjectResult& r = results_[visible_ids_[k]];
+            if (r.drawn && r.refresh && (worst == SIZE_MAX || r.predicted_ms > results_[visible_ids_[worst]].predicted_ms)) worst = k;
+        }
+        if (worst == SIZE_MAX) return;
+        const uint32_t id = visible_ids_[worst];
+        uint32_t kept = 0;  // the kept capture's way, when offered
+        for (uint32_t j = 1; j < problem_.way_count(worst); ++j) {
+            const WayKind& kind = way_kinds_[problem_.way_begin[worst] + j - 1];
+            if (kind.representation == Representation::simple_imposter && !kind.refresh) kept = j;
+        }
+        // else the level the refresh would have rendered, smooth: its error, without the
+        // render into the texture (the step-down after this trims it if the frame is still over)
+        const WayKind& refresh = way_kinds_[problem_.way_begin[worst] + plan_.way[worst] - 1];
+        const double triangles = kept ? 2.0 : std::max(problem_.lo[worst], double(tom::active_triangle_count(*objects_[id].mesh, refresh.vertices)));
+        predicted -= results_[id].predicted_ms;
+        plan_.way[worst] = kept;
+        predicted += choose(id, worst, triangles, kept);
+        plan_.triangles[worst] = triangles;
+    }
+}
+
+// The plan counts each refresh at its cost spread over the capture's lifetime; the frame pays
+// it whole. So a frame renews at most what a quarter of the budget pays for beyond the spread
+// cost, the cheapest first (the others wait for a later frame), and the plan is solved again
+// with that time set aside, so that every object, not the refreshes alone, gives it up.
+void Runtime::reserve_refreshes(const SelectParams& sp) {
+    if (!problem_.has_menu()) return;
+    std::vector<Renewal>& renewals = renewals_;
+    renewals.clear();
+    for (size_t k = 0; k < visible_ids_.size(); ++k) {
+        const uint32_t j = plan_.way[k];
+        if (!plan_.drawn[k] || j == 0) continue;
+        const WayKind& kind = way_kinds_[problem_.way_begin[k] + j - 1];
+        if (kind.refresh) renewals.push_back({std::max(0.0, kind.full_ms - problem_.cost(k, j, 2.0)), k, j});
+    }
+    if (renewals.empty()) return;
+    std::sort(renewals.begin(), renewals.end(), [](const Renewal& a, const Renewal& b) { return a.extra < b.extra || (a.extra == b.extra && a.k < b.k); });
+    const double budget = problem_.budget_ms, reserve = 0.25 * budget;
+    double kept = 0;
+    for (const Renewal& r : renewals) {
+        if (kept + r.extra <= reserve) kept += r.extra;
+        else problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = 2.0 * budget;  // not this frame
+    }
+    problem_.budget_ms = budget - kept;
+    select(selector_, problem_, sp, plan_);
+    problem_.budget_ms = budget;
+}
+
+// The eye of this frame, and the viewer's speed: given, or the eye's motion since the last
+// frame over the frame interval, smoothed.
+void Runtime::note_viewer(const FrameParams& params) {
+    eye_of(params.camera.view, eye_);
+    const double interval_s = params.menu.frame_interval_s > 0 ? params.menu.frame_interval_s : 1e-3 * params.budget_ms;
+    if (params.menu.viewer_speed >= 0) speed_ = params.menu.viewer_speed;
+    else if (have_eye_ && interval_s > 0 && std::isfinite(interval_s)) speed_ = 0.5 * speed_ + 0.5 * distance3(eye_, last_eye_) / interval_s;
+    std::copy(eye_, eye_ + 3, last_eye_);
+    have_eye_ = true;
+}
+
+// A refresh chosen: the object's imposter is now the capture from this frame's eye.
+void Runtime::commit_capture(uint32_t id, uint32_t way, size_t k) {
+    Object& o = objects_[id];
+    const WayKind& kind = way_kinds_[problem_.way_begin[k] + way - 1];
+    double centre[3], radius;
+    world_sphere(o.transform, o.box, o.diagonal, centre, radius);
+    ImposterState& s = o.imposter;
+    s.valid = true;
+    for (int c = 0; c < 3; ++c) s.eye[c] = float(eye_[c]), s.centre[c] = float(centre[c]);
+    s.radius = float(radius);
+    s.texture_px = kind.texture_px;
+    s.vertices = kind.vertices;
+    s.frame = frame_;
+    o.lifetime_distance = -1;  // measured again from the new capture
+}
+
 const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     const auto start = std::chrono::steady_clock::now();
     last_camera_ = params.camera;
     last_fixed_c_ = params.fixed_c;
     report_ = FrameReport();
     visible_ids_.clear();
+    note_viewer(params);
     for (uint32_t id = 0; id < objects_.size(); ++id) {
         Object& o = objects_[id];
         ObjectResult& r = results_[id];
         const double previous = r.drawn ? r.triangles : 0.0;
+        const Representation previous_representation = r.drawn ? r.representation : Representation::smooth;
         const Projection p = project_box(params.camera, o.transform, o.box, params.focus_weight);
         r = ObjectResult();
         r.triangles = uint32_t(previous);  // kept for the problem's "previous" until replaced below
+        r.representation = previous_representation;
         r.visible = p.visible;
         if (!p.visible) {
             o.last_x = o.last_y = -1;
@@ -185,6 +440,13 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     if (!params.correct_model) correction_ = 1.0;
     report_.correction = correction_;
     problem_.budget_ms = (params.budget_ms - model_.frame_fixed_ms()) / correction_;
+    const bool menu = (params.menu.flat && model_.has_flat()) || (params.menu.imposters && model_.has_imposters());
+    problem_.ways.clear();
+    way_kinds_.clear();
+    problem_.way_begin.assign(menu ? n + 1 : 0, 0);
+    problem_.previous_way.assign(menu ? n : 0, 0);
+    const float* P = params.camera.projection;
+    const double radians_per_px = (P[5] != 0 ? 2.0 * std::atan(1.0 / P[5]) : 1.0) / std::max<uint32_t>(1, params.camera.viewport_height);
     for (size_t k = 0; k < n; ++k) {
         const uint32_t id = visible_ids_[k];
         const Object& o = objects_[id];
@@ -206,12 +468,18 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         problem_.hi[k] = hi;
         problem_.previous[k] = r.triangles > 0 ? std::min(hi, std::max(lo, double(r.triangles))) : 0.0;
         coverage_[k] = r.coverage_px;
+        if (menu) {
+            problem_.way_begin[k] = uint32_t(problem_.ways.size());
+            add_ways(id, k, params, radians_per_px);
+        }
     }
+    if (menu) problem_.way_begin[n] = uint32_t(problem_.ways.size());
     stress_ = update_stress(stress_, params.previous_frame_ms, params.budget_ms);
     report_.stress = stress_;
     if (params.error_bounded) {
         plan_.triangles.resize(n);
         plan_.drawn.assign(n, 1);
+        plan_.way.assign(n, 0);  // the levels alone: an error bound is a level's
         for (size_t k = 0; k < n; ++k) plan_.triangles[k] = problem_.hi[k];  // hi is the error bound's resolution
         plan_.cost_ms = plan_.benefit = 0;
         for (size_t k = 0; k < n; ++k) {
@@ -231,41 +499,49 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         sp.coverage_px = coverage_.data();
         sp.stress = stress_;
         select(selector_, problem_, sp, plan_);
+        reserve_refreshes(sp);
     }
     // round down to the TOM resolutions and predict with the real vertex counts
-    // (the finest resolution with at most `triangles`; returns its predicted time)
-    auto choose = [&](const Object& o, ObjectResult& r, double triangles) {
-        r.vertices = resolution_for(o, triangles);
-        r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-        r.predicted_ms = correction_ * model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, double(tom::part_count(*o.mesh)));
-        r.error_px = projected_error_px(o, r, r.triangles);
-        return r.predicted_ms;
-    };
     double predicted = model_.frame_fixed_ms();
     for (size_t k = 0; k < n; ++k) {
         const uint32_t id = visible_ids_[k];
         ObjectResult& r = results_[id];
         r.drawn = plan_.drawn[k] != 0;
         r.triangles = 0;
-        if (r.drawn) predicted += choose(objects_[id], r, plan_.triangles[k]);
+        r.representation = Representation::smooth;
+        if (r.drawn) predicted += choose(id, k, plan_.triangles[k], plan_.way[k]);
     }
+    if (!params.error_bounded) repair_refreshes(params.budget_ms, predicted);
     // vertex counts are exact here and were estimated in the problem: step down if that tipped
-    // a feasible plan over the budget
+    // a feasible plan over the budget (imposters have no levels to step down)
     for (int round = 0; round < 8 && plan_.feasible && predicted > params.budget_ms && !params.error_bounded; ++round) {
         const double factor = std::max(0.5, 1.0 - (predicted - params.budget_ms) / std::max(predicted - model_.frame_fixed_ms(), 1e-12) - 0.01);
         predicted = model_.frame_fixed_ms();
         for (size_t k = 0; k < n; ++k) {
             ObjectResult& r = results_[visible_ids_[k]];
-            if (r.drawn) predicted += choose(objects_[visible_ids_[k]], r, std::max(problem_.lo[k], r.triangles * factor));
+            if (!r.drawn) continue;
+            if (r.representation == Representation::simple_imposter) predicted += r.predicted_ms;
+            else predicted += choose(visible_ids_[k], k, std::max(problem_.way(k, plan_.way[k]).lo, r.triangles * factor), plan_.way[k]);
         }
     }
     for (size_t k = 0; k < n; ++k) {
-        const ObjectResult& r = results_[visible_ids_[k]];
+        const uint32_t id = visible_ids_[k];
+        const ObjectResult& r = results_[id];
         if (!r.drawn) continue;
         ++report_.drawn;
         report_.triangles += r.triangles;
         report_.max_error_px = std::max(report_.max_error_px, r.error_px);
+        report_.flat += r.representation == Representation::flat;
+        if (r.representation == Representation::simple_imposter) {
+            ++report_.imposters;
+            report_.triangles += 2;  // its quad
+            if (r.refresh) {
+                ++report_.refreshes;
+                commit_capture(id, plan_.way[k], k);
+            }
+        }
     }
+    ++frame_;
     report_.visible = uint32_t(n);
     report_.predicted_ms = predicted;
     last_predicted_ms_ = predicted;
@@ -281,14 +557,14 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
 
 tom::Extracted Runtime::indices(uint32_t id, uint32_t* destination, size_t capacity) const noexcept {
     const ObjectResult& r = results_[id];
-    if (!r.drawn) return {};
+    if (!has_geometry(r)) return {};
     return tom::extract(*objects_[id].mesh, r.vertices, destination, capacity);
 }
 
 tom::Extracted Runtime::indices(uint32_t id, uint32_t* destination, size_t capacity, tom::PartDraw* draws) const noexcept {
     const ObjectResult& r = results_[id];
     const uint32_t parts = tom::part_count(*objects_[id].mesh);
-    if (!r.drawn) {
+    if (!has_geometry(r)) {
         for (uint32_t p = 0; p < parts; ++p) draws[p] = {0, 0, tom::part_at(*objects_[id].mesh, p).material};
         return {};
     }
@@ -297,7 +573,7 @@ tom::Extracted Runtime::indices(uint32_t id, uint32_t* destination, size_t capac
 
 tom::Extracted Runtime::indices(uint32_t id, uint16_t* destination, size_t capacity) const noexcept {
     const ObjectResult& r = results_[id];
-    if (!r.drawn) return {};
+    if (!has_geometry(r)) return {};
     return tom::extract(*objects_[id].mesh, r.vertices, destination, capacity);
 }
 

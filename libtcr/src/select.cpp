@@ -186,29 +186,35 @@ void drop_least_valuable(const Problem& p, bool menu, Plan& plan) {
 }
 
 // Keeps the previous resolution where the change would be smaller than the dead band; undoes
-// the snaps that cost the most if the plan no longer fits.
+// the snaps that cost the most if the plan no longer fits. With a menu, only objects drawn the
+// way they were drawn in the previous frame snap, within that way's range.
 void apply_hysteresis(const Problem& p, double band, Plan& plan) {
     std::vector<uint32_t>& snapped = plan.work_index;
     snapped.clear();
     double cost = 0;
+    const bool menu = p.has_menu() && p.previous_way.size() == p.size();
     for (size_t i = 0; i < p.size(); ++i) {
         if (!plan.drawn[i]) continue;
+        const uint32_t j = plan.way[i];
+        const Way w = p.way(i, j);
         const double prev = p.previous[i];
-        if (prev >= p.lo[i] && prev <= p.hi[i] && prev > 0 && std::abs(plan.triangles[i] - prev) < band * prev && plan.triangles[i] != prev) {
+        const bool same_way = !menu || p.previous_way[i] == j;
+        if (same_way && prev >= w.lo && prev <= w.hi && prev > 0 && std::abs(plan.triangles[i] - prev) < band * prev && plan.triangles[i] != prev) {
             plan.work_a[i] = plan.triangles[i];  // remember the solver's value
             plan.triangles[i] = prev;
             snapped.push_back(uint32_t(i));
         }
-        cost += p.cost(i, plan.triangles[i]);
+        cost += p.cost(i, j, plan.triangles[i]);
     }
     if (cost <= p.budget_ms) return;
+    auto extra = [&](uint32_t i) { return p.way(i, plan.way[i]).per_tri_ms * (plan.triangles[i] - plan.work_a[i]); };
     std::sort(snapped.begin(), snapped.end(), [&](uint32_t x, uint32_t y) {
-        const double dx = p.per_tri_ms[x] * (plan.triangles[x] - plan.work_a[x]), dy = p.per_tri_ms[y] * (plan.triangles[y] - plan.work_a[y]);
+        const double dx = extra(x), dy = extra(y);
         return dx > dy || (dx == dy && x < y);
     });
     for (uint32_t i : snapped) {
         if (cost <= p.budget_ms) break;
-        cost -= p.per_tri_ms[i] * (plan.triangles[i] - plan.work_a[i]);
+        cost -= extra(i);
         plan.triangles[i] = plan.work_a[i];
     }
 }
@@ -256,7 +262,7 @@ void select(SelectorKind kind, const Problem& p, const SelectParams& params, Pla
     case SelectorKind::static_size: solve_size_heuristic(p, params, 1.0, plan); break;
     case SelectorKind::stress: solve_size_heuristic(p, params, params.stress, plan); break;
     }
-    if (params.hysteresis > 0 && !menu) apply_hysteresis(p, params.hysteresis, plan);  // (a menu's ways: greedy starts from the previous frame)
+    if (params.hysteresis > 0 && !(menu && kind == SelectorKind::greedy)) apply_hysteresis(p, params.hysteresis, plan);  // (greedy on a menu starts from the previous frame)
     evaluate(p, plan);
     // the certificate holds for any plan with these drawn objects: recompute the gap for the final one
     if (!std::isnan(plan.upper_bound)) plan.gap = std::max(0.0, (plan.upper_bound - plan.benefit) / std::max(std::abs(plan.upper_bound), 1e-300));

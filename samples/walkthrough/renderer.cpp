@@ -17,27 +17,59 @@ namespace walk {
 
 namespace {
 
-const char* kVertex = R"(#version 330 core
+// The mesh shaders, smooth or flat: QUALIFIER is "" (Gouraud, interpolated) or "flat" (the
+// provoking vertex's shade over the whole triangle).
+const char* kVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 uniform mat4 model;
 uniform mat4 view_projection;
 uniform vec3 color;
-out vec3 shade;
+QUALIFIER out vec3 shade;
 void main() {
     vec3 n = normalize(mat3(model) * normal);
-    // Gouraud: two directional lights and an ambient term, lit per vertex
+    // two directional lights and an ambient term, lit per vertex
     float d = 0.15 + 0.65 * max(dot(n, normalize(vec3(0.4, 0.8, 0.5))), 0.0) + 0.3 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.4))), 0.0);
     shade = color * d;
     gl_Position = view_projection * model * vec4(position, 1.0);
 }
 )";
 
-const char* kFragment = R"(#version 330 core
-in vec3 shade;
+const char* kFragment = R"(
+QUALIFIER in vec3 shade;
 out vec4 frag;
 void main() { frag = vec4(shade, 1.0); }
 )";
+
+// A simple imposter: one quad from four corners (a triangle strip of gl_VertexID 0..3), its
+// texture alpha-tested so the object's outline, not the quad, shows.
+const char* kImposterVertex = R"(#version 330 core
+uniform vec3 corners[4];
+uniform mat4 view_projection;
+out vec2 uv;
+void main() {
+    const int corner[4] = int[4](0, 1, 3, 2);
+    const vec2 uvs[4] = vec2[4](vec2(0, 0), vec2(1, 0), vec2(1, 1), vec2(0, 1));
+    int c = corner[gl_VertexID];
+    uv = uvs[c];
+    gl_Position = view_projection * vec4(corners[c], 1.0);
+}
+)";
+
+const char* kImposterFragment = R"(#version 330 core
+in vec2 uv;
+uniform sampler2D image;
+uniform vec3 color;
+uniform float tint;
+out vec4 frag;
+void main() {
+    vec4 c = texture(image, uv);
+    if (c.a < 0.5) discard;
+    frag = vec4(mix(c.rgb, color, tint), 1.0);
+}
+)";
+
+constexpr float kBackground[3] = {0.92f, 0.93f, 0.95f};
 
 GLuint compile(GLenum type, const char* src) {
     GLuint s = glCreateShader(type);
@@ -53,17 +85,114 @@ GLuint compile(GLenum type, const char* src) {
     return s;
 }
 
+GLuint link(const std::string& vertex, const std::string& fragment) {
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, compile(GL_VERTEX_SHADER, vertex.c_str()));
+    glAttachShader(program, compile(GL_FRAGMENT_SHADER, fragment.c_str()));
+    glLinkProgram(program);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) throw std::runtime_error("OpenGL: cannot link the shaders");
+    return program;
+}
+
+// "#version 330 core" and the qualifier in front of a mesh shader
+std::string with_qualifier(const char* source, const char* qualifier) {
+    std::string s = std::string("#version 330 core\n") + source;
+    const size_t at = s.find("QUALIFIER");
+    s.replace(at, 9, qualifier);
+    return s;
+}
+
 } // namespace
 
 struct Renderer::Impl {
     OSMesaContext context = nullptr;
     std::vector<unsigned char> color;
-    GLuint program = 0, vao = 0, index_buffer = 0;
-    GLint u_model = -1, u_vp = -1, u_color = -1;
+    struct MeshProgram {
+        GLuint program = 0;
+        GLint u_model = -1, u_vp = -1, u_color = -1;
+    } smooth, flat;
+    GLuint imposter_program = 0, vao = 0, quad_vao = 0, index_buffer = 0;
+    GLint u_corners = -1, u_imposter_vp = -1, u_image = -1, u_imposter_color = -1, u_tint = -1;
+    GLuint framebuffer = 0, depth = 0;
+    uint32_t depth_side = 0;
     struct Mesh {
         GLuint vbo;
     };
     std::vector<Mesh> meshes;
+    std::vector<GLuint> textures;   // by slot, 0 where none yet
+    std::vector<uint32_t> sides;
+
+    MeshProgram make_mesh_program(const char* qualifier) {
+        MeshProgram p;
+        p.program = link(with_qualifier(kVertex, qualifier), with_qualifier(kFragment, qualifier));
+        p.u_model = glGetUniformLocation(p.program, "model");
+        p.u_vp = glGetUniformLocation(p.program, "view_projection");
+        p.u_color = glGetUniformLocation(p.program, "color");
+        return p;
+    }
+    // the slot's texture at side x side, and the depth buffer at least that large
+    GLuint texture_for(uint32_t slot, uint32_t side) {
+        if (slot >= textures.size()) textures.resize(slot + 1, 0), sides.resize(slot + 1, 0);
+        if (!textures[slot]) {
+            glGenTextures(1, &textures[slot]);
+            glBindTexture(GL_TEXTURE_2D, textures[slot]);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        }
+        if (sides[slot] != side) {
+            glBindTexture(GL_TEXTURE_2D, textures[slot]);
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, GLsizei(side), GLsizei(side), 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+            sides[slot] = side;
+        }
+        if (side > depth_side) {
+            glBindRenderbuffer(GL_RENDERBUFFER, depth);
+            glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, GLsizei(side), GLsizei(side));
+            depth_side = side;
+        }
+        return textures[slot];
+    }
+    void draw_meshes(const MeshProgram& p, const float vp[16], const std::vector<Draw>& draws, int32_t capture, Shading shading) {
+        glUseProgram(p.program);
+        glUniformMatrix4fv(p.u_vp, 1, GL_FALSE, vp);
+        glBindVertexArray(vao);
+        for (const Draw& d : draws) {
+            if (d.capture != capture || d.shading != shading) continue;
+            glBindBuffer(GL_ARRAY_BUFFER, meshes[d.mesh].vbo);
+            glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, nullptr);
+            glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(12));
+            glEnableVertexAttribArray(0);
+            glEnableVertexAttribArray(1);
+            glUniformMatrix4fv(p.u_model, 1, GL_FALSE, d.model);
+            // a mirroring transform (glTF scenes have them) turns counter-clockwise front faces clockwise
+            const float* m = d.model;
+            const float det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[4] * (m[1] * m[10] - m[2] * m[9]) + m[8] * (m[1] * m[6] - m[2] * m[5]);
+            glFrontFace(det < 0 ? GL_CW : GL_CCW);
+            glUniform3fv(p.u_color, 1, d.color);
+            glDrawElements(GL_TRIANGLES, GLsizei(d.index_count), GL_UNSIGNED_INT, reinterpret_cast<void*>(d.first * sizeof(uint32_t)));
+        }
+    }
+    void draw_imposters(const float vp[16], const std::vector<Draw>& draws) {
+        glUseProgram(imposter_program);
+        glUniformMatrix4fv(u_imposter_vp, 1, GL_FALSE, vp);
+        glUniform1i(u_image, 0);
+        glActiveTexture(GL_TEXTURE0);
+        glBindVertexArray(quad_vao);
+        glDisable(GL_CULL_FACE);  // seen from behind its capture, a quad still shows (its error is the distortion's)
+        for (const Draw& d : draws) {
+            if (d.shading != Shading::imposter || d.texture >= textures.size() || !textures[d.texture]) continue;
+            glBindTexture(GL_TEXTURE_2D, textures[d.texture]);
+            glUniform3fv(u_corners, 4, d.corners);
+            glUniform3fv(u_imposter_color, 1, d.color);
+            glUniform1f(u_tint, d.tint);
+            glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+        }
+        glEnable(GL_CULL_FACE);
+        glBindVertexArray(vao);
+    }
 };
 
 Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Impl>()), width_(width), height_(height) {
@@ -74,16 +203,17 @@ Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Imp
     impl_->color.resize(size_t(width) * height * 4);
     if (!OSMesaMakeCurrent(impl_->context, impl_->color.data(), GL_UNSIGNED_BYTE, GLsizei(width), GLsizei(height)))
         throw std::runtime_error("OSMesa: cannot make the context current");
-    impl_->program = glCreateProgram();
-    glAttachShader(impl_->program, compile(GL_VERTEX_SHADER, kVertex));
-    glAttachShader(impl_->program, compile(GL_FRAGMENT_SHADER, kFragment));
-    glLinkProgram(impl_->program);
-    GLint ok = 0;
-    glGetProgramiv(impl_->program, GL_LINK_STATUS, &ok);
-    if (!ok) throw std::runtime_error("OpenGL: cannot link the shaders");
-    impl_->u_model = glGetUniformLocation(impl_->program, "model");
-    impl_->u_vp = glGetUniformLocation(impl_->program, "view_projection");
-    impl_->u_color = glGetUniformLocation(impl_->program, "color");
+    impl_->smooth = impl_->make_mesh_program("");
+    impl_->flat = impl_->make_mesh_program("flat");
+    impl_->imposter_program = link(kImposterVertex, kImposterFragment);
+    impl_->u_corners = glGetUniformLocation(impl_->imposter_program, "corners");
+    impl_->u_imposter_vp = glGetUniformLocation(impl_->imposter_program, "view_projection");
+    impl_->u_image = glGetUniformLocation(impl_->imposter_program, "image");
+    impl_->u_imposter_color = glGetUniformLocation(impl_->imposter_program, "color");
+    impl_->u_tint = glGetUniformLocation(impl_->imposter_program, "tint");
+    glGenVertexArrays(1, &impl_->quad_vao);
+    glGenFramebuffers(1, &impl_->framebuffer);
+    glGenRenderbuffers(1, &impl_->depth);
     glGenVertexArrays(1, &impl_->vao);
     glBindVertexArray(impl_->vao);
     glGenBuffers(1, &impl_->index_buffer);
@@ -118,31 +248,42 @@ uint32_t Renderer::add_mesh(const tom::MeshView& mesh) {
 }
 
 void Renderer::render(const float view[16], const float projection[16], const std::vector<Draw>& draws, const std::vector<uint32_t>& indices,
-                      size_t index_count) {
-    glClearColor(0.92f, 0.93f, 0.95f, 1.0f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    glUseProgram(impl_->program);
-    float vp[16];
-    tcr::multiply(projection, view, vp);
-    glUniformMatrix4fv(impl_->u_vp, 1, GL_FALSE, vp);
+                      size_t index_count, const std::vector<Capture>& captures) {
+    Impl& g = *impl_;
     // the frame's index buffers, streamed into one buffer object (orphaned each frame)
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, impl_->index_buffer);
+    glBindVertexArray(g.vao);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.index_buffer);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(index_count * sizeof(uint32_t)), indices.data(), GL_STREAM_DRAW);
-    for (const Draw& d : draws) {
-        glBindBuffer(GL_ARRAY_BUFFER, impl_->meshes[d.mesh].vbo);
-        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, nullptr);
-        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(12));
-        glEnableVertexAttribArray(0);
-        glEnableVertexAttribArray(1);
-        glUniformMatrix4fv(impl_->u_model, 1, GL_FALSE, d.model);
-        // a mirroring transform (glTF scenes have them) turns counter-clockwise front faces clockwise
-        const float* m = d.model;
-        const float det = m[0] * (m[5] * m[10] - m[6] * m[9]) - m[4] * (m[1] * m[10] - m[2] * m[9]) + m[8] * (m[1] * m[6] - m[2] * m[5]);
-        glFrontFace(det < 0 ? GL_CW : GL_CCW);
-        glUniform3fv(impl_->u_color, 1, d.color);
-        glDrawElements(GL_TRIANGLES, GLsizei(d.index_count), GL_UNSIGNED_INT, reinterpret_cast<void*>(d.first * sizeof(uint32_t)));
+    float vp[16];
+    for (size_t c = 0; c < captures.size(); ++c) {
+        const Capture& cap = captures[c];
+        const GLuint texture = g.texture_for(cap.texture, cap.side);
+        glBindFramebuffer(GL_FRAMEBUFFER, g.framebuffer);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture, 0);
+        glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, g.depth);
+        glViewport(0, 0, GLsizei(cap.side), GLsizei(cap.side));
+        // the background's colour with no coverage: the quad's filtered edge fades into it, not into black
+        glClearColor(kBackground[0], kBackground[1], kBackground[2], 0.0f);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        tcr::multiply(cap.projection, cap.view, vp);
+        g.draw_meshes(g.smooth, vp, draws, int32_t(c), Shading::smooth);
+        g.draw_meshes(g.flat, vp, draws, int32_t(c), Shading::flat);
     }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, GLsizei(width_), GLsizei(height_));
+    glClearColor(kBackground[0], kBackground[1], kBackground[2], 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    tcr::multiply(projection, view, vp);
+    g.draw_meshes(g.smooth, vp, draws, -1, Shading::smooth);
+    g.draw_meshes(g.flat, vp, draws, -1, Shading::flat);
+    g.draw_imposters(vp, draws);
     glFinish();
+}
+
+size_t Renderer::texture_bytes() const noexcept {
+    size_t bytes = 0;
+    for (uint32_t side : impl_->sides) bytes += size_t(side) * side * 4;
+    return bytes;
 }
 
 bool Renderer::save_png(const std::string& path) {

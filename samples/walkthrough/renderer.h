@@ -2,7 +2,10 @@
 // A headless OpenGL renderer on Mesa's OSMesa (llvmpipe, the CPU rasterizer): what the
 // walkthrough draws with. Vertex buffers are uploaded once per mesh; each frame the chosen
 // levels' index buffers are streamed into one index buffer and drawn with one indexed draw per
-// object; Gouraud shading with two directional lights, as in the papers.
+// object (or part): Gouraud shading with two directional lights, as in the papers, or flat
+// shading (each triangle lit by its provoking vertex's normal); and simple imposters, each a
+// texture the frame's captures render objects into through a framebuffer object, drawn as one
+// quad with an alpha test.
 
 #include <cstdint>
 #include <memory>
@@ -22,17 +25,33 @@ public:
     /// Uploads a mesh's full vertex streams (positions, normals); returns its handle.
     uint32_t add_mesh(const tom::MeshView& mesh);
 
+    enum class Shading : uint8_t { smooth, flat, imposter };
     struct Draw {
         uint32_t mesh;
         const float* model;  ///< 4x4 column-major
         size_t first;        ///< offset of the object's indices in the frame's index array
         uint32_t index_count;
         float color[3];
+        Shading shading = Shading::smooth;
+        int32_t capture = -1;   ///< >= 0: drawn into that capture's texture instead of the frame (skipped when the frame has no such capture)
+        uint32_t texture = 0;   ///< imposters: the texture slot their quad shows
+        float corners[12] = {}; ///< imposters: the quad's corners in world space, texture (0,0), (1,0), (1,1), (0,1)
+        float tint = 0;         ///< imposters: how much of `color` to mix into the texture's
+        uint32_t tag = 0;       ///< the caller's (the walkthrough: its object), unused here
     };
-    /// Clears, uploads the frame's indices (one buffer), draws every object with one indexed draw,
-    /// waits for the rasterizer (glFinish). view/projection column-major.
+    /// A render of objects into a texture slot (created or resized to side x side), before the frame.
+    struct Capture {
+        uint32_t texture;
+        uint32_t side;
+        float view[16], projection[16];
+    };
+    /// Renders the captures into their textures (the draws marked with their index), then clears
+    /// the frame, draws the rest, imposters last, and waits for the rasterizer (glFinish). The
+    /// frame's indices are uploaded once, into one buffer. Matrices column-major.
     void render(const float view[16], const float projection[16], const std::vector<Draw>& draws, const std::vector<uint32_t>& indices,
-                size_t index_count);
+                size_t index_count, const std::vector<Capture>& captures = {});
+    /// Bytes of the imposter textures held.
+    size_t texture_bytes() const noexcept;
     /// Reads the frame back and writes it as PNG. \return false when the file cannot be written.
     bool save_png(const std::string& path);
     uint32_t width() const noexcept { return width_; }

@@ -92,7 +92,7 @@ tcr::Camera camera_for(uint32_t f, uint32_t frames, uint32_t width, uint32_t hei
 }
 
 struct Row {
-    uint32_t frame, visible_objects, drawn_objects;
+    uint32_t frame, visible_objects, drawn_objects, flat_objects, imposters, refreshes;
     uint64_t visible_triangles, drawn_triangles;
     double predicted_ms, measured_ms, render_ms, cull_ms, optimize_ms, extract_ms, benefit, gap;
 };
@@ -102,6 +102,7 @@ struct Summary {
     uint32_t frames = 0;
     double budget_ms = 0;
     double mean = 0, max = 0, std = 0, compute_mean = 0, compute_max = 0, over = 0, prediction_error = 0, drawn = 0, visible = 0, gap = NAN;
+    double flat_mean = 0, imposters_mean = 0, refreshes_mean = 0;  // objects drawn flat-shaded, as imposters, imposters renewed, a frame
     // the image against full detail (--quality-every): SSIM and PSNR over the measured frames
     uint32_t quality_frames = 0;
     double ssim_mean = NAN, ssim_min = NAN, psnr_mean = NAN;
@@ -123,6 +124,9 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
         s.over += (r.measured_ms > 1.1 * budget) ? 1.0 / rows.size() : 0.0;
         s.drawn += double(r.drawn_triangles) / rows.size();
         s.visible += double(r.visible_triangles) / rows.size();
+        s.flat_mean += double(r.flat_objects) / rows.size();
+        s.imposters_mean += double(r.imposters) / rows.size();
+        s.refreshes_mean += double(r.refreshes) / rows.size();
         if (r.predicted_ms > 0) {
             s.prediction_error += std::abs(r.predicted_ms - r.measured_ms) / r.measured_ms;
             ++predicted;
@@ -136,6 +140,11 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
     return s;
 }
 
+// A selector's name in --selector: a libtcr selector, "none", or either with "-levels" (the
+// TOM levels alone, for comparing the menu with them in one run).
+bool ends_with_levels(const std::string& s) { return s.size() > 7 && s.compare(s.size() - 7, 7, "-levels") == 0; }
+std::string base_selector(const std::string& s) { return ends_with_levels(s) ? s.substr(0, s.size() - 7) : s; }
+
 // Every instance of the scene into the runtime, in scene order (its object ids are the instances').
 void add_objects(tcr::Runtime& rt, const World& w) {
     for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
@@ -143,6 +152,8 @@ void add_objects(tcr::Runtime& rt, const World& w) {
 
 // Object colours of the shaded view, and of the warm-up frames (never shown).
 constexpr float kSand[3] = {0.85f, 0.78f, 0.62f}, kGrey[3] = {0.8f, 0.8f, 0.8f};
+// The representation view's colours: smooth-shaded levels, flat-shaded levels, imposters.
+constexpr float kSmoothColor[3] = {0.3f, 0.5f, 0.9f}, kFlatColor[3] = {0.95f, 0.6f, 0.15f}, kImposterColor[3] = {0.85f, 0.2f, 0.75f};
 
 // Hue from red (coarse) through green to blue (full resolution), for the LOD view.
 void lod_color(double fraction, float out[3]) {
@@ -165,6 +176,9 @@ struct Options {
     double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise: less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
     uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
+    std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading and imposters too
+    double flat_error_factor = 2.0;       // flat shading's projected error over smooth's (tcr::Menu)
+    double imposter_max_px = 1.0;         // an imposter is reused while its distortion stays within this
 };
 
 // Grows `v` to hold at least `n` elements, by doubling, and touches the new memory once, so no
@@ -176,26 +190,50 @@ void ensure(std::vector<uint32_t>& v, size_t n) {
 
 // The frame the runtime planned, extracted: each drawn object's level into `indices` (grown as
 // needed), one draw per object, or per part of a multi-part object (as the cost model counts
-// them), in `color`. Returns the frame's index count.
+// them), in `color` and the shading the runtime chose; an imposter as its quad, after, when the
+// runtime renews it, its level drawn into its texture (a capture). Returns the frame's index count.
 size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<uint32_t>& mesh_handles, const float color[3],
-                     std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws) {
+                     std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws, std::vector<walk::Renderer::Capture>& captures) {
+    using Shading = walk::Renderer::Shading;
     ensure(indices, size_t(rt.last_frame().triangles) * 3);
     draws.clear();
+    captures.clear();
     size_t at = 0;
     tom::PartDraw parts[64];
     for (uint32_t id = 0; id < rt.object_count(); ++id) {
-        if (!rt.object(id).drawn) continue;
+        const tcr::ObjectResult& obj = rt.object(id);
+        if (!obj.drawn) continue;
         const uint32_t mesh = w.scene.instances[id].mesh;
+        walk::Renderer::Draw d{mesh_handles[mesh], w.transforms[id].data(), at, 0, {color[0], color[1], color[2]}};
+        d.tag = id;
+        d.shading = obj.representation == tcr::Representation::flat ? Shading::flat : Shading::smooth;
+        if (obj.representation == tcr::Representation::simple_imposter) {
+            const tcr::ImposterState& im = rt.imposter(id);
+            walk::Renderer::Draw quad = d;
+            quad.shading = Shading::imposter;
+            quad.texture = id;
+            tcr::imposter_quad(im, quad.corners);
+            draws.push_back(quad);
+            if (!obj.refresh) continue;
+            walk::Renderer::Capture c{id, im.texture_px, {}, {}};
+            tcr::imposter_camera(im, c.view, c.projection);
+            d.capture = int32_t(captures.size());
+            captures.push_back(c);
+        }
         if (tom::part_count(*w.meshes[mesh]) > 64) {  // more than a draw list here holds: one draw
             const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at);
-            draws.push_back({mesh_handles[mesh], w.transforms[id].data(), at, e.triangle_count * 3, {color[0], color[1], color[2]}});
+            d.index_count = e.triangle_count * 3;
+            draws.push_back(d);
             at += size_t(e.triangle_count) * 3;
             continue;
         }
         const tom::Extracted e = rt.indices(id, indices.data() + at, indices.size() - at, parts);
         for (uint32_t p = 0; p < tom::part_count(*w.meshes[mesh]); ++p)
-            if (parts[p].index_count > 0)
-                draws.push_back({mesh_handles[mesh], w.transforms[id].data(), at + parts[p].first_index, parts[p].index_count, {color[0], color[1], color[2]}});
+            if (parts[p].index_count > 0) {
+                d.first = at + parts[p].first_index;
+                d.index_count = parts[p].index_count;
+                draws.push_back(d);
+            }
         at += size_t(e.triangle_count) * 3;
     }
     return at;
@@ -280,10 +318,12 @@ struct PathRun {
     walk::Renderer* renderer;  // null: simulated
     const std::vector<uint32_t>& mesh_handles;
     const bool none;           // full detail, no budget
+    const bool levels_only;    // "SELECTOR-levels": TOM levels smooth-shaded, whatever --representations says
     tcr::CostModel model;
     tcr::Runtime rt;
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
+    std::vector<walk::Renderer::Capture> captures;
     std::mt19937_64 noise_rng;
     std::normal_distribution<double> noise;  // clamped where drawn
     double overhead_ms = 0;         // the planning time reserved for the next frame
@@ -292,7 +332,7 @@ struct PathRun {
 
     PathRun(const World& world, const std::string& selector, const Options& options, const tcr::CostModel& calibrated, walk::Renderer* r,
             const std::vector<uint32_t>& handles)
-        : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), model(allowance(calibrated, options)),
+        : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), levels_only(ends_with_levels(selector)), model(allowance(calibrated, options)),
           rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise) {
         add_objects(rt, w);
     }
@@ -304,7 +344,7 @@ struct PathRun {
     }
     static tcr::SelectorKind kind_of(const std::string& selector) {
         tcr::SelectorKind kind = tcr::SelectorKind::exact;
-        if (selector != "none") tcr::parse_selector(selector, kind);
+        if (selector != "none") tcr::parse_selector(base_selector(selector), kind);
         return kind;
     }
 
@@ -322,9 +362,9 @@ struct PathRun {
             recent_cpu[k] = r.cull_ms + r.optimize_ms;
             ensure(indices, size_t(r.triangles) * 3);  // outside the timing
             const auto extract_start = Clock::now();
-            const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws);
+            const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws, captures);
             if (k > 0 && r.triangles > 0) extract_per_triangle = std::max(extract_per_triangle, ms_since(extract_start) / double(r.triangles));
-            if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at);
+            if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at, captures);
         }
         if (!none) {
             model.t_tri_ms += 1.25 * extract_per_triangle;
@@ -342,7 +382,11 @@ struct PathRun {
         fp.previous_frame_ms = previous_render_ms;
         fp.deadline_ms = o.optimize_share * o.budget_ms;
         fp.hysteresis = o.hysteresis;
+        fp.menu.flat = fp.menu.imposters = o.representations == "all" && !levels_only;
+        fp.menu.flat_error_factor = o.flat_error_factor;
+        fp.menu.imposter_max_px = o.imposter_max_px;
         if (none) {
+            fp.menu = tcr::Menu();
             fp.budget_ms = 1e12;
             fp.max_error_px = 0;
         }
@@ -377,17 +421,20 @@ struct PathRun {
         row.optimize_ms = r.optimize_ms;
         row.visible_objects = r.visible;
         row.drawn_objects = r.drawn;
+        row.flat_objects = r.flat;
+        row.imposters = r.imposters;
+        row.refreshes = r.refreshes;
         row.visible_triangles = r.visible_triangles;
         row.drawn_triangles = r.triangles;
         row.benefit = r.benefit;
         row.gap = r.gap;
         const auto extract_start = Clock::now();
-        index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws);
+        index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws, captures);
         row.extract_ms = ms_since(extract_start);
         double render_ms;
         if (renderer) {
             const auto render_start = Clock::now();
-            renderer->render(cam.view, cam.projection, draws, indices, index_count);
+            renderer->render(cam.view, cam.projection, draws, indices, index_count, captures);
             render_ms = ms_since(render_start);
         } else {
             render_ms = simulated_render_ms(r);
@@ -407,20 +454,32 @@ struct PathRun {
         return row;
     }
 
-    // The frame as drawn, then each object coloured by its level, as shots/SELECTOR-NAME*.png
+    // The frame as drawn, then each object coloured by its level (an imposter by the level in
+    // its texture) and by its representation, as shots/SELECTOR-NAME{,-lod,-rep}.png; the
+    // re-renders draw no captures (the textures are the frame's).
     void save_shots(const std::string& selector, char name, uint32_t f, size_t index_count) {
         const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
         const std::string base = (fs::path(o.out) / "shots" / (selector + "-" + name)).string();
         fs::create_directories(fs::path(base).parent_path());
         renderer->save_png(base + ".png");
-        size_t k = 0;
-        for (uint32_t id = 0; id < rt.object_count(); ++id) {
-            const tcr::ObjectResult& obj = rt.object(id);
-            if (!obj.drawn) continue;
-            lod_color(double(obj.triangles) / w.meshes[w.scene.instances[id].mesh]->triangle_count, draws[k++].color);
+        std::vector<walk::Renderer::Draw> coloured = draws;
+        for (walk::Renderer::Draw& d : coloured) {
+            const tcr::ObjectResult& obj = rt.object(d.tag);
+            const tom::MeshView& mesh = *w.meshes[w.scene.instances[d.tag].mesh];
+            const uint32_t level = obj.representation == tcr::Representation::simple_imposter ? tom::active_triangle_count(mesh, rt.imposter(d.tag).vertices) : obj.triangles;
+            lod_color(double(level) / mesh.triangle_count, d.color);
+            d.tint = 1;
         }
-        renderer->render(cam.view, cam.projection, draws, indices, index_count);
+        renderer->render(cam.view, cam.projection, coloured, indices, index_count);
         renderer->save_png(base + "-lod.png");
+        for (walk::Renderer::Draw& d : coloured) {
+            const tcr::Representation r = rt.object(d.tag).representation;
+            const float* c = r == tcr::Representation::flat ? kFlatColor : (r == tcr::Representation::simple_imposter ? kImposterColor : kSmoothColor);
+            std::copy(c, c + 3, d.color);
+            d.tint = 0.7f;  // an imposter's picture shows through its colour
+        }
+        renderer->render(cam.view, cam.projection, coloured, indices, index_count);
+        renderer->save_png(base + "-rep.png");
     }
 };
 
@@ -466,10 +525,11 @@ nlohmann::ordered_json noise_test(const World& w, const Options& o, const tcr::C
     fp.budget_ms = o.budget_ms;
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
+    std::vector<walk::Renderer::Capture> captures;  // (the levels alone: none)
     size_t at = 0;
     for (int settle = 0; settle < 10; ++settle) {
         rt.plan_frame(fp);
-        at = extract_frame(w, rt, handles, kSand, indices, draws);
+        at = extract_frame(w, rt, handles, kSand, indices, draws, captures);
         const auto t0 = Clock::now();
         renderer.render(cam.view, cam.projection, draws, indices, at);
         fp.previous_frame_ms = ms_since(t0);
@@ -579,7 +639,7 @@ struct Frame {
 // `repeats` times in the frame (up to 64), toward kCalibrationTriangles a frame, so that even a
 // small level's time stands well above the empty frame's jitter; the median of 7 frames.
 tcr::CostSample sample(const tom::MeshView& mesh, uint32_t handle, const Config& cfg, const tcr::Camera& cam, double empty_ms,
-                       walk::Renderer& renderer, Frame& f) {
+                       walk::Renderer& renderer, Frame& f, walk::Renderer::Shading shading = walk::Renderer::Shading::smooth) {
     double d2 = 0;
     float c[3];
     for (int k = 0; k < 3; ++k) {
@@ -601,6 +661,7 @@ tcr::CostSample sample(const tom::MeshView& mesh, uint32_t handle, const Config&
         const float x = (float(k % columns) - 0.5f * (columns - 1)) * spacing, y = (float(k / columns) - 0.5f * (copies / columns - 1)) * spacing;
         t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -cfg.distance - s * c[2], 1};
         f.draws.push_back({handle, t.data(), 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}});
+        f.draws.back().shading = shading;
         pixels += tcr::project_box(cam, t.data(), box).coverage_px;
     }
     const int repeats = std::max(1, std::min(64, int(std::ceil(kCalibrationTriangles / (double(tris) * copies)))));
@@ -631,7 +692,113 @@ double frame_noise(const tom::MeshView& mesh, uint32_t handle, const tcr::Camera
     return mean > 0 ? std::sqrt(var) / mean : 0.0;
 }
 
+// Simple imposters' quads: `copies` quads a frame (repeated toward 2,000 quads) of one texture
+// made from `mesh`, each covering about `side_px` square pixels; the time per quad above the
+// empty frame's, as a sample of no triangles (the fit's fill term: t_setup + t_pix pixels).
+tcr::CostSample quad_sample(uint32_t texture, float side_px, const tcr::Camera& cam, double empty_ms, walk::Renderer& renderer, Frame& f) {
+    f.draws.clear();
+    const float distance = 10.0f;
+    const float half = 0.5f * side_px * 2.0f * distance * std::tan(30.0f * 3.14159265f / 180.0f) / float(renderer.height());  // pixels -> metres at 10 m
+    const int columns = 8;
+    for (int k = 0; k < 64; ++k) {
+        walk::Renderer::Draw d{0, nullptr, 0, 0, {kGrey[0], kGrey[1], kGrey[2]}};
+        d.shading = walk::Renderer::Shading::imposter;
+        d.texture = texture;
+        const float x = (float(k % columns) - 3.5f) * 1.1f * 2 * half, y = (float(k / columns) - 3.5f) * 1.1f * 2 * half;
+        const float su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
+        for (int c = 0; c < 4; ++c) d.corners[3 * c] = x + half * su[c], d.corners[3 * c + 1] = y + half * sv[c], d.corners[3 * c + 2] = -distance;
+        f.draws.push_back(d);
+    }
+    const int repeats = std::max(1, int(2000 / 64));
+    for (int rep = 1; rep < repeats; ++rep)
+        for (int k = 0; k < 64; ++k) f.draws.push_back(f.draws[size_t(k)]);
+    const double frame_ms = median(time_frames(renderer, cam, f.draws, f.indices, 0, 7));
+    tcr::CostSample out;
+    out.pixels = double(side_px) * side_px * 0.8;  // the object's share of its quad (the alpha test discards the rest after the fetch)
+    out.time_ms = std::max(0.0, frame_ms - empty_ms) / (64.0 * repeats);
+    return out;
+}
+
+// Refreshes: `count` captures of the mesh's level `fraction` into textures of `side`, in one
+// frame; the time per capture above the model's time of drawing that level into that many
+// pixels: the render target's switch and clear (CostModel::refresh_t_setup_ms).
+double refresh_overhead(const tom::MeshView& mesh, uint32_t handle, double fraction, uint32_t side, const tcr::CostModel& model, const tcr::Camera& cam,
+                        double empty_ms, walk::Renderer& renderer, Frame& f) {
+    const uint32_t n = tom::vertex_count_for_fraction(mesh, fraction);
+    const uint32_t tris = tom::active_triangle_count(mesh, n);
+    f.indices.resize(size_t(tris) * 3);
+    tom::extract(mesh, n, f.indices.data(), f.indices.size());
+    tcr::ImposterState s;
+    s.valid = true;
+    s.eye[2] = 0;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) {
+        d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
+        s.centre[k] = 0.5f * (mesh.bounds_min[k] + mesh.bounds_max[k]);
+    }
+    s.radius = float(0.5 * std::sqrt(d2));
+    s.eye[0] = s.centre[0], s.eye[1] = s.centre[1], s.eye[2] = s.centre[2] + 4 * s.radius;
+    s.texture_px = side;
+    const int count = 16;
+    std::vector<walk::Renderer::Capture> captures;
+    f.draws.clear();
+    static const float kIdentity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    for (int c = 0; c < count; ++c) {
+        walk::Renderer::Capture cap{uint32_t(1000 + c), side, {}, {}};
+        tcr::imposter_camera(s, cap.view, cap.projection);
+        captures.push_back(cap);
+        walk::Renderer::Draw d{handle, kIdentity, 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}};
+        d.capture = c;
+        f.draws.push_back(d);
+    }
+    std::vector<double> times;
+    for (int r = 0; r < 7; ++r) {
+        const auto t0 = Clock::now();
+        renderer.render(cam.view, cam.projection, f.draws, f.indices, f.indices.size(), captures);
+        times.push_back(ms_since(t0));
+    }
+    const double per_capture = std::max(0.0, median(times) - empty_ms) / count;
+    return std::max(0.0, per_capture - model.object_ms(tris, referenced_vertices(f.indices, n, f.used), 0.5 * double(side) * side));
+}
+
 } // namespace calib
+
+// The other ways' coefficients: flat shading refitted on the first two meshes' draws; a refresh's
+// overhead, the median over two levels and two texture sides; the imposter quad's draw and fill
+// by least squares on relative errors over five quad sizes.
+void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<uint32_t>& handles, const tcr::Camera& cam, double empty_ms,
+                    calib::Frame& frame, tcr::CostModel& m, std::FILE* log) {
+    std::vector<tcr::CostSample> flat;
+    for (size_t mi = 0; mi < std::min<size_t>(w.meshes.size(), 2); ++mi)
+        for (const calib::Config& cfg : calib::configs())
+            flat.push_back(calib::sample(*w.meshes[mi], handles[mi], cfg, cam, empty_ms, renderer, frame, walk::Renderer::Shading::flat));
+    const tcr::CalibrationResult fit = tcr::fit_cost_model(flat);
+    m.flat_t_tri_ms = fit.model.t_tri_ms;
+    m.flat_t_vert_ms = fit.model.t_vert_ms;
+    m.flat_t_pix_ms = fit.model.t_pix_ms;
+    std::vector<double> overheads;
+    for (double fraction : {0.4, 0.05})
+        for (uint32_t side : {64u, 256u}) overheads.push_back(calib::refresh_overhead(*w.meshes[0], handles[0], fraction, side, m, cam, empty_ms, renderer, frame));
+    m.refresh_t_setup_ms = calib::median(overheads);
+    // t = a + b P by weighted least squares, weights 1 / t^2 (relative residuals)
+    double s00 = 0, s01 = 0, s11 = 0, r0 = 0, r1 = 0;
+    for (float side : {8.0f, 16.0f, 32.0f, 64.0f, 128.0f}) {
+        const tcr::CostSample q = calib::quad_sample(1000, side, cam, empty_ms, renderer, frame);
+        if (q.time_ms <= 0) continue;
+        const double wt = 1.0 / (q.time_ms * q.time_ms);
+        s00 += wt, s01 += wt * q.pixels, s11 += wt * q.pixels * q.pixels, r0 += wt * q.time_ms, r1 += wt * q.time_ms * q.pixels;
+    }
+    const double det = s00 * s11 - s01 * s01;
+    if (det > 0) {
+        m.imposter_t_pix_ms = std::max(0.0, (s00 * r1 - s01 * r0) / det);
+        m.imposter_t_setup_ms = std::max(1e-6, (r0 - s01 * m.imposter_t_pix_ms) / s00);
+    }
+    std::fprintf(log,
+                 "ways: flat t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms (fit %.1f%% mean relative error over %zu samples); refresh overhead %.4g ms; "
+                 "imposter quad %.4g ms + %.4g ms a pixel\n",
+                 m.flat_t_tri_ms, m.flat_t_vert_ms, m.flat_t_pix_ms, 100 * fit.mean_relative_error, flat.size(), m.refresh_t_setup_ms, m.imposter_t_setup_ms,
+                 m.imposter_t_pix_ms);
+}
 
 // Fits the cost model on this renderer: the empty frame gives t_init + t_final and the safety
 // allowance, draws of up to four meshes at five levels, three distances and two copy counts give
@@ -657,6 +824,7 @@ tcr::CostModel calibrate(const World& w, walk::Renderer& renderer, const std::ve
     for (double e : empty) spread += (e - empty_ms) * (e - empty_ms) / empty.size();
     m.safety_ms = std::max(0.25, 2.0 * std::sqrt(spread));
     m.noise_rel = noise_rel;
+    calibrate_ways(w, renderer, handles, cam, empty_ms, frame, m, log);
     std::fprintf(log,
                  "calibration: %zu samples (4 meshes x (5 levels x 3 distances x 8 copies + 2 x 64 small copies), each frame repeated up to 64x toward %.0f triangles, median of 7), empty frame %.3f ms\n"
                  "  t_setup %.4g ms, t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms; fit: rms %.4f ms, mean relative error %.1f%% "
@@ -681,7 +849,7 @@ int main(int argc, char** argv) {
     app.add_option("--instances", instances, "For --make-scene: number of instances (default 300)");
     app.add_option("--calibrate", calibrate_out, "Render sample objects, fit the cost model, write this calibration file (docs/CALIBRATION.md)");
     app.add_option("--calibration", o.calibration, "Calibration file to run with (required unless --calibrate)");
-    app.add_option("--selector", o.selectors, "none, static, stress, greedy, barrier, exact, or all (default all)")->delimiter(',');
+    app.add_option("--selector", o.selectors, "none, static, stress, greedy, barrier, exact, or all (default all); SELECTOR-levels: that selector on the TOM levels alone")->delimiter(',');
     app.add_option("--budget-ms", o.budget_ms, "Frame budget in ms (default 40)")->check(CLI::PositiveNumber);
     app.add_option("--frames", o.frames, "Frames along the path (default 300)")->check(CLI::Range(10u, 100000u));
     app.add_flag("--simulate", o.simulate, "No OpenGL: frame times from the calibrated model plus noise");
@@ -695,6 +863,11 @@ int main(int argc, char** argv) {
     app.add_option("--quality-every", o.quality_every,
                    "Compare every K-th recorded frame with the same view at full detail (SSIM, PSNR by scikit-image; needs --out, not --simulate)")
         ->check(CLI::Range(1u, 100000u));
+    app.add_option("--representations", o.representations,
+                   "levels: TOM levels smooth-shaded only; all (default): also flat shading and simple imposters, where calibrated (exact and greedy choose among them)")
+        ->check(CLI::IsMember({"levels", "all"}));
+    app.add_option("--flat-error-factor", o.flat_error_factor, "Flat shading's projected error as a multiple of smooth shading's (default 2)")->check(CLI::PositiveNumber);
+    app.add_option("--imposter-max-px", o.imposter_max_px, "Reuse an imposter while its distortion stays within this many pixels (default 1)")->check(CLI::PositiveNumber);
     app.add_option("--noise-test", noise_renders, "Draw viewpoint A's frame (the exact selector's plan at --budget-ms) this many times in a row and print how much identical frames vary")
         ->check(CLI::Range(20u, 100000u));
     app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"
@@ -763,10 +936,10 @@ int main(int argc, char** argv) {
             }
             return 0;
         }
-        if (o.selectors.empty() || (o.selectors.size() == 1 && o.selectors[0] == "all")) o.selectors = {"none", "static", "stress", "greedy", "barrier", "exact"};
+        if (o.selectors.empty() || (o.selectors.size() == 1 && o.selectors[0] == "all")) o.selectors = {"none", "static", "stress", "greedy", "barrier", "exact", "exact-levels"};
         for (const std::string& s : o.selectors) {
             tcr::SelectorKind k;
-            if (s != "none" && !tcr::parse_selector(s, k)) {
+            if (s != "none" && !tcr::parse_selector(base_selector(s), k)) {
                 std::fprintf(stderr, "error: unknown selector '%s'\n", s.c_str());
                 return 2;
             }
@@ -788,11 +961,13 @@ int main(int argc, char** argv) {
             summaries.push_back(run(w, sel, o, model, o.simulate ? nullptr : renderer.get(), handles, rows, reference.get()));
             if (!o.out.empty()) {
                 std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
-                csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap\n";
+                csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap,"
+                       "flat_objects,imposters,imposter_refreshes\n";
                 for (const Row& r : rows)
                     csv << r.frame << ',' << r.visible_objects << ',' << r.drawn_objects << ',' << r.visible_triangles << ',' << r.drawn_triangles << ','
                         << r.predicted_ms << ',' << r.measured_ms << ',' << r.render_ms << ',' << r.cull_ms << ',' << r.optimize_ms << ',' << r.extract_ms
-                        << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << '\n';
+                        << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << ',' << r.flat_objects << ','
+                        << r.imposters << ',' << r.refreshes << '\n';
             }
         }
         if (reference) {
@@ -821,6 +996,10 @@ int main(int argc, char** argv) {
             j["ssim_mean"] = or_null(s.ssim_mean);
             j["ssim_min"] = or_null(s.ssim_min);
             j["psnr_mean"] = or_null(s.psnr_mean);
+            j["representations"] = ends_with_levels(s.selector) ? std::string("levels") : o.representations;
+            j["flat_objects_mean"] = s.flat_mean;
+            j["imposters_drawn_mean"] = s.imposters_mean;
+            j["imposter_refreshes_mean"] = s.refreshes_mean;
             j["simulated"] = o.simulate;
             j["viewpoint_frames"] = {{"A", shots[0]}, {"B", shots[1]}, {"C", shots[2]}};  // the screenshots' frames
             out.push_back(j);
@@ -829,13 +1008,14 @@ int main(int argc, char** argv) {
             for (const auto& j : out) std::printf("%s\n", j.dump().c_str());
         } else {
             const bool quality = reference != nullptr;
-            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
-                        quality ? " | image vs full detail" : "");
-            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
-                        "tris mean", "tris mean", quality ? " | SSIM mean    min  PSNR dB" : "");
+            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s | %20s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
+                        "objects a frame", quality ? " | image vs full detail" : "");
+            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s | %6s %6s %6s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
+                        "tris mean", "tris mean", "flat", "impost", "renew", quality ? " | SSIM mean    min  PSNR dB" : "");
             for (const Summary& s : summaries) {
-                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f", s.selector.c_str(), s.mean, s.max, s.std,
-                            s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible);
+                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f | %6.1f %6.1f %6.2f", s.selector.c_str(), s.mean, s.max, s.std,
+                            s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible,
+                            s.flat_mean, s.imposters_mean, s.refreshes_mean);
                 if (quality) std::printf(" |    %.4f %.4f %8.2f", s.ssim_mean, s.ssim_min, s.psnr_mean);
                 std::printf("\n");
             }

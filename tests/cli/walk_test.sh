@@ -42,6 +42,22 @@ rows = list(csv.DictReader(open('$work/real/quality.csv')))
 assert len(rows) == 9 and {r['selector'] for r in rows} == set(runs), rows
 "
 check "the measured frames and their references are kept" test "$(ls "$work"/real/quality/reference-*.png | wc -l)" -eq 3 -a "$(ls "$work"/real/quality/exact-*.png | wc -l)" -eq 3
+# the menu: exact with the whole menu against exact on TOM levels alone, on the same path
+check "a real path with imposters, and with levels alone" "$walk" --scene "$work/scene.txt" --calibration "$work/calibration.txt" --selector exact,exact-levels \
+  --frames 30 --budget-ms "$budget" --width 320 --height 240 --out "$work/menu" --quality-every 10
+check "the calibration fits flat shading, quads and refreshes" bash -c "for k in flat_t_tri_ms imposter_t_setup_ms imposter_t_pix_ms refresh_t_setup_ms; do awk -v k=\$k '\$1 == k && \$2 > 0 { f = 1 } END { exit !f }' '$work/calibration.txt' || exit 1; done"
+check "levels alone draw no imposter; the menu's imposters are counted and their renewals bounded" /usr/bin/python3 -c "
+import csv, json
+runs = {r['selector']: r for r in json.load(open('$work/menu/summary.json'))}
+lv, menu = runs['exact-levels'], runs['exact']
+assert lv['representations'] == 'levels' and menu['representations'] == 'all', (lv, menu)
+assert lv['imposters_drawn_mean'] == 0 and lv['imposter_refreshes_mean'] == 0 and lv['flat_objects_mean'] == 0, lv
+assert 0 <= menu['imposter_refreshes_mean'] <= menu['imposters_drawn_mean'], menu
+rows = list(csv.DictReader(open('$work/menu/frames-exact.csv')))
+assert all(int(r['imposter_refreshes']) <= int(r['imposters']) for r in rows), rows
+for r in (lv, menu): assert 0 < r['ssim_mean'] < 1, r
+"
+check "--representations levels is a menu of levels for every selector" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --selector exact --representations levels --frames 10 --budget-ms '$budget' --width 320 --height 240 --out '$work/lv' --json | /usr/bin/python3 -c 'import json, sys; r = [json.loads(l) for l in sys.stdin if l.startswith(\"{\")]; assert r and all(x[\"imposters_drawn_mean\"] == 0 for x in r), r'"
 check "--quality-every with --simulate is a usage error" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --simulate --quality-every 5 --out '$work/q' --frames 10; test \$? -eq 2"
 check "the summary has the documented keys" /usr/bin/python3 -c "
 import json

@@ -329,3 +329,115 @@ TEST_CASE("a multi-part object is one object with one resolution and a draw set-
     }
     CHECK(predicted[0] - predicted[1] == Approx(2 * model().t_setup_ms));  // three set-ups instead of one
 }
+
+namespace {
+
+// Objects far out (a 10 x 10 grid 30 units away) behind a few near ones that want every
+// triangle the far ones free, a renderer whose quads are cheap and whose geometry is dear: the
+// kind of frame where imposters pay.
+tcr::CostModel imposter_model() {
+    tcr::CostModel m = model();
+    m.t_tri_ms = 2e-4;
+    m.flat_t_tri_ms = 1.9e-4;
+    m.imposter_t_setup_ms = 0.004;
+    m.imposter_t_pix_ms = 2e-6;
+    m.refresh_t_setup_ms = 0.05;
+    return m;
+}
+
+void fill_far(tcr::Runtime& rt, const tom::File& file) {
+    for (int i = 0; i < 100; ++i) {
+        float t[16];
+        tcr::translation_scale(float(i % 10 - 5) * 1.2f, float(i / 10 - 5) * 1.2f, -30.0f, 1.0f, t);
+        rt.add_object(file.mesh(0), t, 1.0f);
+    }
+    for (int i = 0; i < 4; ++i) {
+        float t[16];
+        tcr::translation_scale(float(i) - 1.5f, 0.0f, 0.0f, 0.8f, t);
+        rt.add_object(file.mesh(0), t, 1.0f);
+    }
+}
+
+tcr::FrameParams menu_frame(float z, bool menu) {
+    tcr::FrameParams f;
+    f.camera = camera_at(z);
+    f.budget_ms = 8.0;
+    f.correct_model = false;
+    f.menu.flat = f.menu.imposters = menu;
+    f.menu.viewer_speed = 1.0;
+    f.menu.frame_interval_s = 0.05;
+    return f;
+}
+
+} // namespace
+
+TEST_CASE("menus: imposters chosen where they pay, reused within the bound, refreshed past it", "[tcr][runtime][menu]") {
+    SceneFixture fx;
+    std::vector<uint32_t> buffer(200000 * 3);
+    for (tcr::SelectorKind k : {tcr::SelectorKind::exact, tcr::SelectorKind::greedy}) {
+        INFO(tcr::selector_name(k));
+        tcr::Runtime rt(imposter_model(), k);
+        fill_far(rt, fx.file);
+        // levels alone: every object smooth, nothing captured
+        const tcr::FrameReport& levels = rt.plan_frame(menu_frame(4.0f, false));
+        CHECK(levels.imposters == 0);
+        CHECK(levels.flat == 0);
+        const double levels_benefit = levels.benefit;
+        INFO("levels: visible " << levels.visible << " drawn " << levels.drawn << " triangles " << levels.triangles << " predicted " << levels.predicted_ms << " size " << rt.object(0).size_px << " coverage " << rt.object(0).coverage_px << " err " << rt.object(0).error_px);
+        // the whole menu: objects become imposters; a refresh is paid whole in its frame, so
+        // the captures build up over frames at the same place, each frame within the budget
+        uint32_t refreshed = 0;
+        for (int frame = 0; frame < 20; ++frame) {
+            const tcr::FrameReport& r = rt.plan_frame(menu_frame(4.0f, true));
+            INFO("frame " << frame << " predicted " << r.predicted_ms << " imposters " << r.imposters << " refreshes " << r.refreshes);
+            CHECK(r.predicted_ms <= 8.0 * (1 + 1e-9));
+            CHECK(r.refreshes <= 25);  // the reserve for renewals is a quarter of the budget
+            refreshed += r.refreshes;
+        }
+        const tcr::FrameReport& first = rt.last_frame();
+        INFO("refreshed " << refreshed << " imposters " << first.imposters << " benefit " << first.benefit << " levels " << levels_benefit);
+        REQUIRE(first.imposters > 10);
+        CHECK(refreshed >= first.imposters);
+        CHECK(first.benefit > levels_benefit);  // once captured, the far objects free time for the near ones
+        uint32_t captured = 0;
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& o = rt.object(id);
+            if (!o.drawn || o.representation != tcr::Representation::simple_imposter) continue;
+            ++captured;
+            REQUIRE(rt.imposter(id).valid);
+            // a refresh renders the capture's level (indices() gives it); a kept capture draws its quad alone
+            const tom::Extracted e = rt.indices(id, buffer.data(), buffer.size());
+            CHECK(e.vertex_count == (o.refresh ? rt.imposter(id).vertices : 0));
+            CHECK(e.triangle_count == o.triangles);
+            CHECK(o.error_px <= first.max_error_px);
+        }
+        CHECK(captured == first.imposters);
+        // a small step: the captures' distortion is within the bound, so they are drawn as kept
+        const tcr::FrameReport& near = rt.plan_frame(menu_frame(4.01f, true));
+        CHECK(near.imposters > 0);
+        CHECK(near.refreshes < near.imposters);
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& o = rt.object(id);
+            if (o.drawn && o.representation == tcr::Representation::simple_imposter && !o.refresh)
+                CHECK(rt.indices(id, buffer.data(), buffer.size()).triangle_count == 0);  // the quad alone
+        }
+        // a step sideways far past the bound: no capture is reusable, every imposter is new
+        tcr::FrameParams moved = menu_frame(4.0f, true);
+        const float eye[3] = {6, 0, 4}, target[3] = {0, 0, -30}, up[3] = {0, 1, 0};
+        tcr::look_at(eye, target, up, moved.camera.view);
+        const tcr::FrameReport& far = rt.plan_frame(moved);
+        CHECK(far.refreshes == far.imposters);
+        CHECK(far.predicted_ms <= 8.0 * (1 + 1e-9));
+        // a moved object loses its capture
+        for (uint32_t id = 0; id < rt.object_count(); ++id)
+            if (rt.imposter(id).valid) {
+                float t[16];
+                tcr::translation_scale(0, 0, -31.0f, 1.0f, t);
+                rt.set_transform(id, t);
+                CHECK_FALSE(rt.imposter(id).valid);
+                break;
+            }
+        rt.clear_imposters();
+        for (uint32_t id = 0; id < rt.object_count(); ++id) CHECK_FALSE(rt.imposter(id).valid);
+    }
+}

@@ -20,6 +20,15 @@ struct CostModel {
     double t_pix_ms = 0.0;    ///< per covered pixel
     double safety_ms = 0.0;   ///< allowance for the system's own noise
     double noise_rel = 0.0;   ///< measured relative standard deviation of identical frames (informational; 0 unknown)
+    // The other ways to draw an object (Funkhouser & Sequin's rendering algorithms, Pasman &
+    // Jansen's imposters), each calibrated on its own; 0 where not calibrated, and a runtime
+    // offers no way whose coefficients are all 0.
+    double flat_t_tri_ms = 0.0;     ///< flat shading: per triangle (its set-up is t_setup)
+    double flat_t_vert_ms = 0.0;    ///< flat shading: per vertex
+    double flat_t_pix_ms = 0.0;     ///< flat shading: per covered pixel
+    double imposter_t_setup_ms = 0.0;  ///< a simple imposter: its textured quad's draw
+    double imposter_t_pix_ms = 0.0;    ///< a simple imposter: per covered pixel (texture fetch, alpha test)
+    double refresh_t_setup_ms = 0.0;   ///< an imposter's refresh: binding its texture as the target, clearing it, the draw
 
     /// Time of one object: t_setup + max(geometry, fill). `inside_share`: the share of the object
     /// inside the view frustum (Projection::inside_share); the rest is clipped before set-up and
@@ -31,6 +40,20 @@ struct CostModel {
         const double fill = t_pix_ms * pixels;
         return t_setup_ms * draws + (geometry > fill ? geometry : fill);
     }
+    /// Time of one object drawn flat-shaded (as object_ms, with the flat coefficients).
+    double flat_ms(double triangles, double vertices, double pixels, double inside_share = 1.0, double draws = 1.0) const noexcept {
+        const double geometry = (flat_t_tri_ms * triangles + flat_t_vert_ms * vertices) * inside_share;
+        const double fill = flat_t_pix_ms * pixels;
+        return t_setup_ms * draws + (geometry > fill ? geometry : fill);
+    }
+    /// Time of one simple imposter's quad covering `pixels`.
+    double imposter_ms(double pixels) const noexcept { return imposter_t_setup_ms + imposter_t_pix_ms * pixels; }
+    /// Time of one refresh: the object at (triangles, vertices), whole, into a texture of `texels`.
+    double refresh_ms(double triangles, double vertices, double texels, double draws = 1.0) const noexcept {
+        return refresh_t_setup_ms + object_ms(triangles, vertices, texels, 1.0, draws);
+    }
+    bool has_flat() const noexcept { return flat_t_tri_ms > 0 || flat_t_vert_ms > 0 || flat_t_pix_ms > 0; }
+    bool has_imposters() const noexcept { return imposter_t_setup_ms > 0 || imposter_t_pix_ms > 0; }
     /// Fixed part of a frame: t_init + t_final + safety.
     double frame_fixed_ms() const noexcept { return t_init_ms + t_final_ms + safety_ms; }
     /// Fewer triangles than this save no time: the object is fill bound (r_min of the sources).

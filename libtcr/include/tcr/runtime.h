@@ -29,6 +29,31 @@
 
 namespace tcr {
 
+/// How an object is drawn (Funkhouser & Sequin's rendering algorithms; Pasman & Jansen's simple
+/// imposter: the object rendered into a texture from one viewpoint, drawn as one quad facing it).
+enum class Representation : uint8_t { smooth, flat, simple_imposter };
+const char* representation_name(Representation r) noexcept;
+
+/// The menu a frame offers beside the TOM levels drawn smooth-shaded (way 0). A way is offered
+/// only where the cost model has its coefficients (CostModel::has_flat, has_imposters), and
+/// only the exact and greedy selectors choose among ways; the others keep way 0.
+struct Menu {
+    bool flat = false;                ///< flat shading, every level
+    bool imposters = false;           ///< simple imposters, for objects whose sphere the eye is well outside
+    /// Flat shading's projected error as a multiple of smooth shading's at the same level: its
+    /// facets show the level's approximation (Funkhouser's flat m = 1 in polygons against
+    /// Gouraud's m = 2 in vertices); fitted to the measured image by tcrwalk (docs/CALIBRATION.md).
+    double flat_error_factor = 2.0;
+    double imposter_max_px = 1.0;     ///< a capture is reused while its distortion (Pasman & Jansen 4.3) stays within this
+    double capture_error_px = 0.1;    ///< a refresh renders the object at the level of this projected error (low: its cost is spread over the lifetime)
+    uint32_t texture_max = 256;       ///< the largest texture side (power of two), texels
+    uint32_t texture_min = 16;
+    double min_distance_radii = 1.5;  ///< no imposter nearer than this many radii from the object's centre
+    double max_lifetime_frames = 60;  ///< a refresh's cost is spread over at most this many frames of its lifetime
+    double viewer_speed = -1;         ///< m/s for the lifetimes; < 0: from the camera's motion between frames
+    double frame_interval_s = 0;      ///< seconds between frames for the lifetimes (0: the budget)
+};
+
 struct FrameParams {
     Camera camera;
     double budget_ms = 16.0;         ///< the whole frame
@@ -44,7 +69,27 @@ struct FrameParams {
     double fixed_c = 1.0;            ///< relative error constant for meshes without a stored curve (Pasman's k ~ 1)
     double triangles_per_pixel = 0.5;  ///< static and stress selectors
     OverBudgetPolicy policy = OverBudgetPolicy::drop_least_valuable;
+    Menu menu;                       ///< the other ways to draw (default: none, levels only)
 };
+
+/// An object's imposter: the viewpoint and the sphere it was captured for, its texture side and
+/// the level rendered into it. The renderer keeps the texture; the runtime decides when it is
+/// renewed (ObjectResult::refresh) and fills this in for it.
+struct ImposterState {
+    bool valid = false;
+    float eye[3] = {0, 0, 0}, centre[3] = {0, 0, 0};
+    float radius = 0;
+    uint32_t texture_px = 0;   ///< side of the square texture
+    uint32_t vertices = 0;     ///< the level rendered into it
+    uint64_t frame = 0;        ///< the frame it was captured in
+};
+/// The camera of a capture: from its eye toward its centre, a square frustum just holding the
+/// sphere (near and far planes at its front and back). Column-major, as tcr::look_at.
+void imposter_camera(const ImposterState& s, float view[16], float projection[16]) noexcept;
+/// The quad of a simple imposter: the capture's frustum cut at the centre's plane, facing the
+/// capture's eye (Pasman & Jansen's two-axis billboard), corners in world space (4 x xyz;
+/// texture corners (0,0), (1,0), (1,1), (0,1) in that order).
+void imposter_quad(const ImposterState& s, float corners[12]) noexcept;
 
 struct ObjectResult {
     bool visible = false;
@@ -57,6 +102,11 @@ struct ObjectResult {
     double importance = 0;
     double error_px = 0;        ///< projected error at the chosen resolution, as max_error_px bounds it: the stored curve (or Pasman's 2 k arctan(r/d) / N) in pixels
     double predicted_ms = 0;
+    Representation representation = Representation::smooth;
+    /// A simple imposter renewed this frame: render the level `vertices` into its texture from
+    /// Runtime::imposter(id) (indices() gives that level) before drawing its quad. An imposter
+    /// not renewed draws its quad alone (indices() gives nothing).
+    bool refresh = false;
 };
 
 struct FrameReport {
@@ -73,6 +123,7 @@ struct FrameReport {
     bool feasible = true;
     bool deadline_hit = false;
     uint32_t iterations = 0;
+    uint32_t flat = 0, imposters = 0, refreshes = 0;  ///< drawn flat-shaded; drawn as imposters; of those, renewed
 };
 
 class Runtime {
@@ -93,6 +144,9 @@ public:
     /// Culls, measures, selects. Allocates nothing once the scene has been planned once.
     const FrameReport& plan_frame(const FrameParams& params);
     const ObjectResult& object(uint32_t id) const noexcept { return results_[id]; }
+    const ImposterState& imposter(uint32_t id) const noexcept { return objects_[id].imposter; }
+    /// Forgets every capture (the renderer lost its textures, the scene was reloaded).
+    void clear_imposters() noexcept;
     const FrameReport& last_frame() const noexcept { return report_; }
 
     /// The chosen level's index buffer (nothing written for an object not drawn).
@@ -120,7 +174,27 @@ private:
         double c_by_m[3];                              // relative error constant fitted for m = 0.5, 1, 2
         double diagonal;                               // object-space bounding-box diagonal
         float last_x = -1, last_y = -1;                // previous frame's screen position (motion)
+        ImposterState imposter;                        // the last capture
+        double lifetime_distance = -1, lifetime_s = 0; // a refresh's lifetime, and the distance it was computed at
     };
+    // One entry of a frame's menu beyond way 0: what it draws.
+    struct WayKind {
+        Representation representation;
+        bool refresh;
+        double error_px;       // imposters: the projected error
+        uint32_t texture_px;   // imposters: the texture's side
+        uint32_t vertices;     // imposters: the level in the texture
+        double full_ms = 0;    // refreshes: the whole cost, paid this frame
+    };
+    void add_ways(uint32_t id, size_t k, const FrameParams& params, double radians_per_px);
+    double choose(uint32_t id, size_t k, double triangles, uint32_t way);
+    void reserve_refreshes(const SelectParams& sp);
+    struct Renewal { double extra; size_t k; uint32_t j; };
+    std::vector<Renewal> renewals_;  // reserve_refreshes' scratch
+    void repair_refreshes(double budget_ms, double& predicted);
+    void note_viewer(const FrameParams& params);
+    void commit_capture(uint32_t id, uint32_t way, size_t k);
+    static bool has_geometry(const ObjectResult& r) noexcept { return r.drawn && (r.representation != Representation::simple_imposter || r.refresh); }
     double c_for(const Object& o, double m, double fixed_c) const noexcept;
     double pasman_k_px(const Object& o, const ObjectResult& r) const noexcept;
     double projected_error_px(const Object& o, const ObjectResult& r, double triangles) const noexcept;
@@ -140,6 +214,11 @@ private:
     double last_predicted_ms_ = 0;
     double last_fixed_c_ = 1.0;
     Camera last_camera_{};
+    std::vector<WayKind> way_kinds_;  // parallel to problem_.ways
+    uint64_t frame_ = 0;
+    double eye_[3] = {0, 0, 0}, last_eye_[3] = {0, 0, 0};
+    double speed_ = 0;                // the viewer's speed, m/s (estimated or given)
+    bool have_eye_ = false;
 };
 
 } // namespace tcr
