@@ -48,6 +48,9 @@ void world_sphere(const float t[16], const Box& box, double diagonal, double cen
 
 double distance3(const double a[3], const double b[3]) { return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])); }
 
+// Seconds between frames for the viewer's speed and the captures' lifetimes: given, or the budget.
+double frame_interval_s(const FrameParams& params) { return params.menu.frame_interval_s > 0 ? params.menu.frame_interval_s : 1e-3 * params.budget_ms; }
+
 uint32_t power_of_two_at_least(double x, uint32_t lo, uint32_t hi) {
     uint32_t side = lo;
     while (side < hi && double(side) < x) side *= 2;
@@ -274,8 +277,7 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
             mo.lifetime_distance = d;
             mo.lifetime_s = speed_ > 0 ? imposters::lifetime(capture, d, bound_rad, speed_, (menu.min_distance_radii - 1.0) * radius) : INFINITY;
         }
-        const double interval_s = menu.frame_interval_s > 0 ? menu.frame_interval_s : 1e-3 * params.budget_ms;
-        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, mo.lifetime_s / interval_s));
+        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, mo.lifetime_s / frame_interval_s(params)));
         const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
         push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
         way_kinds_.back().full_ms = quad_ms + refresh_ms;
@@ -342,19 +344,18 @@ void Runtime::repair_refreshes(double budget_ms, double& predicted) {
 // with that time set aside, so that every object, not the refreshes alone, gives it up.
 void Runtime::reserve_refreshes(const SelectParams& sp) {
     if (!problem_.has_menu()) return;
-    std::vector<Renewal>& renewals = renewals_;
-    renewals.clear();
+    renewals_.clear();
     for (size_t k = 0; k < visible_ids_.size(); ++k) {
         const uint32_t j = plan_.way[k];
         if (!plan_.drawn[k] || j == 0) continue;
         const WayKind& kind = way_kinds_[problem_.way_begin[k] + j - 1];
-        if (kind.refresh) renewals.push_back({std::max(0.0, kind.full_ms - problem_.cost(k, j, 2.0)), k, j});
+        if (kind.refresh) renewals_.push_back({std::max(0.0, kind.full_ms - problem_.cost(k, j, 2.0)), k, j});
     }
-    if (renewals.empty()) return;
-    std::sort(renewals.begin(), renewals.end(), [](const Renewal& a, const Renewal& b) { return a.extra < b.extra || (a.extra == b.extra && a.k < b.k); });
+    if (renewals_.empty()) return;
+    std::sort(renewals_.begin(), renewals_.end(), [](const Renewal& a, const Renewal& b) { return a.extra < b.extra || (a.extra == b.extra && a.k < b.k); });
     const double budget = problem_.budget_ms, reserve = 0.25 * budget;
     double kept = 0;
-    for (const Renewal& r : renewals) {
+    for (const Renewal& r : renewals_) {
         if (kept + r.extra <= reserve) kept += r.extra;
         else problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = 2.0 * budget;  // not this frame
     }
@@ -367,7 +368,7 @@ void Runtime::reserve_refreshes(const SelectParams& sp) {
 // frame over the frame interval, smoothed.
 void Runtime::note_viewer(const FrameParams& params) {
     eye_of(params.camera.view, eye_);
-    const double interval_s = params.menu.frame_interval_s > 0 ? params.menu.frame_interval_s : 1e-3 * params.budget_ms;
+    const double interval_s = frame_interval_s(params);
     if (params.menu.viewer_speed >= 0) speed_ = params.menu.viewer_speed;
     else if (have_eye_ && interval_s > 0 && std::isfinite(interval_s)) speed_ = 0.5 * speed_ + 0.5 * distance3(eye_, last_eye_) / interval_s;
     std::copy(eye_, eye_ + 3, last_eye_);

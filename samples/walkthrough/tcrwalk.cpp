@@ -730,7 +730,6 @@ double refresh_overhead(const tom::MeshView& mesh, uint32_t handle, double fract
     tom::extract(mesh, n, f.indices.data(), f.indices.size());
     tcr::ImposterState s;
     s.valid = true;
-    s.eye[2] = 0;
     double d2 = 0;
     for (int k = 0; k < 3; ++k) {
         d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
