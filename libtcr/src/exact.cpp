@@ -128,7 +128,7 @@ void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline&
     if (!fits(0)) {
         double lo = feasible;
         for (int k = 0; k < 200 && fits(lo); ++k) lo *= 0.5;
-        hi = bisect_multiplier(lo, feasible, 1e-9, fits, deadline, plan);
+        hi = bisect_multiplier(lo, std::min(feasible, 2.0 * lo), 1e-7, fits, deadline, plan);
     }
     for (size_t i = 0; i < p.size(); ++i)
         if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
@@ -146,26 +146,32 @@ void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan) 
     };
     if (choose_at(p, plan, 0.0, way, n) <= p.budget_ms) {  // the budget does not bind: the best ways at full resolution
         take();
+        plan.multiplier = 0;
         evaluate(p, plan);
         certify(p, plan, 0.0, true);
         return;
     }
-    // bracket: cost(lo) > budget >= cost(hi); the minima fit (the over-budget policy saw to it)
-    double lo = 1, hi = 1;
+    // bracket: cost(lo) > budget >= cost(hi); the minima fit (the over-budget policy saw to it).
+    // The search starts from the multiplier of the plan given (a warm plan: the last frame's,
+    // or the same frame's first solve), steps of 4 at a time, then halves the last step.
+    const double start = plan.multiplier > 0 && std::isfinite(plan.multiplier) ? plan.multiplier : 1.0;
+    double lo = start, hi = start;
     if (choose_at(p, plan, hi, way, n) <= p.budget_ms) {
-        for (int k = 0; k < 400 && choose_at(p, plan, lo, way, n) <= p.budget_ms; ++k) lo *= 0.5;
-        hi = 2 * lo;
+        for (int k = 0; k < 200 && choose_at(p, plan, lo, way, n) <= p.budget_ms; ++k) hi = lo, lo *= 0.25;
     } else {
-        for (int k = 0; k < 400 && choose_at(p, plan, hi, way, n) > p.budget_ms; ++k) hi *= 2;
-        lo = 0.5 * hi;
+        for (int k = 0; k < 200 && choose_at(p, plan, hi, way, n) > p.budget_ms; ++k) lo = hi, hi *= 4;
     }
-    const double tolerance = std::max(1e-12, params.tolerance * 1e-3);
+    // the ways change only where l crosses an object's switch point, and the fixed-way solve
+    // after this spends what the bracket leaves: the way bisection needs no more than the
+    // certificate's tolerance
+    const double tolerance = std::max(1e-12, params.tolerance);
     hi = bisect_multiplier(lo, hi, tolerance, [&](double lambda) { return choose_at(p, plan, lambda, way, n) <= p.budget_ms; }, deadline, plan);
     choose_at(p, plan, hi, way, n);
     take();
     spend_budget(p, plan, hi, deadline);
     evaluate(p, plan);
     certify(p, plan, hi, true);
+    plan.multiplier = hi;
     const double ub = dual_bound(p, plan.drawn, lo, true);
     if (ub < plan.upper_bound) {
         plan.upper_bound = ub;

@@ -256,7 +256,7 @@ double lifetime(const Capture& c, double d, double bound, double speed, double m
     const double far = (d - min_distance) + (c.radius + min_distance) * kPi;
     if (worst(far) <= bound) return kInfinity;
     double lo = 0.0, hi = far;
-    for (int it = 0; it < 200 && hi - lo > 1e-12 * far; ++it) {
+    for (int it = 0; it < 200 && hi - lo > 1e-5 * hi; ++it) {  // lo always within the bound
         const double mid = 0.5 * (lo + hi);
         (worst(mid) <= bound ? lo : hi) = mid;
     }

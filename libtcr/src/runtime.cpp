@@ -184,10 +184,10 @@ double Runtime::triangles_for_error(uint32_t id, double max_error_px) const noex
     const ObjectResult& r = results_[id];
     if (!(max_error_px > 0)) return o.triangles;
     if (!o.has_curve) return std::min(o.triangles, std::max(o.min_triangles, std::ceil(pasman_k_px(o, r) / max_error_px)));
-    // bisection in log n over the interpolated curve
+    // bisection in log n over the interpolated curve, to a triangle or 0.05% (hi always meets the bound)
     double lo = o.min_triangles, hi = o.triangles;
     if (projected_error_px(o, r, lo) <= max_error_px) return lo;
-    for (int it = 0; it < 40; ++it) {
+    for (int it = 0; it < 40 && hi - lo > 0.5 && hi > lo * 1.0005; ++it) {
         const double mid = std::sqrt(lo * hi);
         (projected_error_px(o, r, mid) <= max_error_px ? hi : lo) = mid;
     }
@@ -245,7 +245,7 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
             w.lo = w.hi = 2;
             w.per_tri_ms = 1e-12;
             w.setup_ms = std::max(0.0, cost_ms - 2e-12);
-            w.error = I * error_px * std::pow(2.0, problem_.m);
+            w.error = I * menu.imposter_error_factor * error_px * std::pow(2.0, problem_.m);
             return w;
         };
         const double needed_px = 2.0 * std::asin(std::min(1.0, radius / from_centre)) / radians_per_px;  // the sphere's angular diameter
@@ -339,11 +339,30 @@ void Runtime::repair_refreshes(double budget_ms, double& predicted) {
 }
 
 // The plan counts each refresh at its cost spread over the capture's lifetime; the frame pays
-// it whole. So a frame renews at most what a quarter of the budget pays for beyond the spread
+// it whole. So a frame renews at most what a share of the budget pays for beyond the spread
 // cost, the cheapest first (the others wait for a later frame), and the plan is solved again
-// with that time set aside, so that every object, not the refreshes alone, gives it up.
-void Runtime::reserve_refreshes(const SelectParams& sp) {
+// with that time set aside, so that every object, not the refreshes alone, gives it up. The
+// solve with less budget may drop some of the renewals it was given time for: then it is solved
+// once more among those it kept, with only their time set aside, so no reserve goes unspent.
+void Runtime::reserve_refreshes(const SelectParams& sp, double share) {
     if (!problem_.has_menu()) return;
+    const double budget = problem_.budget_ms;
+    double cap = share * budget, reserved = -1;
+    for (int round = 0; round < 3; ++round) {
+        const double kept = keep_cheapest_refreshes(cap);
+        if (reserved < 0 && renewals_.empty()) return;                  // the plan renews nothing
+        if (reserved >= 0 && kept >= reserved - 0.01 * budget) return;  // little left unspent: this plan stands
+        problem_.budget_ms = budget - kept;
+        select(selector_, problem_, sp, plan_);
+        problem_.budget_ms = budget;
+        reserved = cap = kept;
+    }
+}
+
+// The plan's refreshes (renewals_): keeps the cheapest whose extra cost (paid whole, beyond the
+// spread cost) fits within `cap`, and takes every other refresh way off this frame's menu (its
+// setup past the budget). \return the extra cost of those kept.
+double Runtime::keep_cheapest_refreshes(double cap) {
     renewals_.clear();
     for (size_t k = 0; k < visible_ids_.size(); ++k) {
         const uint32_t j = plan_.way[k];
@@ -351,17 +370,17 @@ void Runtime::reserve_refreshes(const SelectParams& sp) {
         const WayKind& kind = way_kinds_[problem_.way_begin[k] + j - 1];
         if (kind.refresh) renewals_.push_back({std::max(0.0, kind.full_ms - problem_.cost(k, j, 2.0)), k, j});
     }
-    if (renewals_.empty()) return;
     std::sort(renewals_.begin(), renewals_.end(), [](const Renewal& a, const Renewal& b) { return a.extra < b.extra || (a.extra == b.extra && a.k < b.k); });
-    const double budget = problem_.budget_ms, reserve = 0.25 * budget;
+    const double off = 2.0 * problem_.budget_ms;
+    for (size_t k = 0; k < visible_ids_.size(); ++k)  // the refreshes the plan did not choose
+        for (uint32_t j = 1; j < problem_.way_count(k); ++j)
+            if (way_kinds_[problem_.way_begin[k] + j - 1].refresh && !(plan_.drawn[k] && plan_.way[k] == j)) problem_.ways[problem_.way_begin[k] + j - 1].setup_ms = off;
     double kept = 0;
     for (const Renewal& r : renewals_) {
-        if (kept + r.extra <= reserve) kept += r.extra;
-        else problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = 2.0 * budget;  // not this frame
+        if (kept + r.extra <= cap) kept += r.extra;
+        else problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = off;  // not this frame
     }
-    problem_.budget_ms = budget - kept;
-    select(selector_, problem_, sp, plan_);
-    problem_.budget_ms = budget;
+    return kept;
 }
 
 // The eye of this frame, and the viewer's speed: given, or the eye's motion since the last
@@ -500,7 +519,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         sp.coverage_px = coverage_.data();
         sp.stress = stress_;
         select(selector_, problem_, sp, plan_);
-        reserve_refreshes(sp);
+        reserve_refreshes(sp, params.menu.refresh_share);
     }
     // round down to the TOM resolutions and predict with the real vertex counts
     double predicted = model_.frame_fixed_ms();

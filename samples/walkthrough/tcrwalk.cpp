@@ -179,6 +179,8 @@ struct Options {
     std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading and imposters too
     double flat_error_factor = 2.0;       // flat shading's projected error over smooth's (tcr::Menu)
     double imposter_max_px = 1.0;         // an imposter is reused while its distortion stays within this
+    double imposter_error_factor = 1.0;   // an imposter's error in the benefit over its geometric error (tcr::Menu)
+    double refresh_share = 0.25;          // a frame renews at most what this share of the budget pays for
 };
 
 // Grows `v` to hold at least `n` elements, by doubling, and touches the new memory once, so no
@@ -385,6 +387,8 @@ struct PathRun {
         fp.menu.flat = fp.menu.imposters = o.representations == "all" && !levels_only;
         fp.menu.flat_error_factor = o.flat_error_factor;
         fp.menu.imposter_max_px = o.imposter_max_px;
+        fp.menu.imposter_error_factor = o.imposter_error_factor;
+        fp.menu.refresh_share = o.refresh_share;
         if (none) {
             fp.menu = tcr::Menu();
             fp.budget_ms = 1e12;
@@ -867,6 +871,8 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"levels", "all"}));
     app.add_option("--flat-error-factor", o.flat_error_factor, "Flat shading's projected error as a multiple of smooth shading's (default 2)")->check(CLI::PositiveNumber);
     app.add_option("--imposter-max-px", o.imposter_max_px, "Reuse an imposter while its distortion stays within this many pixels (default 1)")->check(CLI::PositiveNumber);
+    app.add_option("--imposter-error-factor", o.imposter_error_factor, "An imposter's projected error in the benefit as a multiple of its geometric error (default 1)")->check(CLI::PositiveNumber);
+    app.add_option("--refresh-share", o.refresh_share, "Renew imposters in a frame for at most this share of the budget (default 0.25)")->check(CLI::Range(0.0, 1.0));
     app.add_option("--noise-test", noise_renders, "Draw viewpoint A's frame (the exact selector's plan at --budget-ms) this many times in a row and print how much identical frames vary")
         ->check(CLI::Range(20u, 100000u));
     app.footer("Exit codes: 0 ok, 1 failure (unreadable scene or mesh, no OpenGL), 2 usage error.\n"

@@ -392,6 +392,7 @@ TEST_CASE("menus: imposters chosen where they pay, reused within the bound, refr
             INFO("frame " << frame << " predicted " << r.predicted_ms << " imposters " << r.imposters << " refreshes " << r.refreshes);
             CHECK(r.predicted_ms <= 8.0 * (1 + 1e-9));
             CHECK(r.refreshes <= 25);  // the reserve for renewals is a quarter of the budget
+            if (r.refreshes > 0) CHECK(r.predicted_ms >= 0.9 * 8.0);  // and what the renewals leave of it is spent
             refreshed += r.refreshes;
         }
         const tcr::FrameReport& first = rt.last_frame();

@@ -45,6 +45,11 @@ struct Menu {
     /// Gouraud's m = 2 in vertices); fitted to the measured image by tcrwalk (docs/CALIBRATION.md).
     double flat_error_factor = 2.0;
     double imposter_max_px = 1.0;     ///< a capture is reused while its distortion (Pasman & Jansen 4.3) stays within this
+    /// An imposter's projected error (captured level + distortion + magnification) as it weighs
+    /// in the benefit: a billboard also loses the object's parallax and lighting between
+    /// captures, which the geometric error does not see (fitted to the measured image, TCR.md).
+    double imposter_error_factor = 1.0;
+    double refresh_share = 0.25;      ///< a frame renews at most what this share of the budget pays for, beyond the spread cost
     double capture_error_px = 0.1;    ///< a refresh renders the object at the level of this projected error (low: its cost is spread over the lifetime)
     uint32_t texture_max = 256;       ///< the largest texture side (power of two), texels
     uint32_t texture_min = 16;
@@ -188,7 +193,8 @@ private:
     };
     void add_ways(uint32_t id, size_t k, const FrameParams& params, double radians_per_px);
     double choose(uint32_t id, size_t k, double triangles, uint32_t way);
-    void reserve_refreshes(const SelectParams& sp);
+    void reserve_refreshes(const SelectParams& sp, double share);
+    double keep_cheapest_refreshes(double cap);
     struct Renewal { double extra; size_t k; uint32_t j; };
     std::vector<Renewal> renewals_;  // reserve_refreshes' scratch
     void repair_refreshes(double budget_ms, double& predicted);

@@ -107,6 +107,9 @@ struct Plan {
     bool feasible = true;            ///< cost_ms <= budget
     uint32_t iterations = 0;         ///< solver iterations (Newton steps, bisection steps)
     bool deadline_hit = false;
+    /// exact on a menu: the plan's Lagrange multiplier (0 where the budget does not bind). A
+    /// plan given back to exact starts its search there: the runtime's plan is last frame's.
+    double multiplier = 0;
 
     // reused between frames so that a warm plan allocates nothing (not part of the result)
     std::vector<double> work_a, work_b, work_c;
