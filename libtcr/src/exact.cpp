@@ -115,23 +115,80 @@ double choose_at(const Problem& p, const Plan& plan, double lambda, std::vector<
     return cost;
 }
 
-// The resolutions for fixed ways that meet the budget (bisection on l; the fixed-way problem is
-// concave, so this is its optimum), starting from a feasible multiplier `feasible`.
+// The resolutions for fixed ways that meet the budget: the fixed-way problem is the concave one
+// solve_exact solves, so its optimum spends the budget at one multiplier. In mu = l^(-1/(m+1))
+// each resolution is clamp(C_j mu, lo, hi), so the cost is piecewise linear in mu with a
+// breakpoint at each end of each clamp: one sort and one sweep find the mu that meets the budget
+// exactly. With ways of different exponents it bisects on l from the feasible `feasible` instead.
 void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline& deadline) {
-    auto fits = [&](double lambda) {
-        double c = 0;
-        for (size_t i = 0; i < p.size(); ++i)
-            if (plan.drawn[i]) c += p.cost(i, plan.way[i], best_resolution(p.way(i, plan.way[i]), lambda));
-        return c <= p.budget_ms;
-    };
-    double hi = 0;
-    if (!fits(0)) {
-        double lo = feasible;
-        for (int k = 0; k < 200 && fits(lo); ++k) lo *= 0.5;
-        hi = bisect_multiplier(lo, std::min(feasible, 2.0 * lo), 1e-7, fits, deadline, plan);
+    const size_t n = p.size();
+    double m = -1;
+    bool one_m = true;
+    for (size_t i = 0; i < n && one_m; ++i)
+        if (plan.drawn[i]) {
+            const double wm = p.way(i, plan.way[i]).m;
+            one_m = m < 0 || wm == m;
+            m = wm;
+        }
+    if (m < 0) return;
+    if (!one_m) {
+        auto fits = [&](double lambda) {
+            double c = 0;
+            for (size_t i = 0; i < n; ++i)
+                if (plan.drawn[i]) c += p.cost(i, plan.way[i], best_resolution(p.way(i, plan.way[i]), lambda));
+            return c <= p.budget_ms;
+        };
+        double hi = 0;
+        if (!fits(0)) {
+            double lo = feasible;
+            for (int k = 0; k < 200 && fits(lo); ++k) lo *= 0.5;
+            hi = bisect_multiplier(lo, std::min(feasible, 2.0 * lo), 1e-7, fits, deadline, plan);
+        }
+        for (size_t i = 0; i < n; ++i)
+            if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
+        return;
     }
-    for (size_t i = 0; i < p.size(); ++i)
-        if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
+    // cost(mu) = fixed + sum a_j clamp(C_j mu, lo_j, hi_j): at mu = 0 every clamp is at lo
+    std::vector<double>& C = plan.work_b;
+    std::vector<std::pair<double, uint32_t>>& breaks = plan.work_heap;
+    breaks.clear();
+    double cost = 0, at_hi = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!plan.drawn[i]) continue;
+        const Way w = p.way(i, plan.way[i]);
+        C[i] = w.error > 0 && w.hi > w.lo ? root_m1(w.m * w.error / w.per_tri_ms, w.m) : 0.0;
+        cost += w.setup_ms + w.per_tri_ms * w.lo;
+        at_hi += w.setup_ms + w.per_tri_ms * w.hi;
+        if (C[i] > 0) {
+            breaks.push_back({w.lo / C[i], uint32_t(2 * i)});      // from here it grows
+            breaks.push_back({w.hi / C[i], uint32_t(2 * i + 1)});  // from here it is at hi
+        }
+    }
+    if (at_hi <= p.budget_ms) {  // the budget does not bind (l = 0): every way at its hi
+        for (size_t i = 0; i < n; ++i)
+            if (plan.drawn[i]) plan.triangles[i] = p.way(i, plan.way[i]).hi;
+        return;
+    }
+    double mu = 0;
+    {
+        std::sort(breaks.begin(), breaks.end());
+        double slope = 0, at = 0;
+        for (const auto& [b, tag] : breaks) {
+            const double next = cost + slope * (b - at);
+            if (next > p.budget_ms) break;
+            cost = next, at = b;
+            const size_t i = tag / 2;
+            slope += (tag % 2 ? -1.0 : 1.0) * p.way(i, plan.way[i]).per_tri_ms * C[i];
+        }
+        mu = slope > 0 ? at + (p.budget_ms - cost) / slope : at;
+        mu *= 1.0 - 1e-12;  // on the feasible side of the rounding
+        ++plan.iterations;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!plan.drawn[i]) continue;
+        const Way w = p.way(i, plan.way[i]);
+        plan.triangles[i] = C[i] > 0 ? clamp(C[i] * mu, w.lo, w.hi) : w.lo;
+    }
 }
 
 } // namespace

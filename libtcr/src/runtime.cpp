@@ -260,24 +260,31 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
             for (int c = 0; c < 3; ++c) old.eye[c] = kept.eye[c];
             const double distortion_px = imposters::distortion_from(old, eye_) / radians_per_px;
             if (distortion_px <= menu.imposter_max_px) {
-                const double level_px = projected_error_px(o, r, tom::active_triangle_count(*o.mesh, kept.vertices));
+                const double level_px = projected_error_px(o, r, kept.triangles);
                 const double magnified_px = 0.5 * std::max(0.0, needed_px / kept.texture_px - 1.0);
                 const double e = level_px + distortion_px + magnified_px;
                 push(imposter_way(quad_ms, e), {Representation::simple_imposter, false, e, kept.texture_px, kept.vertices});
             }
         }
-        // a new capture from here: the level of capture_error_px, a texture holding the sphere
-        const uint32_t vertices = resolution_for(o, triangles_for_error(id, menu.capture_error_px));
-        const uint32_t triangles = tom::active_triangle_count(*o.mesh, vertices);
+        // a new capture from here: the level of capture_error_px (found again when the projected
+        // size has changed by 10%: its error by as much), a texture holding the sphere
+        Object& mo = objects_[id];
+        if (mo.capture_error_px != menu.capture_error_px || std::abs(r.size_px - mo.capture_size_px) > 0.1 * mo.capture_size_px) {
+            mo.capture_error_px = menu.capture_error_px;
+            mo.capture_size_px = r.size_px;
+            mo.capture_vertices = resolution_for(o, triangles_for_error(id, menu.capture_error_px));
+            mo.capture_triangles = tom::active_triangle_count(*o.mesh, mo.capture_vertices);
+        }
+        const uint32_t vertices = mo.capture_vertices, triangles = mo.capture_triangles;
         const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
         const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
-        Object& mo = objects_[id];
         const double d = from_centre - radius;
         if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d) {  // Pasman's lifetime changes slowly with distance
             mo.lifetime_distance = d;
-            mo.lifetime_s = speed_ > 0 ? imposters::lifetime(capture, d, bound_rad, speed_, (menu.min_distance_radii - 1.0) * radius) : INFINITY;
+            mo.lifetime_m = imposters::lifetime(capture, d, bound_rad, 1.0, (menu.min_distance_radii - 1.0) * radius);  // at 1 m/s: the walk
         }
-        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, mo.lifetime_s / frame_interval_s(params)));
+        const double lifetime_s = speed_ > 0 ? mo.lifetime_m / speed_ : INFINITY;
+        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, lifetime_s / frame_interval_s(params)));
         const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
         push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
         way_kinds_.back().full_ms = quad_ms + refresh_ms;
@@ -406,6 +413,7 @@ void Runtime::commit_capture(uint32_t id, uint32_t way, size_t k) {
     s.radius = float(radius);
     s.texture_px = kind.texture_px;
     s.vertices = kind.vertices;
+    s.triangles = tom::active_triangle_count(*o.mesh, kind.vertices);
     s.frame = frame_;
     o.lifetime_distance = -1;  // measured again from the new capture
 }

@@ -39,7 +39,8 @@ public:
         float tint = 0;         ///< imposters: how much of `color` to mix into the texture's
         uint32_t tag = 0;       ///< the caller's (the walkthrough: its object), unused here
     };
-    /// A render of objects into a texture slot (created or resized to side x side), before the frame.
+    /// A render of objects into a texture slot (a square of side x side, a power of two from 16 to
+    /// 256, in a layer of an array texture that the frame's imposters share), before the frame.
     struct Capture {
         uint32_t texture;
         uint32_t side;
@@ -50,8 +51,10 @@ public:
     /// frame's indices are uploaded once, into one buffer. Matrices column-major.
     void render(const float view[16], const float projection[16], const std::vector<Draw>& draws, const std::vector<uint32_t>& indices,
                 size_t index_count, const std::vector<Capture>& captures = {});
-    /// Bytes of the imposter textures held.
+    /// Bytes of the imposter textures held (the array textures' whole layers).
     size_t texture_bytes() const noexcept;
+    /// The frame as drawn: RGBA, 8 bits a channel, rows from the bottom.
+    std::vector<unsigned char> read_pixels() const;
     /// Reads the frame back and writes it as PNG. \return false when the file cannot be written.
     bool save_png(const std::string& path);
     uint32_t width() const noexcept { return width_; }

@@ -57,7 +57,32 @@ void write_scene(const std::string& path, const Scene& s) {
         out << "instance " << i.mesh << ' ' << i.x << ' ' << i.y << ' ' << i.z << ' ' << i.size << ' ' << i.yaw_deg << ' ' << i.weight << "\n";
 }
 
-Scene make_scene(const std::vector<std::string>& meshes, uint32_t instances, uint64_t seed, uint32_t heaviest) {
+namespace {
+
+// The far ring: objects of every mesh 50 to 150 units out, two to six units tall, where the
+// levels are down to their coarsest and an imposter of the detailed object costs a quad (Pasman
+// & Jansen's simple imposters pay beyond about fifty radii). Its own stream of the seed, so the
+// near scene is the same with or without it.
+void add_far_ring(Scene& s, uint32_t count, uint64_t seed) {
+    std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (uint32_t k = 0; k < count; ++k) {
+        Instance i;
+        i.mesh = uint32_t(rng() % s.meshes.size());
+        const float r = 50.0f + 100.0f * u(rng), a = 2 * kPi * u(rng);
+        i.x = r * std::cos(a);
+        i.z = r * std::sin(a);
+        i.size = 2.0f + 4.0f * u(rng);
+        i.y = 0.5f * i.size;
+        i.yaw_deg = 360.0f * u(rng);
+        i.weight = 1.0f;
+        s.instances.push_back(i);
+    }
+}
+
+} // namespace
+
+Scene make_scene(const std::vector<std::string>& meshes, uint32_t instances, uint64_t seed, uint32_t heaviest, uint32_t far_instances) {
     Scene s;
     s.meshes = meshes;
     std::mt19937_64 rng(seed);
@@ -77,6 +102,7 @@ Scene make_scene(const std::vector<std::string>& meshes, uint32_t instances, uin
         i.weight = u(rng) < 0.05f ? 3.0f : 1.0f;
         s.instances.push_back(i);
     }
+    add_far_ring(s, far_instances, seed);
     return s;
 }
 

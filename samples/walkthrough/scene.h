@@ -31,8 +31,9 @@ Scene read_scene(const std::string& path);
 void write_scene(const std::string& path, const Scene& scene);
 /// A crowd of about 60% of the instances within radius 6 of the origin (any mesh), the rest
 /// sparse in a ring from radius 14 to 40 (mesh `heaviest`, the most detailed); sizes 0.6 to 2.4;
-/// deterministic from the seed.
-Scene make_scene(const std::vector<std::string>& meshes, uint32_t instances, uint64_t seed, uint32_t heaviest);
+/// deterministic from the seed. `far_instances` more go in a ring from radius 50 to 150 (every
+/// mesh, sizes 2 to 6), drawn from a stream of their own so the rest is the same without them.
+Scene make_scene(const std::vector<std::string>& meshes, uint32_t instances, uint64_t seed, uint32_t heaviest, uint32_t far_instances = 0);
 
 struct CameraPose {
     float eye[3], target[3];

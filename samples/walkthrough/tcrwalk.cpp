@@ -696,10 +696,11 @@ double frame_noise(const tom::MeshView& mesh, uint32_t handle, const tcr::Camera
     return mean > 0 ? std::sqrt(var) / mean : 0.0;
 }
 
-// Simple imposters' quads: `copies` quads a frame (repeated toward 2,000 quads) of one texture
-// made from `mesh`, each covering about `side_px` square pixels; the time per quad above the
-// empty frame's, as a sample of no triangles (the fit's fill term: t_setup + t_pix pixels).
-tcr::CostSample quad_sample(uint32_t texture, float side_px, const tcr::Camera& cam, double empty_ms, walk::Renderer& renderer, Frame& f) {
+// Simple imposters' quads: 64 quads a frame (repeated toward 2,000 quads), each showing the
+// next of `textures` textures from `texture` on (a frame's imposters each bind their own), each
+// covering about `side_px` square pixels; the time per quad above the empty frame's, as a
+// sample of no triangles (the fit's fill term: t_setup + t_pix pixels).
+tcr::CostSample quad_sample(uint32_t texture, uint32_t textures, float side_px, const tcr::Camera& cam, double empty_ms, walk::Renderer& renderer, Frame& f) {
     f.draws.clear();
     const float distance = 10.0f;
     const float half = 0.5f * side_px * 2.0f * distance * std::tan(30.0f * 3.14159265f / 180.0f) / float(renderer.height());  // pixels -> metres at 10 m
@@ -707,7 +708,7 @@ tcr::CostSample quad_sample(uint32_t texture, float side_px, const tcr::Camera& 
     for (int k = 0; k < 64; ++k) {
         walk::Renderer::Draw d{0, nullptr, 0, 0, {kGrey[0], kGrey[1], kGrey[2]}};
         d.shading = walk::Renderer::Shading::imposter;
-        d.texture = texture;
+        d.texture = texture + uint32_t(k) % textures;
         const float x = (float(k % columns) - 3.5f) * 1.1f * 2 * half, y = (float(k / columns) - 3.5f) * 1.1f * 2 * half;
         const float su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
         for (int c = 0; c < 4; ++c) d.corners[3 * c] = x + half * su[c], d.corners[3 * c + 1] = y + half * sv[c], d.corners[3 * c + 2] = -distance;
@@ -786,7 +787,7 @@ void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<
     // t = a + b P by weighted least squares, weights 1 / t^2 (relative residuals)
     double s00 = 0, s01 = 0, s11 = 0, r0 = 0, r1 = 0;
     for (float side : {8.0f, 16.0f, 32.0f, 64.0f, 128.0f}) {
-        const tcr::CostSample q = calib::quad_sample(1000, side, cam, empty_ms, renderer, frame);
+        const tcr::CostSample q = calib::quad_sample(1000, 16, side, cam, empty_ms, renderer, frame);  // the refreshes' 16 textures
         if (q.time_ms <= 0) continue;
         const double wt = 1.0 / (q.time_ms * q.time_ms);
         s00 += wt, s01 += wt * q.pixels, s11 += wt * q.pixels * q.pixels, r0 += wt * q.time_ms, r1 += wt * q.time_ms * q.pixels;
@@ -843,13 +844,14 @@ int main(int argc, char** argv) {
     Options o;
     std::string make_scene, calibrate_out;
     std::vector<std::string> mesh_files;
-    uint32_t instances = 300, noise_renders = 0;
+    uint32_t instances = 300, far_instances = 0, noise_renders = 0;
     CLI::App app{"tcrwalk: render a scene of TOM objects headless along a path, under libtcr's selectors, and measure the frame budget"};
     app.set_version_flag("--version", "tcrwalk 0.1.0");
     app.add_option("--scene", o.scene, "Scene file (see samples/walkthrough/scene.h)");
     app.add_option("--make-scene", make_scene, "Write a scene file from --meshes (deterministic from --seed) and exit");
     app.add_option("--meshes", mesh_files, "For --make-scene: .tom files (paths stored relative to the scene file)");
     app.add_option("--instances", instances, "For --make-scene: number of instances (default 300)");
+    app.add_option("--far-instances", far_instances, "For --make-scene: this many more in a ring 50 to 150 units out, where imposters pay (default 0)");
     app.add_option("--calibrate", calibrate_out, "Render sample objects, fit the cost model, write this calibration file (docs/CALIBRATION.md)");
     app.add_option("--calibration", o.calibration, "Calibration file to run with (required unless --calibrate)");
     app.add_option("--selector", o.selectors, "none, static, stress, greedy, barrier, exact, or all (default all); SELECTOR-levels: that selector on the TOM levels alone")->delimiter(',');
@@ -892,7 +894,7 @@ int main(int argc, char** argv) {
                 const tom::File f = tom::File::open(mesh_files[k]);
                 if (f.mesh_count() && f.mesh(0).triangle_count > most) most = f.mesh(0).triangle_count, heaviest = uint32_t(k);
             }
-            walk::write_scene(make_scene, walk::make_scene(rel, instances, o.seed, heaviest));
+            walk::write_scene(make_scene, walk::make_scene(rel, instances, o.seed, heaviest, far_instances));
             const World w = load_world(make_scene);
             std::printf("%s: %zu instances of %zu meshes, %llu triangles at full detail\n", make_scene.c_str(), w.scene.instances.size(),
                         w.meshes.size(), static_cast<unsigned long long>(w.full_triangles));

@@ -86,6 +86,7 @@ struct ImposterState {
     float radius = 0;
     uint32_t texture_px = 0;   ///< side of the square texture
     uint32_t vertices = 0;     ///< the level rendered into it
+    uint32_t triangles = 0;    ///< that level's triangles
     uint64_t frame = 0;        ///< the frame it was captured in
 };
 /// The camera of a capture: from its eye toward its centre, a square frustum just holding the
@@ -180,7 +181,10 @@ private:
         double diagonal;                               // object-space bounding-box diagonal
         float last_x = -1, last_y = -1;                // previous frame's screen position (motion)
         ImposterState imposter;                        // the last capture
-        double lifetime_distance = -1, lifetime_s = 0; // a refresh's lifetime, and the distance it was computed at
+        double lifetime_distance = -1, lifetime_m = 0; // how far the viewer walks before a capture from here breaks its bound, and the distance it was computed at
+        // the level a capture renders, for the projected size and capture error it was found at
+        double capture_size_px = -1, capture_error_px = -1;
+        uint32_t capture_vertices = 0, capture_triangles = 0;
     };
     // One entry of a frame's menu beyond way 0: what it draws.
     struct WayKind {

@@ -1,0 +1,167 @@
+// The walkthrough's headless renderer (OSMesa, llvmpipe): a simple imposter seen from the
+// viewpoint it was captured from covers the pixels its geometry covers, in the geometry's
+// colours, whatever the side of its cell and wherever the cell sits among the other captures
+// of the shared array textures (several sides in one layer, layers in two array textures).
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "renderer.h"
+#include "support.h"
+#include "tcr/runtime.h"
+#include "tcr/view.h"
+#include "tom/builder/writer.h"
+#include "tom/format.h"
+
+namespace {
+
+constexpr uint32_t kWidth = 320, kHeight = 240;
+
+struct Bunny {
+    std::vector<uint8_t> bytes;
+    tom::File file;
+    static std::vector<uint8_t> make() { return tom::serialize({tom::build(test::real_meshes()[0].mesh)}); }
+    Bunny() : bytes(make()), file(tom::File::from_bytes(bytes.data(), bytes.size())) {}
+    const tom::MeshView& mesh() const { return file.mesh(0); }
+};
+
+// One object of the test scene: where it stands and how large, and its capture.
+struct Placed {
+    float model[16];
+    tcr::ImposterState capture;
+};
+
+struct Scene {
+    walk::Renderer renderer{kWidth, kHeight};
+    Bunny bunny;
+    uint32_t handle = renderer.add_mesh(bunny.mesh());
+    std::vector<uint32_t> indices;
+    float eye[3] = {0, 0.2f, 7}, view[16], projection[16];
+    Scene() {
+        indices.resize(size_t(bunny.mesh().triangle_count) * 3);
+        tom::extract(bunny.mesh(), bunny.mesh().vertex_count, indices.data(), indices.size());
+        const float target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+        tcr::look_at(eye, target, up, view);
+        tcr::perspective(50.0f * 3.14159265f / 180.0f, float(kWidth) / float(kHeight), 0.1f, 100.0f, projection);
+    }
+    // an object at (x, y, 0) whose bounding sphere has radius `radius`, turned `yaw` radians
+    // about the vertical, captured from the eye
+    Placed place(float x, float y, float radius, uint32_t side, float yaw = 0) const {
+        const tom::MeshView& m = bunny.mesh();
+        double d2 = 0;
+        float centre[3];
+        for (int k = 0; k < 3; ++k) {
+            d2 += double(m.bounds_max[k] - m.bounds_min[k]) * double(m.bounds_max[k] - m.bounds_min[k]);
+            centre[k] = 0.5f * (m.bounds_min[k] + m.bounds_max[k]);
+        }
+        const float scale = radius / float(0.5 * std::sqrt(d2));
+        // column-major scale, then the turn, then the move that puts the centre at (x, y, 0)
+        const float c = std::cos(yaw), sn = std::sin(yaw);
+        Placed p;
+        const float rs[3] = {scale * (c * centre[0] + sn * centre[2]), scale * centre[1], scale * (-sn * centre[0] + c * centre[2])};
+        const float matrix[16] = {scale * c, 0, -scale * sn, 0, 0, scale, 0, 0, scale * sn, 0, scale * c, 0, x - rs[0], y - rs[1], -rs[2], 1};
+        std::copy(matrix, matrix + 16, p.model);
+        p.capture.valid = true;
+        p.capture.centre[0] = x, p.capture.centre[1] = y, p.capture.centre[2] = 0;
+        std::copy(eye, eye + 3, p.capture.eye);
+        p.capture.radius = radius;
+        p.capture.texture_px = side;
+        return p;
+    }
+    walk::Renderer::Draw geometry(const Placed& p) const {
+        return walk::Renderer::Draw{handle, p.model, 0, uint32_t(indices.size()), {0.8f, 0.7f, 0.5f}};
+    }
+    std::vector<unsigned char> direct(const std::vector<Placed>& objects) {
+        std::vector<walk::Renderer::Draw> draws;
+        for (const Placed& p : objects) draws.push_back(geometry(p));
+        renderer.render(view, projection, draws, indices, indices.size());
+        return renderer.read_pixels();
+    }
+    // each object captured into slot `first_slot + i` this frame and drawn as its quad alone
+    std::vector<unsigned char> as_imposters(const std::vector<Placed>& objects, uint32_t first_slot) {
+        std::vector<walk::Renderer::Draw> draws;
+        std::vector<walk::Renderer::Capture> captures;
+        for (size_t i = 0; i < objects.size(); ++i) {
+            walk::Renderer::Capture c{first_slot + uint32_t(i), objects[i].capture.texture_px, {}, {}};
+            tcr::imposter_camera(objects[i].capture, c.view, c.projection);
+            captures.push_back(c);
+            walk::Renderer::Draw g = geometry(objects[i]);
+            g.capture = int32_t(i);
+            draws.push_back(g);
+            walk::Renderer::Draw quad = g;
+            quad.capture = -1;
+            quad.shading = walk::Renderer::Shading::imposter;
+            quad.texture = first_slot + uint32_t(i);
+            tcr::imposter_quad(objects[i].capture, quad.corners);
+            draws.push_back(quad);
+        }
+        renderer.render(view, projection, draws, indices, indices.size(), captures);
+        return renderer.read_pixels();
+    }
+};
+
+// What the imposter frame shares with the direct one: the overlap of their foregrounds (pixels
+// unlike the corner's background) over their union, and the mean colour difference (0-255)
+// where both are foreground.
+struct Agreement {
+    double overlap = 0, colour = 0;
+    size_t direct_pixels = 0;
+};
+Agreement agreement(const std::vector<unsigned char>& a, const std::vector<unsigned char>& b) {
+    auto differs = [](const unsigned char* p, const unsigned char* q) { return std::abs(p[0] - q[0]) + std::abs(p[1] - q[1]) + std::abs(p[2] - q[2]) > 12; };
+    size_t both = 0, either = 0;
+    double colour = 0;
+    Agreement out;
+    for (size_t i = 0; i < a.size(); i += 4) {
+        const bool fa = differs(&a[i], &a[0]), fb = differs(&b[i], &b[0]);
+        out.direct_pixels += fa;
+        either += fa || fb;
+        if (!(fa && fb)) continue;
+        ++both;
+        colour += (std::abs(a[i] - b[i]) + std::abs(a[i + 1] - b[i + 1]) + std::abs(a[i + 2] - b[i + 2])) / 3.0;
+    }
+    out.overlap = either ? double(both) / double(either) : 1.0;
+    out.colour = both ? colour / double(both) : 0.0;
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("walk renderer: imposters of several sides in one layer draw their objects", "[walk][renderer][imposters]") {
+    Scene s;
+    const std::vector<Placed> objects = {s.place(-1.6f, 0, 0.7f, 64), s.place(0, 0.1f, 0.7f, 128, 1.0f), s.place(1.6f, 0, 0.7f, 256, 2.0f), s.place(0, -1.2f, 0.4f, 32, 3.0f)};
+    const std::vector<unsigned char> direct = s.direct(objects);
+    const std::vector<unsigned char> imposters = s.as_imposters(objects, 0);
+    const Agreement a = agreement(direct, imposters);
+    INFO("overlap " << a.overlap << " colour difference " << a.colour << " foreground " << a.direct_pixels);
+    REQUIRE(a.direct_pixels > 1500);  // the objects are in view
+    CHECK(a.overlap > 0.93);  // measured 0.97 and 4 (the 32-texel cell is magnified)
+    CHECK(a.colour < 8);
+    // the cells of a layer: 256 takes one, 128, 64 and 32 share a second
+    CHECK(s.renderer.texture_bytes() == size_t(32) * 256 * 256 * 4);
+    // the same slots captured again at other sides: freed cells are taken again, same picture
+    std::vector<Placed> resized = objects;
+    const uint32_t sides[4] = {256, 64, 128, 64};
+    for (size_t i = 0; i < resized.size(); ++i) resized[i].capture.texture_px = sides[i];
+    const Agreement again = agreement(direct, s.as_imposters(resized, 0));
+    INFO("resized: overlap " << again.overlap << " colour difference " << again.colour);
+    CHECK(again.overlap > 0.93);
+    CHECK(again.colour < 8);
+}
+
+TEST_CASE("walk renderer: forty captures of a full layer each spill into a second array texture", "[walk][renderer][imposters]") {
+    Scene s;
+    std::vector<Placed> objects;
+    for (int i = 0; i < 40; ++i)  // each turned its own way: a capture shown in another's place would not match
+        objects.push_back(s.place(-2.7f + 0.6f * float(i % 10), -1.2f + 0.8f * float(i / 10), 0.28f, 256, 0.157f * float(i)));
+    const std::vector<unsigned char> direct = s.direct(objects);
+    const Agreement a = agreement(direct, s.as_imposters(objects, 100));
+    INFO("overlap " << a.overlap << " colour difference " << a.colour << " foreground " << a.direct_pixels);
+    REQUIRE(a.direct_pixels > 2500);
+    CHECK(a.overlap > 0.95);  // measured 0.99 and 1.3
+    CHECK(a.colour < 5);
+    CHECK(s.renderer.texture_bytes() == size_t(2) * 32 * 256 * 256 * 4);  // 40 layers of 32 a texture
+}
