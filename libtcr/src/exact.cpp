@@ -116,11 +116,11 @@ double choose_at(const Problem& p, const Plan& plan, double lambda, std::vector<
 }
 
 // The resolutions for fixed ways that meet the budget: the fixed-way problem is the concave one
-// solve_exact solves, so its optimum spends the budget at one multiplier. In mu = l^(-1/(m+1))
+// solve_exact solves, so its optimum spends the budget at one multiplier (returned). In mu = l^(-1/(m+1))
 // each resolution is clamp(C_j mu, lo, hi), so the cost is piecewise linear in mu with a
 // breakpoint at each end of each clamp: one sort and one sweep find the mu that meets the budget
 // exactly. With ways of different exponents it bisects on l from the feasible `feasible` instead.
-void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline& deadline) {
+double spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline& deadline) {
     const size_t n = p.size();
     double m = -1;
     bool one_m = true;
@@ -130,7 +130,7 @@ void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline&
             one_m = m < 0 || wm == m;
             m = wm;
         }
-    if (m < 0) return;
+    if (m < 0) return 0.0;
     if (!one_m) {
         auto fits = [&](double lambda) {
             double c = 0;
@@ -140,13 +140,15 @@ void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline&
         };
         double hi = 0;
         if (!fits(0)) {
-            double lo = feasible;
+            double lo = feasible > 0 ? feasible : 1.0;
+            for (int k = 0; k < 200 && !fits(lo); ++k) lo *= 2;  // a multiplier that fits
+            const double start = lo;
             for (int k = 0; k < 200 && fits(lo); ++k) lo *= 0.5;
-            hi = bisect_multiplier(lo, std::min(feasible, 2.0 * lo), 1e-7, fits, deadline, plan);
+            hi = bisect_multiplier(lo, std::min(start, 2.0 * lo), 1e-7, fits, deadline, plan);
         }
         for (size_t i = 0; i < n; ++i)
             if (plan.drawn[i]) plan.triangles[i] = best_resolution(p.way(i, plan.way[i]), hi);
-        return;
+        return hi;
     }
     // cost(mu) = fixed + sum a_j clamp(C_j mu, lo_j, hi_j): at mu = 0 every clamp is at lo
     std::vector<double>& C = plan.work_b;
@@ -167,7 +169,7 @@ void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline&
     if (at_hi <= p.budget_ms) {  // the budget does not bind (l = 0): every way at its hi
         for (size_t i = 0; i < n; ++i)
             if (plan.drawn[i]) plan.triangles[i] = p.way(i, plan.way[i]).hi;
-        return;
+        return 0.0;
     }
     double mu = 0;
     {
@@ -189,9 +191,16 @@ void spend_budget(const Problem& p, Plan& plan, double feasible, const Deadline&
         const Way w = p.way(i, plan.way[i]);
         plan.triangles[i] = C[i] > 0 ? clamp(C[i] * mu, w.lo, w.hi) : w.lo;
     }
+    return mu > 0 ? std::pow(mu, -(m + 1.0)) : INFINITY;
 }
 
 } // namespace
+
+void spend_on_ways(const Problem& p, Plan& plan) {
+    const double lambda = spend_budget(p, plan, plan.multiplier, Deadline(0));
+    evaluate(p, plan);
+    if (std::isfinite(lambda)) certify(p, plan, lambda, true);
+}
 
 void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan) {
     const Deadline deadline(params.deadline_ms);

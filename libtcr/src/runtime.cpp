@@ -232,7 +232,7 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
         w.lo = std::min(w.hi, std::max(o.min_triangles, fill / w.per_tri_ms));
         w.setup_ms = model_.t_setup_ms * parts + std::max(0.0, fill - w.per_tri_ms * w.lo);
         w.error = problem_.error[k] * menu.flat_error_factor;
-        push(w, {Representation::flat, false, 0, 0, 0});
+        if (!dominated_by_smooth(w, k)) push(w, {Representation::flat, false, 0, 0, 0});
     }
     double centre[3], radius;
     world_sphere(o.transform, o.box, o.diagonal, centre, radius);
@@ -292,6 +292,19 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
     problem_.previous_way[k] = previous_way;
 }
 
+// Whether way 0 (the levels smooth) does better than the level way `w` of object k for every
+// choice of it: for each n of w, the smooth resolution of the same error, n / (A_w / A)^(1/m),
+// (or the smooth lo, when that is below it) costs no more. Costs are linear in n on the ranges,
+// so the ends decide. A dominated way is never in an optimal plan; leaving it out makes the
+// frame's problem smaller (flat shading on llvmpipe: barely cheaper a triangle, twice the error).
+bool Runtime::dominated_by_smooth(const Way& w, size_t k) const noexcept {
+    const double A = problem_.error[k], a = problem_.per_tri_ms[k], s = problem_.setup_ms[k], lo = problem_.lo[k];
+    if (!(A > 0) || w.error < A || w.m != problem_.m) return false;
+    const double stretch = std::pow(w.error / A, 1.0 / w.m);  // n of w has the error of n / stretch smooth
+    auto worse = [&](double n) { return w.setup_ms + w.per_tri_ms * n >= s + a * std::max(lo, n / stretch); };
+    return w.setup_ms + w.per_tri_ms * w.lo >= s + a * lo && worse(std::max(w.lo, lo * stretch)) && worse(w.hi);
+}
+
 // The resolution and prediction of object `id` (k-th visible) drawn its way `way` with about
 // `triangles`; \return its predicted time.
 double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
@@ -347,10 +360,11 @@ void Runtime::repair_refreshes(double budget_ms, double& predicted) {
 
 // The plan counts each refresh at its cost spread over the capture's lifetime; the frame pays
 // it whole. So a frame renews at most what a share of the budget pays for beyond the spread
-// cost, the cheapest first (the others wait for a later frame), and the plan is solved again
-// with that time set aside, so that every object, not the refreshes alone, gives it up. The
-// solve with less budget may drop some of the renewals it was given time for: then it is solved
-// once more among those it kept, with only their time set aside, so no reserve goes unspent.
+// cost, the cheapest first (the others wait for a later frame, drawn by their kept capture or
+// their levels), and the plan is solved again with that time set aside, so that every object,
+// not the refreshes alone, gives it up. exact keeps its ways and solves the resolutions again
+// (one sort); greedy chooses again, and when that drops some of the renewals it was given time
+// for, once more among those it kept, with only their time set aside, so no reserve goes unspent.
 void Runtime::reserve_refreshes(const SelectParams& sp, double share) {
     if (!problem_.has_menu()) return;
     const double budget = problem_.budget_ms;
@@ -360,15 +374,18 @@ void Runtime::reserve_refreshes(const SelectParams& sp, double share) {
         if (reserved < 0 && renewals_.empty()) return;                  // the plan renews nothing
         if (reserved >= 0 && kept >= reserved - 0.01 * budget) return;  // little left unspent: this plan stands
         problem_.budget_ms = budget - kept;
-        select(selector_, problem_, sp, plan_);
+        if (selector_ == SelectorKind::exact) spend_on_ways(problem_, plan_);
+        else select(selector_, problem_, sp, plan_);
         problem_.budget_ms = budget;
+        if (selector_ == SelectorKind::exact) return;  // its ways, and so its renewals, stand
         reserved = cap = kept;
     }
 }
 
 // The plan's refreshes (renewals_): keeps the cheapest whose extra cost (paid whole, beyond the
-// spread cost) fits within `cap`, and takes every other refresh way off this frame's menu (its
-// setup past the budget). \return the extra cost of those kept.
+// spread cost) fits within `cap`, takes every other refresh way off this frame's menu (its
+// setup past the budget) and moves the objects that had one to their kept capture, when it is
+// offered, else to their levels. \return the extra cost of those kept.
 double Runtime::keep_cheapest_refreshes(double cap) {
     renewals_.clear();
     for (size_t k = 0; k < visible_ids_.size(); ++k) {
@@ -384,8 +401,17 @@ double Runtime::keep_cheapest_refreshes(double cap) {
             if (way_kinds_[problem_.way_begin[k] + j - 1].refresh && !(plan_.drawn[k] && plan_.way[k] == j)) problem_.ways[problem_.way_begin[k] + j - 1].setup_ms = off;
     double kept = 0;
     for (const Renewal& r : renewals_) {
-        if (kept + r.extra <= cap) kept += r.extra;
-        else problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = off;  // not this frame
+        if (kept + r.extra <= cap) {
+            kept += r.extra;
+            continue;
+        }
+        problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = off;  // not this frame
+        uint32_t instead = 0;
+        for (uint32_t j = 1; j < problem_.way_count(r.k); ++j) {
+            const WayKind& kind = way_kinds_[problem_.way_begin[r.k] + j - 1];
+            if (kind.representation == Representation::simple_imposter && !kind.refresh) instead = j;
+        }
+        plan_.way[r.k] = instead;
     }
     return kept;
 }

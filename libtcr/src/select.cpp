@@ -113,6 +113,8 @@ void certify(const Problem& p, Plan& plan, double lambda, bool ways) noexcept {
 
 double dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda) noexcept { return detail::dual_bound(p, drawn, lambda, p.has_menu()); }
 
+void spend_on_ways(const Problem& p, Plan& plan) { detail::spend_on_ways(p, plan); }
+
 double detail::dual_bound(const Problem& p, const std::vector<uint8_t>& drawn, double lambda, bool ways) noexcept {
     // g(l) = sum_i max_{lo<=n<=hi} [b_i(n) - l c_i(n)] + l budget: an upper bound for l >= 0
     lambda = std::max(0.0, lambda);

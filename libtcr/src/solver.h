@@ -103,6 +103,7 @@ void solve_exact(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_barrier(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_greedy(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_exact_menu(const Problem& p, const SelectParams& params, Plan& plan);
+void spend_on_ways(const Problem& p, Plan& plan);
 void solve_greedy_menu(const Problem& p, const SelectParams& params, Plan& plan);
 void solve_size_heuristic(const Problem& p, const SelectParams& params, double stress, Plan& plan);
 

@@ -481,3 +481,45 @@ TEST_CASE("menus: exact spends the budget that a change of way leaves", "[tcr][s
         CHECK(plan.upper_bound >= brute - 1e-9 * std::abs(brute));
     }
 }
+
+TEST_CASE("menus: spend_on_ways keeps the ways and finds the fixed-way optimum for a new budget", "[tcr][select][menu]") {
+    // the reference: each object's kept way as the way 0 of a problem without a menu, solved by
+    // exact (bisection and a linear solve on the bracket's segment)
+    std::mt19937 rng(21);
+    for (int trial = 0; trial < 40; ++trial) {
+        tcr::Problem p = random_menu_problem(rng, 25, 1.0, 0.3);
+        std::vector<double> coverage;
+        const tcr::SelectParams sp = params_for(p, coverage);
+        tcr::Plan plan;
+        tcr::select(tcr::SelectorKind::exact, p, sp, plan);
+        const std::vector<uint32_t> ways = plan.way;
+        if (std::count(plan.drawn.begin(), plan.drawn.end(), 0)) continue;  // compare whole plans
+        p.budget_ms *= trial % 2 ? 0.9 : 1.1;  // less time, or more
+        tcr::spend_on_ways(p, plan);
+        CHECK(plan.way == ways);
+        tcr::Problem fixed;
+        fixed.m = p.m;
+        fixed.resize(p.size());
+        fixed.budget_ms = p.budget_ms;
+        double minima = 0;
+        for (size_t i = 0; i < p.size(); ++i) {
+            if (!plan.drawn[i]) continue;
+            const tcr::Way w = p.way(i, ways[i]);
+            fixed.importance[i] = p.importance[i], fixed.error[i] = w.error, fixed.per_tri_ms[i] = w.per_tri_ms;
+            fixed.setup_ms[i] = w.setup_ms, fixed.lo[i] = w.lo, fixed.hi[i] = w.hi;
+            minima += w.setup_ms + w.per_tri_ms * w.lo;
+        }
+        if (minima > p.budget_ms) continue;  // the kept ways no longer fit: nothing to compare
+        tcr::Plan reference;
+        std::vector<double> fixed_coverage;
+        tcr::select(tcr::SelectorKind::exact, fixed, params_for(fixed, fixed_coverage), reference);
+        double benefit = 0, cost = 0;
+        for (size_t i = 0; i < p.size(); ++i)
+            if (plan.drawn[i]) benefit += p.benefit(i, ways[i], plan.triangles[i]), cost += p.cost(i, ways[i], plan.triangles[i]);
+        INFO("trial " << trial << ": benefit " << benefit << " reference " << reference.benefit << " cost " << cost << " budget " << p.budget_ms);
+        CHECK(cost <= p.budget_ms * (1 + 1e-12));
+        CHECK(benefit >= reference.benefit - 1e-7 * std::abs(reference.benefit));
+        CHECK(plan.benefit == Approx(benefit).epsilon(1e-12));
+        CHECK(plan.upper_bound >= plan.benefit - 1e-9 * std::abs(plan.benefit));  // a certificate over every way
+    }
+}

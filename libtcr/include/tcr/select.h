@@ -125,6 +125,12 @@ struct Plan {
 /// every object's way 0, as without a menu.
 void select(SelectorKind kind, const Problem& p, const SelectParams& params, Plan& plan);
 
+/// Keeps the plan's drawn set and ways and solves its resolutions again for p's budget: the
+/// optimum of that fixed-way problem (concave), by one sort of its clamp breakpoints. For a
+/// caller that changes a few objects' ways after select(): the runtime defers imposter refreshes
+/// this way. Certifies the plan over every way at the multiplier found.
+void spend_on_ways(const Problem& p, Plan& plan);
+
 /// The dual bound g(l) for the drawn objects of `plan` (see above), and the l that the plan's
 /// marginal costs suggest; used by tests and by selectors for their certificates. With a menu,
 /// each object's best way at l: a bound on every plan, whatever its ways.
