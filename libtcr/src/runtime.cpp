@@ -254,6 +254,10 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
         capture.radius = radius;
         for (int c = 0; c < 3; ++c) capture.eye[c] = eye_[c], capture.centre[c] = centre[c];
         const double bound_rad = menu.imposter_max_px * radians_per_px;
+        // a capture is renewed once it breaks the bound (its distortion, or its level's error and
+        // its texels' magnification as the object comes nearer), not sooner: the refresh's cost is spread over a lifetime
+        // that a renewal within the bound would cut short, again and again (Schaufler, Pasman)
+        bool renew = true;
         const ImposterState& kept = o.imposter;
         if (kept.valid) {
             imposters::Capture old = capture;
@@ -264,30 +268,33 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
                 const double magnified_px = 0.5 * std::max(0.0, needed_px / kept.texture_px - 1.0);
                 const double e = level_px + distortion_px + magnified_px;
                 push(imposter_way(quad_ms, e), {Representation::simple_imposter, false, e, kept.texture_px, kept.vertices});
+                renew = level_px + magnified_px > menu.imposter_max_px;  // the object came nearer
             }
         }
-        // a new capture from here: the level of capture_error_px (found again when the projected
-        // size has changed by 10%: its error by as much), a texture holding the sphere
-        Object& mo = objects_[id];
-        if (mo.capture_error_px != menu.capture_error_px || std::abs(r.size_px - mo.capture_size_px) > 0.1 * mo.capture_size_px) {
-            mo.capture_error_px = menu.capture_error_px;
-            mo.capture_size_px = r.size_px;
-            mo.capture_vertices = resolution_for(o, triangles_for_error(id, menu.capture_error_px));
-            mo.capture_triangles = tom::active_triangle_count(*o.mesh, mo.capture_vertices);
+        if (renew) {
+            // a new capture from here: the level of capture_error_px (found again when the projected
+            // size has changed by 10%: its error by as much), a texture holding the sphere
+            Object& mo = objects_[id];
+            if (mo.capture_error_px != menu.capture_error_px || std::abs(r.size_px - mo.capture_size_px) > 0.1 * mo.capture_size_px) {
+                mo.capture_error_px = menu.capture_error_px;
+                mo.capture_size_px = r.size_px;
+                mo.capture_vertices = resolution_for(o, triangles_for_error(id, menu.capture_error_px));
+                mo.capture_triangles = tom::active_triangle_count(*o.mesh, mo.capture_vertices);
+            }
+            const uint32_t vertices = mo.capture_vertices, triangles = mo.capture_triangles;
+            const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
+            const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
+            const double d = from_centre - radius;
+            if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d) {  // Pasman's lifetime changes slowly with distance
+                mo.lifetime_distance = d;
+                mo.lifetime_m = imposters::lifetime(capture, d, bound_rad, 1.0, (menu.min_distance_radii - 1.0) * radius);  // at 1 m/s: the walk
+            }
+            const double lifetime_s = speed_ > 0 ? mo.lifetime_m / speed_ : INFINITY;
+            const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, lifetime_s / frame_interval_s(params)));
+            const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
+            push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
+            way_kinds_.back().full_ms = quad_ms + refresh_ms;
         }
-        const uint32_t vertices = mo.capture_vertices, triangles = mo.capture_triangles;
-        const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
-        const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
-        const double d = from_centre - radius;
-        if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d) {  // Pasman's lifetime changes slowly with distance
-            mo.lifetime_distance = d;
-            mo.lifetime_m = imposters::lifetime(capture, d, bound_rad, 1.0, (menu.min_distance_radii - 1.0) * radius);  // at 1 m/s: the walk
-        }
-        const double lifetime_s = speed_ > 0 ? mo.lifetime_m / speed_ : INFINITY;
-        const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, lifetime_s / frame_interval_s(params)));
-        const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
-        push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
-        way_kinds_.back().full_ms = quad_ms + refresh_ms;
     }
     problem_.previous_way[k] = previous_way;
 }
