@@ -142,6 +142,32 @@ CalibrationResult fit_cost_model(const std::vector<CostSample>& samples) {
     return r;
 }
 
+namespace {
+
+// The calibration file's keys, in the order they are written (docs/CALIBRATION.md).
+struct Key {
+    const char* name;
+    double CostModel::*field;
+};
+constexpr Key kKeys[] = {
+    {"t_init_ms", &CostModel::t_init_ms},
+    {"t_final_ms", &CostModel::t_final_ms},
+    {"t_setup_ms", &CostModel::t_setup_ms},
+    {"t_tri_ms", &CostModel::t_tri_ms},
+    {"t_vert_ms", &CostModel::t_vert_ms},
+    {"t_pix_ms", &CostModel::t_pix_ms},
+    {"safety_ms", &CostModel::safety_ms},
+    {"noise_rel", &CostModel::noise_rel},
+    {"flat_t_tri_ms", &CostModel::flat_t_tri_ms},
+    {"flat_t_vert_ms", &CostModel::flat_t_vert_ms},
+    {"flat_t_pix_ms", &CostModel::flat_t_pix_ms},
+    {"imposter_t_setup_ms", &CostModel::imposter_t_setup_ms},
+    {"imposter_t_pix_ms", &CostModel::imposter_t_pix_ms},
+    {"refresh_t_setup_ms", &CostModel::refresh_t_setup_ms},
+};
+
+} // namespace
+
 CostModel read_cost_model(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw tom::IoError("cannot open calibration file '" + path + "'");
@@ -159,21 +185,9 @@ CostModel read_cost_model(const std::string& path) {
         std::string rest;
         if (!(ls >> value) || (ls >> rest) || !std::isfinite(value) || value < 0)
             throw tom::ParseError(path + ":" + std::to_string(number) + ": expected '" + key + " <non-negative number>'");
-        if (key == "t_init_ms") m.t_init_ms = value;
-        else if (key == "t_final_ms") m.t_final_ms = value;
-        else if (key == "t_setup_ms") m.t_setup_ms = value;
-        else if (key == "t_tri_ms") m.t_tri_ms = value;
-        else if (key == "t_vert_ms") m.t_vert_ms = value;
-        else if (key == "t_pix_ms") m.t_pix_ms = value;
-        else if (key == "safety_ms") m.safety_ms = value;
-        else if (key == "noise_rel") m.noise_rel = value;
-        else if (key == "flat_t_tri_ms") m.flat_t_tri_ms = value;
-        else if (key == "flat_t_vert_ms") m.flat_t_vert_ms = value;
-        else if (key == "flat_t_pix_ms") m.flat_t_pix_ms = value;
-        else if (key == "imposter_t_setup_ms") m.imposter_t_setup_ms = value;
-        else if (key == "imposter_t_pix_ms") m.imposter_t_pix_ms = value;
-        else if (key == "refresh_t_setup_ms") m.refresh_t_setup_ms = value;
-        else throw tom::ParseError(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
+        const Key* known = std::find_if(std::begin(kKeys), std::end(kKeys), [&](const Key& k) { return key == k.name; });
+        if (known == std::end(kKeys)) throw tom::ParseError(path + ":" + std::to_string(number) + ": unknown key '" + key + "'");
+        m.*(known->field) = value;
     }
     return m;
 }
@@ -184,10 +198,7 @@ void write_cost_model(const std::string& path, const CostModel& m, const std::st
     out << "# libtcr cost model (docs/CALIBRATION.md); times in milliseconds\n";
     if (!comment.empty()) out << "# " << comment << "\n";
     out.precision(9);
-    out << "t_init_ms " << m.t_init_ms << "\nt_final_ms " << m.t_final_ms << "\nt_setup_ms " << m.t_setup_ms << "\nt_tri_ms " << m.t_tri_ms
-        << "\nt_vert_ms " << m.t_vert_ms << "\nt_pix_ms " << m.t_pix_ms << "\nsafety_ms " << m.safety_ms << "\nnoise_rel " << m.noise_rel << "\n";
-    out << "flat_t_tri_ms " << m.flat_t_tri_ms << "\nflat_t_vert_ms " << m.flat_t_vert_ms << "\nflat_t_pix_ms " << m.flat_t_pix_ms << "\nimposter_t_setup_ms "
-        << m.imposter_t_setup_ms << "\nimposter_t_pix_ms " << m.imposter_t_pix_ms << "\nrefresh_t_setup_ms " << m.refresh_t_setup_ms << "\n";
+    for (const Key& k : kKeys) out << k.name << ' ' << m.*(k.field) << '\n';
     if (!out) throw tom::IoError("cannot write calibration file '" + path + "'");
 }
 
