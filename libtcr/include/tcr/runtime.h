@@ -53,7 +53,7 @@ struct Menu {
     double capture_error_px = 0.1;    ///< a refresh renders the object at the level of this projected error (low: its cost is spread over the lifetime)
     uint32_t texture_max = 256;       ///< the largest texture side (power of two), texels
     uint32_t texture_min = 16;
-    double min_distance_radii = 1.5;  ///< no imposter nearer than this many radii from the object's centre
+    double min_distance_radii = 8.0;  ///< no imposter nearer than this many radii from the object's centre
     double max_lifetime_frames = 60;  ///< a refresh's cost is spread over at most this many frames of its lifetime
     double viewer_speed = -1;         ///< m/s for the lifetimes; < 0: from the camera's motion between frames
     double frame_interval_s = 0;      ///< seconds between frames for the lifetimes (0: the budget)
