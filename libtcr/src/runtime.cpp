@@ -255,8 +255,9 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
         for (int c = 0; c < 3; ++c) capture.eye[c] = eye_[c], capture.centre[c] = centre[c];
         const double bound_rad = menu.imposter_max_px * radians_per_px;
         // a capture is renewed once it breaks the bound (its distortion, or its level's error and
-        // its texels' magnification as the object comes nearer), not sooner: the refresh's cost is spread over a lifetime
-        // that a renewal within the bound would cut short, again and again (Schaufler, Pasman)
+        // its texels' magnification as the object comes nearer), not sooner: the refresh's cost
+        // is spread over a lifetime that a renewal within the bound would cut short, again and
+        // again (Schaufler, Pasman)
         bool renew = true;
         const ImposterState& kept = o.imposter;
         if (kept.valid) {
