@@ -337,6 +337,15 @@ double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
     return r.predicted_ms;
 }
 
+// The way of the k-th visible object's kept capture, when its menu offers one; else 0 (its levels).
+uint32_t Runtime::kept_capture_way(size_t k) const noexcept {
+    for (uint32_t j = 1; j < problem_.way_count(k); ++j) {
+        const WayKind& kind = way_kinds_[problem_.way_begin[k] + j - 1];
+        if (kind.representation == Representation::simple_imposter && !kind.refresh) return j;
+    }
+    return 0;
+}
+
 // A plan spreads refreshes over their lifetimes; the frame pays each whole. While that tips it
 // over the budget, the refresh that costs the most becomes its kept capture (when one is within
 // the bound) or the captured level drawn smooth.
@@ -350,11 +359,7 @@ void Runtime::repair_refreshes(double budget_ms, double& predicted) {
         }
         if (worst == SIZE_MAX) return;
         const uint32_t id = visible_ids_[worst];
-        uint32_t kept = 0;  // the kept capture's way, when offered
-        for (uint32_t j = 1; j < problem_.way_count(worst); ++j) {
-            const WayKind& kind = way_kinds_[problem_.way_begin[worst] + j - 1];
-            if (kind.representation == Representation::simple_imposter && !kind.refresh) kept = j;
-        }
+        const uint32_t kept = kept_capture_way(worst);
         // else the level the refresh would have rendered, smooth: its error, without the
         // render into the texture (the step-down after this trims it if the frame is still over)
         const WayKind& refresh = way_kinds_[problem_.way_begin[worst] + plan_.way[worst] - 1];
@@ -414,12 +419,7 @@ double Runtime::keep_cheapest_refreshes(double cap) {
             continue;
         }
         problem_.ways[problem_.way_begin[r.k] + r.j - 1].setup_ms = off;  // not this frame
-        uint32_t instead = 0;
-        for (uint32_t j = 1; j < problem_.way_count(r.k); ++j) {
-            const WayKind& kind = way_kinds_[problem_.way_begin[r.k] + j - 1];
-            if (kind.representation == Representation::simple_imposter && !kind.refresh) instead = j;
-        }
-        plan_.way[r.k] = instead;
+        plan_.way[r.k] = kept_capture_way(r.k);
     }
     return kept;
 }

@@ -199,6 +199,7 @@ private:
     double choose(uint32_t id, size_t k, double triangles, uint32_t way);
     void reserve_refreshes(const SelectParams& sp, double share);
     bool dominated_by_smooth(const Way& w, size_t k) const noexcept;
+    uint32_t kept_capture_way(size_t k) const noexcept;
     double keep_cheapest_refreshes(double cap);
     struct Renewal { double extra; size_t k; uint32_t j; };
     std::vector<Renewal> renewals_;  // reserve_refreshes' scratch
