@@ -164,6 +164,8 @@ constexpr Key kKeys[] = {
     {"imposter_t_setup_ms", &CostModel::imposter_t_setup_ms},
     {"imposter_t_pix_ms", &CostModel::imposter_t_pix_ms},
     {"refresh_t_setup_ms", &CostModel::refresh_t_setup_ms},
+    {"meshed_t_tri_ms", &CostModel::meshed_t_tri_ms},
+    {"meshed_refresh_t_setup_ms", &CostModel::meshed_refresh_t_setup_ms},
 };
 
 } // namespace

@@ -64,6 +64,7 @@ const char* representation_name(Representation r) noexcept {
     case Representation::smooth: return "smooth";
     case Representation::flat: return "flat";
     case Representation::simple_imposter: return "imposter";
+    case Representation::meshed_imposter: return "meshed";
     }
     return "?";
 }
@@ -89,6 +90,38 @@ void imposter_quad(const ImposterState& s, float corners[12]) noexcept {
     const double su[4] = {-1, 1, 1, -1}, sv[4] = {-1, -1, 1, 1};
     for (int c = 0; c < 4; ++c)
         for (int k = 0; k < 3; ++k) corners[3 * c + k] = float(s.centre[k] + h * (su[c] * right[k] + sv[c] * up[k]));
+}
+
+void depth_mesh(const float view[16], const float projection[16], const float* depth, uint32_t side, uint32_t grid, float* positions) noexcept {
+    // eye-space depth from window depth: z_ndc = 2 depth - 1, z_eye = -P[14] / (z_ndc + P[10]);
+    // the capture's centre lies on its axis halfway between the near and far planes' distances
+    const double near = double(projection[14]) / (double(projection[10]) - 1.0), far = double(projection[14]) / (double(projection[10]) + 1.0);
+    const double centre = 0.5 * (near + far);
+    const double right[3] = {view[0], view[4], view[8]}, up[3] = {view[1], view[5], view[9]}, back[3] = {view[2], view[6], view[10]};
+    double eye[3];
+    eye_of(view, eye);
+    const double cell = double(side) / grid;
+    for (uint32_t j = 0; j <= grid; ++j)
+        for (uint32_t i = 0; i <= grid; ++i) {
+            // the object texel nearest the vertex in the image, within one cell (the nearer depth on a tie)
+            const auto lo = [&](uint32_t v) { return uint32_t(std::max(0.0, std::floor((double(v) - 1.0) * cell))); };
+            const auto hi = [&](uint32_t v) { return uint32_t(std::min(double(side), std::ceil((double(v) + 1.0) * cell))); };
+            float nearest = 1.0f;
+            double best = INFINITY;
+            for (uint32_t y = lo(j); y < hi(j); ++y)
+                for (uint32_t x = lo(i); x < hi(i); ++x) {
+                    const float z = depth[size_t(y) * side + x];
+                    if (z >= 1.0f) continue;
+                    const double dx = x + 0.5 - i * cell, dy = y + 0.5 - j * cell, d2 = dx * dx + dy * dy;
+                    if (d2 < best || (d2 == best && z < nearest)) best = d2, nearest = z;
+                }
+            double distance = centre;  // no object texel near: the simple imposter's plane
+            if (nearest < 1.0f) distance = double(projection[14]) / (2.0 * nearest - 1.0 + double(projection[10]));
+            const double x_ndc = 2.0 * i / grid - 1.0, y_ndc = 2.0 * j / grid - 1.0;
+            const double xe = x_ndc * distance / projection[0], ye = y_ndc * distance / projection[5];
+            float* out = positions + 3 * (size_t(j) * (grid + 1) + i);
+            for (int k = 0; k < 3; ++k) out[k] = float(eye[k] + xe * right[k] + ye * up[k] - distance * back[k]);
+        }
 }
 
 Runtime::Runtime(const CostModel& model, SelectorKind selector) : model_(model), selector_(selector) {}
@@ -238,21 +271,29 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
     world_sphere(o.transform, o.box, o.diagonal, centre, radius);
     const double from_centre = distance3(eye_, centre);
     if (menu.imposters && model_.has_imposters() && radius > 0 && from_centre > menu.min_distance_radii * radius && r.size_px >= 2) {
-        // an imposter's quad is two triangles: A n^-m at n = 2 is I e
-        auto imposter_way = [&](double cost_ms, double error_px) {
+        const bool meshed = menu.meshed && menu.meshed_grid > 0 && model_.has_meshed();
+        // an imposter draws n triangles (its quad, 2, or its depth mesh): A n^-m at that n is I e
+        auto imposter_way = [&](double n, double cost_ms, double error_px) {
             Way w;
             w.m = problem_.m;
-            w.lo = w.hi = 2;
+            w.lo = w.hi = n;
             w.per_tri_ms = 1e-12;
-            w.setup_ms = std::max(0.0, cost_ms - 2e-12);
-            w.error = I * menu.imposter_error_factor * error_px * std::pow(2.0, problem_.m);
+            w.setup_ms = std::max(0.0, cost_ms - 1e-12 * n);
+            w.error = I * menu.imposter_error_factor * error_px * std::pow(n, problem_.m);
             return w;
         };
+        auto mesh_triangles = [](uint32_t grid) { return grid ? 2.0 * grid * grid : 2.0; };
+        auto draw_ms = [&](uint32_t grid) { return grid ? model_.meshed_ms(r.coverage_px, mesh_triangles(grid)) : model_.imposter_ms(r.coverage_px); };
         const double needed_px = 2.0 * std::asin(std::min(1.0, radius / from_centre)) / radians_per_px;  // the sphere's angular diameter
-        const double quad_ms = model_.imposter_ms(r.coverage_px);
         imposters::Capture capture;
         capture.radius = radius;
+        capture.k = menu.meshed_k;
         for (int c = 0; c < 3; ++c) capture.eye[c] = eye_[c], capture.centre[c] = centre[c];
+        auto as_method = [&](imposters::Capture c, uint32_t grid) {
+            c.method = grid ? imposters::Method::meshed_imposter : imposters::Method::simple_imposter;
+            c.polygons = mesh_triangles(grid);
+            return c;
+        };
         const double bound_rad = menu.imposter_max_px * radians_per_px;
         // a capture is renewed once it breaks the bound (its distortion, or its level's error and
         // its texels' magnification as the object comes nearer), not sooner: the refresh's cost
@@ -260,15 +301,16 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
         // again (Schaufler, Pasman)
         bool renew = true;
         const ImposterState& kept = o.imposter;
-        if (kept.valid) {
-            imposters::Capture old = capture;
+        if (kept.valid && (kept.grid == 0 || meshed)) {
+            imposters::Capture old = as_method(capture, kept.grid);
             for (int c = 0; c < 3; ++c) old.eye[c] = kept.eye[c];
             const double distortion_px = imposters::distortion_from(old, eye_) / radians_per_px;
             if (distortion_px <= menu.imposter_max_px) {
                 const double level_px = projected_error_px(o, r, kept.triangles);
                 const double magnified_px = 0.5 * std::max(0.0, needed_px / kept.texture_px - 1.0);
                 const double e = level_px + distortion_px + magnified_px;
-                push(imposter_way(quad_ms, e), {Representation::simple_imposter, false, e, kept.texture_px, kept.vertices});
+                const Representation rep = kept.grid ? Representation::meshed_imposter : Representation::simple_imposter;
+                push(imposter_way(mesh_triangles(kept.grid), draw_ms(kept.grid), e), {rep, false, e, kept.texture_px, kept.vertices, kept.grid});
                 renew = level_px + magnified_px > menu.imposter_max_px;  // the object came nearer
             }
         }
@@ -286,15 +328,23 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
             const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
             const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
             const double d = from_centre - radius;
-            if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d) {  // Pasman's lifetime changes slowly with distance
+            const uint32_t grid = meshed ? menu.meshed_grid : 0;
+            if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d || mo.lifetime_grid != grid) {  // Pasman's lifetime changes slowly with distance
                 mo.lifetime_distance = d;
-                mo.lifetime_m = imposters::lifetime(capture, d, bound_rad, 1.0, (menu.min_distance_radii - 1.0) * radius);  // at 1 m/s: the walk
+                mo.lifetime_grid = grid;
+                for (int method = 0; method < (meshed ? 2 : 1); ++method)  // at 1 m/s: the walk
+                    mo.lifetime_m[method] = imposters::lifetime(as_method(capture, method ? grid : 0), d, bound_rad, 1.0, (menu.min_distance_radii - 1.0) * radius);
             }
-            const double lifetime_s = speed_ > 0 ? mo.lifetime_m / speed_ : INFINITY;
-            const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, lifetime_s / frame_interval_s(params)));
             const double e = projected_error_px(o, r, triangles) + 0.5 * std::max(0.0, needed_px / side - 1.0);
-            push(imposter_way(quad_ms + refresh_ms / frames, e), {Representation::simple_imposter, true, e, side, vertices});
-            way_kinds_.back().full_ms = quad_ms + refresh_ms;
+            for (int method = 0; method < (meshed ? 2 : 1); ++method) {
+                const uint32_t g = method ? grid : 0;
+                const double lifetime_s = speed_ > 0 ? mo.lifetime_m[method] / speed_ : INFINITY;
+                const double frames = std::max(1.0, std::min(menu.max_lifetime_frames, lifetime_s / frame_interval_s(params)));
+                const double full_ms = refresh_ms + (g ? model_.meshed_refresh_t_setup_ms : 0.0);
+                const Representation rep = g ? Representation::meshed_imposter : Representation::simple_imposter;
+                push(imposter_way(mesh_triangles(g), draw_ms(g) + full_ms / frames, e), {rep, true, e, side, vertices, g});
+                way_kinds_.back().full_ms = draw_ms(g) + full_ms;
+            }
         }
     }
     problem_.previous_way[k] = previous_way;
@@ -318,15 +368,16 @@ bool Runtime::dominated_by_smooth(const Way& w, size_t k) const noexcept {
 double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
     const Object& o = objects_[id];
     ObjectResult& r = results_[id];
-    const WayKind kind = way == 0 ? WayKind{Representation::smooth, false, 0, 0, 0} : way_kinds_[problem_.way_begin[k] + way - 1];
+    const WayKind kind = way == 0 ? WayKind{Representation::smooth, false, 0, 0, 0, 0} : way_kinds_[problem_.way_begin[k] + way - 1];
     const double parts = double(tom::part_count(*o.mesh));
     r.representation = kind.representation;
     r.refresh = kind.refresh;
-    if (kind.representation == Representation::simple_imposter) {
+    if (is_imposter(kind.representation)) {
         r.vertices = kind.vertices;
         r.triangles = kind.refresh ? tom::active_triangle_count(*o.mesh, kind.vertices) : 0;
         r.error_px = kind.error_px;
-        r.predicted_ms = correction_ * (kind.refresh ? kind.full_ms : model_.imposter_ms(r.coverage_px));
+        const double draw_ms = kind.grid ? model_.meshed_ms(r.coverage_px, 2.0 * kind.grid * kind.grid) : model_.imposter_ms(r.coverage_px);
+        r.predicted_ms = correction_ * (kind.refresh ? kind.full_ms : draw_ms);
         return r.predicted_ms;
     }
     r.vertices = resolution_for(o, triangles);
@@ -341,7 +392,7 @@ double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
 uint32_t Runtime::kept_capture_way(size_t k) const noexcept {
     for (uint32_t j = 1; j < problem_.way_count(k); ++j) {
         const WayKind& kind = way_kinds_[problem_.way_begin[k] + j - 1];
-        if (kind.representation == Representation::simple_imposter && !kind.refresh) return j;
+        if (is_imposter(kind.representation) && !kind.refresh) return j;
     }
     return 0;
 }
@@ -363,7 +414,7 @@ void Runtime::repair_refreshes(double budget_ms, double& predicted) {
         // else the level the refresh would have rendered, smooth: its error, without the
         // render into the texture (the step-down after this trims it if the frame is still over)
         const WayKind& refresh = way_kinds_[problem_.way_begin[worst] + plan_.way[worst] - 1];
-        const double triangles = kept ? 2.0 : std::max(problem_.lo[worst], double(tom::active_triangle_count(*objects_[id].mesh, refresh.vertices)));
+        const double triangles = kept ? problem_.way(worst, kept).lo : std::max(problem_.lo[worst], double(tom::active_triangle_count(*objects_[id].mesh, refresh.vertices)));
         predicted -= results_[id].predicted_ms;
         plan_.way[worst] = kept;
         predicted += choose(id, worst, triangles, kept);
@@ -446,6 +497,7 @@ void Runtime::commit_capture(uint32_t id, uint32_t way, size_t k) {
     for (int c = 0; c < 3; ++c) s.eye[c] = float(eye_[c]), s.centre[c] = float(centre[c]);
     s.radius = float(radius);
     s.texture_px = kind.texture_px;
+    s.grid = kind.grid;
     s.vertices = kind.vertices;
     s.triangles = tom::active_triangle_count(*o.mesh, kind.vertices);
     s.frame = frame_;
@@ -582,7 +634,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         for (size_t k = 0; k < n; ++k) {
             ObjectResult& r = results_[visible_ids_[k]];
             if (!r.drawn) continue;
-            if (r.representation == Representation::simple_imposter) predicted += r.predicted_ms;
+            if (is_imposter(r.representation)) predicted += r.predicted_ms;
             else predicted += choose(visible_ids_[k], k, std::max(problem_.way(k, plan_.way[k]).lo, r.triangles * factor), plan_.way[k]);
         }
     }
@@ -594,13 +646,15 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         report_.triangles += r.triangles;
         report_.max_error_px = std::max(report_.max_error_px, r.error_px);
         report_.flat += r.representation == Representation::flat;
-        if (r.representation == Representation::simple_imposter) {
+        if (is_imposter(r.representation)) {
             ++report_.imposters;
-            report_.triangles += 2;  // its quad
             if (r.refresh) {
                 ++report_.refreshes;
                 commit_capture(id, plan_.way[k], k);
             }
+            const uint32_t grid = objects_[id].imposter.grid;
+            report_.meshed += grid > 0;
+            report_.triangles += grid ? 2u * grid * grid : 2u;  // its depth mesh or its quad
         }
     }
     ++frame_;

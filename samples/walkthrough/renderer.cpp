@@ -11,6 +11,7 @@
 
 #include <stdexcept>
 
+#include "tcr/runtime.h"
 #include "tcr/view.h"
 
 namespace walk {
@@ -71,6 +72,29 @@ void main() {
 }
 )";
 
+// A meshed imposter: its depth mesh's vertices in world space, each with its texture point in
+// the capture and, repeated, its cell, colour and tint and layer, so a chunk's meshes are one draw.
+const char* kMeshedVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec2 uv_in;
+layout(location = 2) in vec4 cell_in;
+layout(location = 3) in vec4 look_in;
+layout(location = 4) in float layer_in;
+uniform mat4 view_projection;
+out vec2 uv;
+flat out vec4 cell;
+flat out vec4 look;
+flat out float layer;
+void main() {
+    uv = uv_in;
+    cell = cell_in;
+    look = look_in;
+    layer = layer_in;
+    gl_Position = view_projection * vec4(position, 1.0);
+}
+)";
+
+// Both imposters' fragments: the capture's texel, clamped to its cell, alpha-tested.
 const char* kImposterFragment = R"(#version 330 core
 in vec2 uv;
 flat in vec4 cell;
@@ -135,6 +159,18 @@ struct Renderer::Impl {
     static constexpr int kInstanceFloats = 12 + 4 + 4 + 1;  // corners, cell, colour and tint, layer
     std::vector<float> instances;  // a chunk's imposters, kInstanceFloats each
     GLuint framebuffer = 0, depth = 0;
+    // Meshed imposters: each slot's depth mesh, (grid + 1)^2 world positions, from its last capture
+    struct DepthMesh {
+        uint32_t grid = 0;  // 0: none (the slot's last capture was a simple imposter's)
+        std::vector<float> positions;
+    };
+    std::vector<DepthMesh> depth_meshes;  // by slot
+    std::vector<float> depth_texels;      // a capture's depth, read back
+    GLuint meshed_program = 0, meshed_vao = 0, meshed_vertices = 0, meshed_indices = 0;
+    GLint u_meshed_vp = -1, u_meshed_image = -1;
+    static constexpr int kMeshedFloats = 3 + 2 + 4 + 4 + 1;  // position, texture point, cell, colour and tint, layer
+    std::vector<float> meshed_vertex_data;
+    std::vector<uint32_t> meshed_index_data;
     struct Mesh {
         GLuint vbo;
     };
@@ -226,6 +262,62 @@ struct Renderer::Impl {
             glDrawElements(GL_TRIANGLES, GLsizei(d.index_count), GL_UNSIGNED_INT, reinterpret_cast<void*>(d.first * sizeof(uint32_t)));
         }
     }
+    // After a capture into `cell`: a meshed one's depth read back into the slot's depth mesh; a
+    // simple one leaves the slot none.
+    void keep_depth_mesh(const Capture& cap, const Cell& cell) {
+        if (cap.texture >= depth_meshes.size()) depth_meshes.resize(cap.texture + 1);
+        DepthMesh& mesh = depth_meshes[cap.texture];
+        mesh.grid = cap.grid;
+        if (!cap.grid) return;
+        depth_texels.resize(size_t(cell.side) * cell.side);
+        glReadPixels(GLint(cell.x), GLint(cell.y), GLsizei(cell.side), GLsizei(cell.side), GL_DEPTH_COMPONENT, GL_FLOAT, depth_texels.data());
+        mesh.positions.resize(size_t(cap.grid + 1) * (cap.grid + 1) * 3);
+        tcr::depth_mesh(cap.view, cap.projection, depth_texels.data(), cell.side, cap.grid, mesh.positions.data());
+    }
+    // The frame's meshed imposters, one indexed draw per chunk of the array textures.
+    void draw_meshed_imposters(const float vp[16], const std::vector<Draw>& draws) {
+        glUseProgram(meshed_program);
+        glUniformMatrix4fv(u_meshed_vp, 1, GL_FALSE, vp);
+        glUniform1i(u_meshed_image, 0);
+        glActiveTexture(GL_TEXTURE0);
+        glBindVertexArray(meshed_vao);
+        glDisable(GL_CULL_FACE);
+        const float page = float(kPageSide);
+        for (uint32_t chunk = 0; chunk < chunks.size(); ++chunk) {
+            meshed_vertex_data.clear();
+            meshed_index_data.clear();
+            for (const Draw& d : draws) {
+                if (d.shading != Shading::meshed || d.texture >= cells.size() || d.texture >= depth_meshes.size()) continue;
+                const Cell& c = cells[d.texture];
+                const DepthMesh& mesh = depth_meshes[d.texture];
+                if (!c.side || c.chunk != chunk || !mesh.grid) continue;
+                const uint32_t g = mesh.grid, base = uint32_t(meshed_vertex_data.size() / kMeshedFloats);
+                const float rest[9] = {float(c.x) / page, float(c.y) / page, float(c.side) / page, 0.5f / page, d.color[0], d.color[1], d.color[2], d.tint, float(c.layer)};
+                for (uint32_t j = 0; j <= g; ++j)
+                    for (uint32_t i = 0; i <= g; ++i) {
+                        const float* p = mesh.positions.data() + 3 * (size_t(j) * (g + 1) + i);
+                        const float uv[2] = {float(i) / float(g), float(j) / float(g)};
+                        meshed_vertex_data.insert(meshed_vertex_data.end(), p, p + 3);
+                        meshed_vertex_data.insert(meshed_vertex_data.end(), uv, uv + 2);
+                        meshed_vertex_data.insert(meshed_vertex_data.end(), rest, rest + 9);
+                    }
+                for (uint32_t j = 0; j < g; ++j)
+                    for (uint32_t i = 0; i < g; ++i) {
+                        const uint32_t a = base + j * (g + 1) + i, b = a + 1, e = a + g + 1, f = e + 1;
+                        const uint32_t quad[6] = {a, b, f, a, f, e};
+                        meshed_index_data.insert(meshed_index_data.end(), quad, quad + 6);
+                    }
+            }
+            if (meshed_index_data.empty()) continue;
+            glBindTexture(GL_TEXTURE_2D_ARRAY, chunks[chunk]);
+            glBindBuffer(GL_ARRAY_BUFFER, meshed_vertices);
+            glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(meshed_vertex_data.size() * sizeof(float)), meshed_vertex_data.data(), GL_STREAM_DRAW);
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(meshed_index_data.size() * sizeof(uint32_t)), meshed_index_data.data(), GL_STREAM_DRAW);
+            glDrawElements(GL_TRIANGLES, GLsizei(meshed_index_data.size()), GL_UNSIGNED_INT, nullptr);
+        }
+        glEnable(GL_CULL_FACE);
+        glBindVertexArray(vao);
+    }
     void draw_imposters(const float vp[16], const std::vector<Draw>& draws) {
         glUseProgram(imposter_program);
         glUniformMatrix4fv(u_imposter_vp, 1, GL_FALSE, vp);
@@ -279,6 +371,25 @@ Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Imp
         glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(offset * sizeof(float)));
         glVertexAttribDivisor(a, 1);
         offset += size_t(sizes[a]);
+    }
+    impl_->meshed_program = link(kMeshedVertex, kImposterFragment);
+    impl_->u_meshed_vp = glGetUniformLocation(impl_->meshed_program, "view_projection");
+    impl_->u_meshed_image = glGetUniformLocation(impl_->meshed_program, "image");
+    glGenVertexArrays(1, &impl_->meshed_vao);
+    glBindVertexArray(impl_->meshed_vao);
+    glGenBuffers(1, &impl_->meshed_vertices);
+    glGenBuffers(1, &impl_->meshed_indices);
+    glBindBuffer(GL_ARRAY_BUFFER, impl_->meshed_vertices);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, impl_->meshed_indices);  // the VAO's own index buffer
+    {
+        const GLsizei meshed_stride = GLsizei(Impl::kMeshedFloats * sizeof(float));
+        const int meshed_sizes[5] = {3, 2, 4, 4, 1};
+        size_t at = 0;
+        for (GLuint a = 0; a < 5; ++a) {
+            glEnableVertexAttribArray(a);
+            glVertexAttribPointer(a, meshed_sizes[a], GL_FLOAT, GL_FALSE, meshed_stride, reinterpret_cast<const void*>(at * sizeof(float)));
+            at += size_t(meshed_sizes[a]);
+        }
     }
     glGenFramebuffers(1, &impl_->framebuffer);
     glGenRenderbuffers(1, &impl_->depth);
@@ -341,6 +452,7 @@ void Renderer::render(const float view[16], const float projection[16], const st
         tcr::multiply(cap.projection, cap.view, vp);
         g.draw_meshes(g.smooth, vp, draws, int32_t(c), Shading::smooth);
         g.draw_meshes(g.flat, vp, draws, int32_t(c), Shading::flat);
+        g.keep_depth_mesh(cap, cell);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glViewport(0, 0, GLsizei(width_), GLsizei(height_));
@@ -350,6 +462,7 @@ void Renderer::render(const float view[16], const float projection[16], const st
     g.draw_meshes(g.smooth, vp, draws, -1, Shading::smooth);
     g.draw_meshes(g.flat, vp, draws, -1, Shading::flat);
     g.draw_imposters(vp, draws);
+    g.draw_meshed_imposters(vp, draws);
     glFinish();
 }
 

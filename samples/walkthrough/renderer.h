@@ -3,9 +3,9 @@
 // walkthrough draws with. Vertex buffers are uploaded once per mesh; each frame the chosen
 // levels' index buffers are streamed into one index buffer and drawn with one indexed draw per
 // object (or part): Gouraud shading with two directional lights, as in the papers, or flat
-// shading (each triangle lit by its provoking vertex's normal); and simple imposters, each a
-// texture the frame's captures render objects into through a framebuffer object, drawn as one
-// quad with an alpha test.
+// shading (each triangle lit by its provoking vertex's normal); and imposters, each a texture
+// the frame's captures render objects into through a framebuffer object, drawn with an alpha
+// test as one quad (simple) or over a grid mesh of the capture's depth buffer (meshed).
 
 #include <cstdint>
 #include <memory>
@@ -25,7 +25,7 @@ public:
     /// Uploads a mesh's full vertex streams (positions, normals); returns its handle.
     uint32_t add_mesh(const tom::MeshView& mesh);
 
-    enum class Shading : uint8_t { smooth, flat, imposter };
+    enum class Shading : uint8_t { smooth, flat, imposter, meshed };
     struct Draw {
         uint32_t mesh;
         const float* model;  ///< 4x4 column-major
@@ -34,8 +34,8 @@ public:
         float color[3];
         Shading shading = Shading::smooth;
         int32_t capture = -1;   ///< >= 0: drawn into that capture's texture instead of the frame (skipped when the frame has no such capture)
-        uint32_t texture = 0;   ///< imposters: the texture slot their quad shows
-        float corners[12] = {}; ///< imposters: the quad's corners in world space, texture (0,0), (1,0), (1,1), (0,1)
+        uint32_t texture = 0;   ///< imposters: the texture slot their quad or depth mesh shows
+        float corners[12] = {}; ///< simple imposters: the quad's corners in world space, texture (0,0), (1,0), (1,1), (0,1)
         float tint = 0;         ///< imposters: how much of `color` to mix into the texture's
         uint32_t tag = 0;       ///< the caller's (the walkthrough: its object), unused here
     };
@@ -45,6 +45,9 @@ public:
         uint32_t texture;
         uint32_t side;
         float view[16], projection[16];
+        /// > 0: a meshed imposter's capture; its depth is read back into a mesh of grid x grid
+        /// cells (tcr::depth_mesh) that the slot's meshed draws show until its next capture
+        uint32_t grid = 0;
     };
     /// Renders the captures into their textures (the draws marked with their index), then clears
     /// the frame, draws the rest, imposters last, and waits for the rasterizer (glFinish). The

@@ -92,7 +92,7 @@ tcr::Camera camera_for(uint32_t f, uint32_t frames, uint32_t width, uint32_t hei
 }
 
 struct Row {
-    uint32_t frame, visible_objects, drawn_objects, flat_objects, imposters, refreshes;
+    uint32_t frame, visible_objects, drawn_objects, flat_objects, imposters, refreshes, meshed;
     uint64_t visible_triangles, drawn_triangles;
     double predicted_ms, measured_ms, render_ms, cull_ms, optimize_ms, extract_ms, benefit, gap;
 };
@@ -103,6 +103,7 @@ struct Summary {
     double budget_ms = 0;
     double mean = 0, max = 0, std = 0, compute_mean = 0, compute_max = 0, over = 0, prediction_error = 0, drawn = 0, visible = 0, gap = NAN;
     double flat_mean = 0, imposters_mean = 0, refreshes_mean = 0;  // objects drawn flat-shaded, as imposters, imposters renewed, a frame
+    double meshed_mean = 0;  // of the imposters, meshed ones, a frame
     // the image against full detail (--quality-every): SSIM and PSNR over the measured frames
     uint32_t quality_frames = 0;
     double ssim_mean = NAN, ssim_min = NAN, psnr_mean = NAN;
@@ -127,6 +128,7 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
         s.flat_mean += double(r.flat_objects) / rows.size();
         s.imposters_mean += double(r.imposters) / rows.size();
         s.refreshes_mean += double(r.refreshes) / rows.size();
+        s.meshed_mean += double(r.meshed) / rows.size();
         if (r.predicted_ms > 0) {
             s.prediction_error += std::abs(r.predicted_ms - r.measured_ms) / r.measured_ms;
             ++predicted;
@@ -152,8 +154,17 @@ void add_objects(tcr::Runtime& rt, const World& w) {
 
 // Object colours of the shaded view, and of the warm-up frames (never shown).
 constexpr float kSand[3] = {0.85f, 0.78f, 0.62f}, kGrey[3] = {0.8f, 0.8f, 0.8f};
-// The representation view's colours: smooth-shaded levels, flat-shaded levels, imposters.
-constexpr float kSmoothColor[3] = {0.3f, 0.5f, 0.9f}, kFlatColor[3] = {0.95f, 0.6f, 0.15f}, kImposterColor[3] = {0.85f, 0.2f, 0.75f};
+// The representation view's colours: smooth-shaded levels, flat-shaded levels, simple and meshed imposters.
+constexpr float kSmoothColor[3] = {0.3f, 0.5f, 0.9f}, kFlatColor[3] = {0.95f, 0.6f, 0.15f}, kImposterColor[3] = {0.85f, 0.2f, 0.75f},
+                kMeshedColor[3] = {0.2f, 0.75f, 0.35f};
+const float* representation_color(tcr::Representation r) {
+    switch (r) {
+    case tcr::Representation::flat: return kFlatColor;
+    case tcr::Representation::simple_imposter: return kImposterColor;
+    case tcr::Representation::meshed_imposter: return kMeshedColor;
+    default: return kSmoothColor;
+    }
+}
 
 // Hue from red (coarse) through green to blue (full resolution), for the LOD view.
 void lod_color(double fraction, float out[3]) {
@@ -176,7 +187,8 @@ struct Options {
     double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise: less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
     uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
-    std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading and imposters too
+    std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading and imposters too; "simple": all but meshed imposters
+    uint32_t meshed_grid = 8;             // a meshed imposter's depth mesh, cells a side (tcr::Menu)
     double flat_error_factor = 2.0;       // flat shading's projected error over smooth's (tcr::Menu)
     double imposter_max_px = 1.0;         // an imposter is reused while its distortion stays within this
     double imposter_error_factor = 1.0;   // an imposter's error in the benefit over its geometric error (tcr::Menu)
@@ -192,8 +204,9 @@ void ensure(std::vector<uint32_t>& v, size_t n) {
 
 // The frame the runtime planned, extracted: each drawn object's level into `indices` (grown as
 // needed), one draw per object, or per part of a multi-part object (as the cost model counts
-// them), in `color` and the shading the runtime chose; an imposter as its quad, after, when the
-// runtime renews it, its level drawn into its texture (a capture). Returns the frame's index count.
+// them), in `color` and the shading the runtime chose; an imposter as its quad or depth mesh,
+// after, when the runtime renews it, its level drawn into its texture (a capture, which for a
+// meshed imposter also remakes its depth mesh). Returns the frame's index count.
 size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<uint32_t>& mesh_handles, const float color[3],
                      std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws, std::vector<walk::Renderer::Capture>& captures) {
     using Shading = walk::Renderer::Shading;
@@ -209,15 +222,15 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
         walk::Renderer::Draw d{mesh_handles[mesh], w.transforms[id].data(), at, 0, {color[0], color[1], color[2]}};
         d.tag = id;
         d.shading = obj.representation == tcr::Representation::flat ? Shading::flat : Shading::smooth;
-        if (obj.representation == tcr::Representation::simple_imposter) {
+        if (tcr::is_imposter(obj.representation)) {
             const tcr::ImposterState& im = rt.imposter(id);
             walk::Renderer::Draw quad = d;
-            quad.shading = Shading::imposter;
+            quad.shading = im.grid ? Shading::meshed : Shading::imposter;
             quad.texture = id;
-            tcr::imposter_quad(im, quad.corners);
+            if (!im.grid) tcr::imposter_quad(im, quad.corners);
             draws.push_back(quad);
             if (!obj.refresh) continue;
-            walk::Renderer::Capture c{id, im.texture_px, {}, {}};
+            walk::Renderer::Capture c{id, im.texture_px, {}, {}, im.grid};
             tcr::imposter_camera(im, c.view, c.projection);
             d.capture = int32_t(captures.size());
             captures.push_back(c);
@@ -384,7 +397,9 @@ struct PathRun {
         fp.previous_frame_ms = previous_render_ms;
         fp.deadline_ms = o.optimize_share * o.budget_ms;
         fp.hysteresis = o.hysteresis;
-        fp.menu.flat = fp.menu.imposters = o.representations == "all" && !levels_only;
+        fp.menu.flat = fp.menu.imposters = (o.representations == "all" || o.representations == "simple") && !levels_only;
+        fp.menu.meshed = o.representations == "all" && !levels_only;
+        fp.menu.meshed_grid = o.meshed_grid;
         fp.menu.flat_error_factor = o.flat_error_factor;
         fp.menu.imposter_max_px = o.imposter_max_px;
         fp.menu.imposter_error_factor = o.imposter_error_factor;
@@ -428,6 +443,7 @@ struct PathRun {
         row.flat_objects = r.flat;
         row.imposters = r.imposters;
         row.refreshes = r.refreshes;
+        row.meshed = r.meshed;
         row.visible_triangles = r.visible_triangles;
         row.drawn_triangles = r.triangles;
         row.benefit = r.benefit;
@@ -470,15 +486,14 @@ struct PathRun {
         for (walk::Renderer::Draw& d : coloured) {
             const tcr::ObjectResult& obj = rt.object(d.tag);
             const tom::MeshView& mesh = *w.meshes[w.scene.instances[d.tag].mesh];
-            const uint32_t level = obj.representation == tcr::Representation::simple_imposter ? tom::active_triangle_count(mesh, rt.imposter(d.tag).vertices) : obj.triangles;
+            const uint32_t level = tcr::is_imposter(obj.representation) ? tom::active_triangle_count(mesh, rt.imposter(d.tag).vertices) : obj.triangles;
             lod_color(double(level) / mesh.triangle_count, d.color);
             d.tint = 1;
         }
         renderer->render(cam.view, cam.projection, coloured, indices, index_count);
         renderer->save_png(base + "-lod.png");
         for (walk::Renderer::Draw& d : coloured) {
-            const tcr::Representation r = rt.object(d.tag).representation;
-            const float* c = r == tcr::Representation::flat ? kFlatColor : (r == tcr::Representation::simple_imposter ? kImposterColor : kSmoothColor);
+            const float* c = representation_color(rt.object(d.tag).representation);
             std::copy(c, c + 3, d.color);
             d.tint = 0.7f;  // an imposter's picture shows through its colour
         }
@@ -726,9 +741,10 @@ tcr::CostSample quad_sample(uint32_t texture, uint32_t textures, float side_px, 
 
 // Refreshes: `count` captures of the mesh's level `fraction` into textures of `side`, in one
 // frame; the time per capture above the model's time of drawing that level into that many
-// pixels: the render target's switch and clear (CostModel::refresh_t_setup_ms).
+// pixels: the render target's switch and clear (CostModel::refresh_t_setup_ms), and with a
+// `grid`, a meshed imposter's depth read back and its mesh made too.
 double refresh_overhead(const tom::MeshView& mesh, uint32_t handle, double fraction, uint32_t side, const tcr::CostModel& model, const tcr::Camera& cam,
-                        double empty_ms, walk::Renderer& renderer, Frame& f) {
+                        double empty_ms, walk::Renderer& renderer, Frame& f, uint32_t grid = 0) {
     const uint32_t n = tom::vertex_count_for_fraction(mesh, fraction);
     const uint32_t tris = tom::active_triangle_count(mesh, n);
     f.indices.resize(size_t(tris) * 3);
@@ -748,7 +764,7 @@ double refresh_overhead(const tom::MeshView& mesh, uint32_t handle, double fract
     f.draws.clear();
     static const float kIdentity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     for (int c = 0; c < count; ++c) {
-        walk::Renderer::Capture cap{uint32_t(1000 + c), side, {}, {}};
+        walk::Renderer::Capture cap{uint32_t(1000 + c), side, {}, {}, grid};
         tcr::imposter_camera(s, cap.view, cap.projection);
         captures.push_back(cap);
         walk::Renderer::Draw d{handle, kIdentity, 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}};
@@ -763,6 +779,50 @@ double refresh_overhead(const tom::MeshView& mesh, uint32_t handle, double fract
     }
     const double per_capture = std::max(0.0, median(times) - empty_ms) / count;
     return std::max(0.0, per_capture - model.object_ms(tris, referenced_vertices(f.indices, n, f.used), 0.5 * double(side) * side));
+}
+
+// Meshed imposters' draws: 16 captures of the mesh's level `fraction`, placed 10 m ahead at
+// about `side_px` pixels across, with depth meshes of `grid` cells a side, into the slots from
+// `slot`; then 64 draws a frame of those depth meshes (repeated toward 2,000); the time per draw
+// above the empty frame's.
+double meshed_draw_ms(const tom::MeshView& mesh, uint32_t handle, uint32_t slot, uint32_t grid, float side_px, const tcr::Camera& cam, double empty_ms,
+                      walk::Renderer& renderer, Frame& f) {
+    const uint32_t n = tom::vertex_count_for_fraction(mesh, 0.1);
+    const uint32_t tris = tom::active_triangle_count(mesh, n);
+    f.indices.resize(size_t(tris) * 3);
+    tom::extract(mesh, n, f.indices.data(), f.indices.size());
+    double d2 = 0, centre[3];
+    for (int k = 0; k < 3; ++k) {
+        d2 += double(mesh.bounds_max[k] - mesh.bounds_min[k]) * (mesh.bounds_max[k] - mesh.bounds_min[k]);
+        centre[k] = 0.5 * (double(mesh.bounds_min[k]) + mesh.bounds_max[k]);
+    }
+    const double distance = 10.0, radius = 0.5 * side_px * distance * std::tan(30.0 * 3.14159265 / 180.0) / renderer.height() * 2.0;
+    const double scale = radius / std::max(1e-9, 0.5 * std::sqrt(d2));
+    float model[16] = {float(scale), 0, 0, 0, 0, float(scale), 0, 0, 0, 0, float(scale), 0, float(-scale * centre[0]), float(-scale * centre[1]),
+                       float(-distance - scale * centre[2]), 1};
+    tcr::ImposterState s;
+    s.valid = true;
+    s.centre[2] = float(-distance);
+    s.radius = float(radius);
+    std::vector<walk::Renderer::Capture> captures;
+    f.draws.clear();
+    for (uint32_t c = 0; c < 16; ++c) {
+        walk::Renderer::Capture cap{slot + c, 64, {}, {}, grid};
+        tcr::imposter_camera(s, cap.view, cap.projection);
+        captures.push_back(cap);
+        walk::Renderer::Draw d{handle, model, 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}};
+        d.capture = int32_t(c);
+        f.draws.push_back(d);
+    }
+    renderer.render(cam.view, cam.projection, f.draws, f.indices, f.indices.size(), captures);
+    f.draws.clear();
+    for (uint32_t k = 0; k < 2048; ++k) {
+        walk::Renderer::Draw d{0, nullptr, 0, 0, {kGrey[0], kGrey[1], kGrey[2]}};
+        d.shading = walk::Renderer::Shading::meshed;
+        d.texture = slot + k % 16;
+        f.draws.push_back(d);
+    }
+    return std::max(0.0, median(time_frames(renderer, cam, f.draws, f.indices, 0, 7)) - empty_ms) / double(f.draws.size());
 }
 
 } // namespace calib
@@ -784,6 +844,21 @@ void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<
     for (double fraction : {0.4, 0.05})
         for (uint32_t side : {64u, 256u}) overheads.push_back(calib::refresh_overhead(*w.meshes[0], handles[0], fraction, side, m, cam, empty_ms, renderer, frame));
     m.refresh_t_setup_ms = calib::median(overheads);
+    // meshed imposters: the refresh's depth read-back and mesh beyond a simple refresh; a depth
+    // mesh's triangle, from the draws of 16 x 16 and 4 x 4 grids of the same captures (at least
+    // 1e-9 ms: a measured 0 would read as not calibrated)
+    std::vector<double> meshed_overheads;
+    for (double fraction : {0.4, 0.05})
+        for (uint32_t side : {64u, 256u})
+            meshed_overheads.push_back(calib::refresh_overhead(*w.meshes[0], handles[0], fraction, side, m, cam, empty_ms, renderer, frame, 8));
+    m.meshed_refresh_t_setup_ms = std::max(1e-6, calib::median(meshed_overheads) - m.refresh_t_setup_ms);
+    std::vector<double> per_triangle;
+    for (float side_px : {32.0f, 96.0f}) {
+        const double coarse = calib::meshed_draw_ms(*w.meshes[0], handles[0], 2000, 4, side_px, cam, empty_ms, renderer, frame);
+        const double fine = calib::meshed_draw_ms(*w.meshes[0], handles[0], 2100, 16, side_px, cam, empty_ms, renderer, frame);
+        per_triangle.push_back((fine - coarse) / (2.0 * 16 * 16 - 2.0 * 4 * 4));
+    }
+    m.meshed_t_tri_ms = std::max(1e-9, calib::median(per_triangle));
     // t = a + b P by weighted least squares, weights 1 / t^2 (relative residuals)
     double s00 = 0, s01 = 0, s11 = 0, r0 = 0, r1 = 0;
     for (float side : {8.0f, 16.0f, 32.0f, 64.0f, 128.0f}) {
@@ -799,9 +874,9 @@ void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<
     }
     std::fprintf(log,
                  "ways: flat t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms (fit %.1f%% mean relative error over %zu samples); refresh overhead %.4g ms; "
-                 "imposter quad %.4g ms + %.4g ms a pixel\n",
+                 "imposter quad %.4g ms + %.4g ms a pixel; meshed imposter + %.4g ms a depth-mesh triangle, its refresh + %.4g ms\n",
                  m.flat_t_tri_ms, m.flat_t_vert_ms, m.flat_t_pix_ms, 100 * fit.mean_relative_error, flat.size(), m.refresh_t_setup_ms, m.imposter_t_setup_ms,
-                 m.imposter_t_pix_ms);
+                 m.imposter_t_pix_ms, m.meshed_t_tri_ms, m.meshed_refresh_t_setup_ms);
 }
 
 // Fits the cost model on this renderer: the empty frame gives t_init + t_final and the safety
@@ -869,8 +944,10 @@ int main(int argc, char** argv) {
                    "Compare every K-th recorded frame with the same view at full detail (SSIM, PSNR by scikit-image; needs --out, not --simulate)")
         ->check(CLI::Range(1u, 100000u));
     app.add_option("--representations", o.representations,
-                   "levels: TOM levels smooth-shaded only; all (default): also flat shading and simple imposters, where calibrated (exact and greedy choose among them)")
-        ->check(CLI::IsMember({"levels", "all"}));
+                   "levels: TOM levels smooth-shaded only; all (default): also flat shading, simple and meshed imposters, where calibrated (exact and greedy choose "
+                   "among them); simple: all but meshed imposters")
+        ->check(CLI::IsMember({"levels", "simple", "all"}));
+    app.add_option("--meshed-grid", o.meshed_grid, "A meshed imposter's depth mesh: cells a side, two triangles each (default 8)")->check(CLI::Range(1u, 64u));
     app.add_option("--flat-error-factor", o.flat_error_factor, "Flat shading's projected error as a multiple of smooth shading's (default 2)")->check(CLI::PositiveNumber);
     app.add_option("--imposter-max-px", o.imposter_max_px, "Reuse an imposter while its distortion stays within this many pixels (default 1)")->check(CLI::PositiveNumber);
     app.add_option("--imposter-error-factor", o.imposter_error_factor, "An imposter's projected error in the benefit as a multiple of its geometric error (default 1)")->check(CLI::PositiveNumber);
@@ -969,12 +1046,12 @@ int main(int argc, char** argv) {
             if (!o.out.empty()) {
                 std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
                 csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap,"
-                       "flat_objects,imposters,imposter_refreshes\n";
+                       "flat_objects,imposters,imposter_refreshes,meshed_imposters\n";
                 for (const Row& r : rows)
                     csv << r.frame << ',' << r.visible_objects << ',' << r.drawn_objects << ',' << r.visible_triangles << ',' << r.drawn_triangles << ','
                         << r.predicted_ms << ',' << r.measured_ms << ',' << r.render_ms << ',' << r.cull_ms << ',' << r.optimize_ms << ',' << r.extract_ms
                         << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << ',' << r.flat_objects << ','
-                        << r.imposters << ',' << r.refreshes << '\n';
+                        << r.imposters << ',' << r.refreshes << ',' << r.meshed << '\n';
             }
         }
         if (reference) {
@@ -1007,6 +1084,7 @@ int main(int argc, char** argv) {
             j["flat_objects_mean"] = s.flat_mean;
             j["imposters_drawn_mean"] = s.imposters_mean;
             j["imposter_refreshes_mean"] = s.refreshes_mean;
+            j["meshed_imposters_mean"] = s.meshed_mean;
             j["simulated"] = o.simulate;
             j["viewpoint_frames"] = {{"A", shots[0]}, {"B", shots[1]}, {"C", shots[2]}};  // the screenshots' frames
             out.push_back(j);
@@ -1015,14 +1093,14 @@ int main(int argc, char** argv) {
             for (const auto& j : out) std::printf("%s\n", j.dump().c_str());
         } else {
             const bool quality = reference != nullptr;
-            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s | %20s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
+            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s | %27s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
                         "objects a frame", quality ? " | image vs full detail" : "");
-            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s | %6s %6s %6s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
-                        "tris mean", "tris mean", "flat", "impost", "renew", quality ? " | SSIM mean    min  PSNR dB" : "");
+            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s | %6s %6s %6s %6s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
+                        "tris mean", "tris mean", "flat", "impost", "meshed", "renew", quality ? " | SSIM mean    min  PSNR dB" : "");
             for (const Summary& s : summaries) {
-                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f | %6.1f %6.1f %6.2f", s.selector.c_str(), s.mean, s.max, s.std,
+                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f | %6.1f %6.1f %6.1f %6.2f", s.selector.c_str(), s.mean, s.max, s.std,
                             s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible,
-                            s.flat_mean, s.imposters_mean, s.refreshes_mean);
+                            s.flat_mean, s.imposters_mean, s.meshed_mean, s.refreshes_mean);
                 if (quality) std::printf(" |    %.4f %.4f %8.2f", s.ssim_mean, s.ssim_min, s.psnr_mean);
                 std::printf("\n");
             }

@@ -47,11 +47,12 @@ check "a real path with imposters, and with levels alone" "$walk" --scene "$work
   --frames 30 --budget-ms "$budget" --width 320 --height 240 --out "$work/menu" --quality-every 10
 # a fit may put flat shading's cost on its triangles or on its vertices, and a quad's on
 # its setup or its pixels: each way's cost for a typical draw must be positive
-check "the calibration fits flat shading, quads and refreshes" /usr/bin/python3 -c "
+check "the calibration fits flat shading, quads, depth meshes and refreshes" /usr/bin/python3 -c "
 k = dict((l.split()[0], float(l.split()[1])) for l in open('$work/calibration.txt') if len(l.split()) == 2 and not l.startswith('#'))
 assert k['flat_t_tri_ms'] + k['flat_t_vert_ms'] > 0, k
 assert k['imposter_t_setup_ms'] + 1000 * k['imposter_t_pix_ms'] > 0, k
 assert k['refresh_t_setup_ms'] > 0, k
+assert k['meshed_t_tri_ms'] > 0 and k['meshed_refresh_t_setup_ms'] > 0, k
 "
 check "levels alone draw no imposter; the menu's imposters are counted and their renewals bounded" /usr/bin/python3 -c "
 import csv, json
@@ -60,8 +61,9 @@ lv, menu = runs['exact-levels'], runs['exact']
 assert lv['representations'] == 'levels' and menu['representations'] == 'all', (lv, menu)
 assert lv['imposters_drawn_mean'] == 0 and lv['imposter_refreshes_mean'] == 0 and lv['flat_objects_mean'] == 0, lv
 assert 0 <= menu['imposter_refreshes_mean'] <= menu['imposters_drawn_mean'], menu
+assert lv['meshed_imposters_mean'] == 0 and 0 <= menu['meshed_imposters_mean'] <= menu['imposters_drawn_mean'], (lv, menu)
 rows = list(csv.DictReader(open('$work/menu/frames-exact.csv')))
-assert all(int(r['imposter_refreshes']) <= int(r['imposters']) for r in rows), rows
+assert all(int(r['imposter_refreshes']) <= int(r['imposters']) and int(r['meshed_imposters']) <= int(r['imposters']) for r in rows), rows
 for r in (lv, menu): assert 0 < r['ssim_mean'] < 1, r
 "
 check "--representations levels is a menu of levels for every selector" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --selector exact --representations levels --frames 10 --budget-ms '$budget' --width 320 --height 240 --out '$work/lv' --json | /usr/bin/python3 -c 'import json, sys; r = [json.loads(l) for l in sys.stdin if l.startswith(\"{\")]; assert r and all(x[\"imposters_drawn_mean\"] == 0 for x in r), r'"

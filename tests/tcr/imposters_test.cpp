@@ -6,6 +6,8 @@
 #include <catch2/catch.hpp>
 
 #include "tcr/imposters.h"
+#include "tcr/runtime.h"
+#include "tcr/view.h"
 
 namespace im = tcr::imposters;
 
@@ -177,4 +179,62 @@ TEST_CASE("a captured imposter's lifetime: the paper's example lasts its T where
     // a bound the capture never meets: no lifetime; one it always meets: forever
     CHECK(im::lifetime(c, 0.5, 1e-9, s.speed, s.min_distance) > 0);  // a tiny bound: exact at its own viewpoint, so a short life
     CHECK(im::lifetime(c, 0.5, 10.0, s.speed, s.min_distance) == INFINITY);
+}
+
+namespace {
+
+// Where a world point lands through a view and projection: window x, y in [0, 1] and depth.
+void to_window(const float view[16], const float projection[16], const float p[3], double out[3]) {
+    float vp[16];
+    tcr::multiply(projection, view, vp);
+    double c[4];
+    for (int r = 0; r < 4; ++r) c[r] = double(vp[r]) * p[0] + double(vp[4 + r]) * p[1] + double(vp[8 + r]) * p[2] + vp[12 + r];
+    for (int k = 0; k < 3; ++k) out[k] = 0.5 * (c[k] / c[3] + 1.0);
+}
+
+// The window depth of a point `distance` ahead along the capture's axis.
+float window_depth(const float projection[16], double distance) {
+    const double z_ndc = (double(projection[10]) * -distance + projection[14]) / distance;
+    return float(0.5 * (z_ndc + 1.0));
+}
+
+} // namespace
+
+TEST_CASE("a meshed imposter's depth mesh: on the capture's rays, at the object texel nearest in the image", "[tcr][imposters][meshed]") {
+    // a capture from 10 m of a sphere of 1 m; a depth buffer of 64 x 64 texels holding the
+    // object at 9.5 m on its left half, and one texel of it at 9.2 m on the right, background
+    // around it
+    tcr::ImposterState s;
+    s.valid = true;
+    s.eye[0] = 0.3f, s.eye[1] = 0.4f, s.eye[2] = 10;
+    s.radius = 1;
+    float view[16], projection[16];
+    tcr::imposter_camera(s, view, projection);
+    const uint32_t side = 64, grid = 8;  // cells of 8 texels
+    std::vector<float> depth(size_t(side) * side, 1.0f);
+    const float plane = window_depth(projection, 9.5), speck = window_depth(projection, 9.2);
+    for (uint32_t y = 0; y < side; ++y)
+        for (uint32_t x = 0; x < side / 2; ++x) depth[size_t(y) * side + x] = plane;
+    depth[size_t(20) * side + 36] = speck;  // within one cell of the vertices (4..5, 2..3)
+    std::vector<float> positions(size_t(grid + 1) * (grid + 1) * 3);
+    tcr::depth_mesh(view, projection, depth.data(), side, grid, positions.data());
+    const double centre = std::sqrt(0.3 * 0.3 + 0.4 * 0.4 + 10.0 * 10.0);  // the eye's distance from the centre
+    for (uint32_t j = 0; j <= grid; ++j)
+        for (uint32_t i = 0; i <= grid; ++i) {
+            INFO("vertex " << i << ", " << j);
+            const float* p = positions.data() + 3 * (size_t(j) * (grid + 1) + i);
+            double w[3];
+            to_window(view, projection, p, w);
+            // on its own ray: it projects to its texture point (i, j) / grid
+            CHECK(w[0] == Approx(double(i) / grid).margin(1e-5));
+            CHECK(w[1] == Approx(double(j) / grid).margin(1e-5));
+            // at the depth the rule gives: the plane's up to its edge (vertex 4, at texel 32, has
+            // the plane's texel 31 and the speck within its cell: the plane's is nearer in the
+            // image, though the speck is nearer the eye), the speck's where it is the only object
+            // texel within a cell, the centre's where there is none
+            const double from_eye_along_axis = -(double(view[2]) * p[0] + double(view[6]) * p[1] + double(view[10]) * p[2] + view[14]);
+            const bool near_speck = i == 5 && j >= 2 && j <= 3;
+            const double expected = i <= 4 ? 9.5 : (near_speck ? 9.2 : centre);
+            CHECK(from_eye_along_axis == Approx(expected).epsilon(1e-4));
+        }
 }

@@ -29,6 +29,8 @@ struct CostModel {
     double imposter_t_setup_ms = 0.0;  ///< a simple imposter: its textured quad's draw
     double imposter_t_pix_ms = 0.0;    ///< a simple imposter: per covered pixel (texture fetch, alpha test)
     double refresh_t_setup_ms = 0.0;   ///< an imposter's refresh: binding its texture as the target, clearing it, the draw
+    double meshed_t_tri_ms = 0.0;      ///< a meshed imposter: per triangle of its depth mesh, beyond the quad's draw and fill
+    double meshed_refresh_t_setup_ms = 0.0;  ///< a meshed imposter's refresh beyond a simple one's: the depth read back, the mesh made
 
     /// Time of one object: t_setup + max(geometry, fill). `inside_share`: the share of the object
     /// inside the view frustum (Projection::inside_share); the rest is clipped before set-up and
@@ -48,12 +50,15 @@ struct CostModel {
     }
     /// Time of one simple imposter's quad covering `pixels`.
     double imposter_ms(double pixels) const noexcept { return imposter_t_setup_ms + imposter_t_pix_ms * pixels; }
+    /// Time of one meshed imposter covering `pixels` over a depth mesh of `triangles`.
+    double meshed_ms(double pixels, double triangles) const noexcept { return imposter_ms(pixels) + meshed_t_tri_ms * triangles; }
     /// Time of one refresh: the object at (triangles, vertices), whole, into a texture of `texels`.
     double refresh_ms(double triangles, double vertices, double texels, double draws = 1.0) const noexcept {
         return refresh_t_setup_ms + object_ms(triangles, vertices, texels, 1.0, draws);
     }
     bool has_flat() const noexcept { return flat_t_tri_ms > 0 || flat_t_vert_ms > 0 || flat_t_pix_ms > 0; }
     bool has_imposters() const noexcept { return imposter_t_setup_ms > 0 || imposter_t_pix_ms > 0; }
+    bool has_meshed() const noexcept { return has_imposters() && (meshed_t_tri_ms > 0 || meshed_refresh_t_setup_ms > 0); }
     /// Fixed part of a frame: t_init + t_final + safety.
     double frame_fixed_ms() const noexcept { return t_init_ms + t_final_ms + safety_ms; }
     /// Fewer triangles than this save no time: the object is fill bound (r_min of the sources).

@@ -30,8 +30,10 @@
 namespace tcr {
 
 /// How an object is drawn (Funkhouser & Sequin's rendering algorithms; Pasman & Jansen's simple
-/// imposter: the object rendered into a texture from one viewpoint, drawn as one quad facing it).
-enum class Representation : uint8_t { smooth, flat, simple_imposter };
+/// imposter: the object rendered into a texture from one viewpoint, drawn as one quad facing it;
+/// their meshed imposter: the same image over a coarse mesh of the capture's depth buffer).
+enum class Representation : uint8_t { smooth, flat, simple_imposter, meshed_imposter };
+inline bool is_imposter(Representation r) noexcept { return r == Representation::simple_imposter || r == Representation::meshed_imposter; }
 const char* representation_name(Representation r) noexcept;
 
 /// The menu a frame offers beside the TOM levels drawn smooth-shaded (way 0). A way is offered
@@ -40,6 +42,12 @@ const char* representation_name(Representation r) noexcept;
 struct Menu {
     bool flat = false;                ///< flat shading, every level
     bool imposters = false;           ///< simple imposters, for objects whose sphere the eye is well outside
+    bool meshed = false;              ///< meshed imposters too, where the cost model has them (CostModel::has_meshed)
+    /// A meshed imposter's depth mesh: a grid of this many cells a side over the capture, two
+    /// triangles a cell (8: 128 triangles, as Pasman & Jansen's Table 1 asks of a 1 m object at
+    /// 15 m for a 1 mrad bound and a 1 s lifetime).
+    uint32_t meshed_grid = 8;
+    double meshed_k = 5.0;            ///< the depth mesh's k of D = k / N (4.4; the paper's k: a grid fits no better than a simplification)
     /// Flat shading's projected error as a multiple of smooth shading's at the same level: its
     /// facets show the level's approximation (Funkhouser's flat m = 1 in polygons against
     /// Gouraud's m = 2 in vertices); fitted to the measured image by tcrwalk (docs/CALIBRATION.md).
@@ -85,6 +93,7 @@ struct ImposterState {
     float eye[3] = {0, 0, 0}, centre[3] = {0, 0, 0};
     float radius = 0;
     uint32_t texture_px = 0;   ///< side of the square texture
+    uint32_t grid = 0;         ///< a meshed imposter's depth mesh, cells a side; 0: a simple imposter
     uint32_t vertices = 0;     ///< the level rendered into it
     uint32_t triangles = 0;    ///< that level's triangles
     uint64_t frame = 0;        ///< the frame it was captured in
@@ -96,6 +105,15 @@ void imposter_camera(const ImposterState& s, float view[16], float projection[16
 /// capture's eye (Pasman & Jansen's two-axis billboard), corners in world space (4 x xyz;
 /// texture corners (0,0), (1,0), (1,1), (0,1) in that order).
 void imposter_quad(const ImposterState& s, float corners[12]) noexcept;
+/// A meshed imposter's depth mesh: (grid + 1)^2 vertices, row by row from the bottom left, in
+/// world space (xyz each), vertex (i, j) on the capture's ray through texture point (i, j) / grid
+/// at the depth of the object texel nearest that point in the image (`depth`: side x side window
+/// depths in [0, 1], 1 for none, rows from the bottom, as glReadPixels gives them) within one
+/// cell: inside the object its own depth, at its outline the outline's, never the far plane (the
+/// paper's stretched edges, section 6.2; the nearest depth instead would pull the outline forward
+/// and exaggerate its parallax). Where no texel within a cell holds the object, at the depth of
+/// the capture's centre, as a simple imposter's quad./// `view` and `projection` are the capture's (imposter_camera). Texture coordinates are (i, j) / grid.
+void depth_mesh(const float view[16], const float projection[16], const float* depth, uint32_t side, uint32_t grid, float* positions) noexcept;
 
 struct ObjectResult {
     bool visible = false;
@@ -109,9 +127,10 @@ struct ObjectResult {
     double error_px = 0;        ///< projected error at the chosen resolution, as max_error_px bounds it: the stored curve (or Pasman's 2 k arctan(r/d) / N) in pixels
     double predicted_ms = 0;
     Representation representation = Representation::smooth;
-    /// A simple imposter renewed this frame: render the level `vertices` into its texture from
-    /// Runtime::imposter(id) (indices() gives that level) before drawing its quad. An imposter
-    /// not renewed draws its quad alone (indices() gives nothing).
+    /// An imposter renewed this frame: render the level `vertices` into its texture from
+    /// Runtime::imposter(id) (indices() gives that level), and for a meshed one make its depth
+    /// mesh (depth_mesh), before drawing it. An imposter not renewed draws its quad or depth
+    /// mesh alone (indices() gives nothing).
     bool refresh = false;
 };
 
@@ -129,7 +148,8 @@ struct FrameReport {
     bool feasible = true;
     bool deadline_hit = false;
     uint32_t iterations = 0;
-    uint32_t flat = 0, imposters = 0, refreshes = 0;  ///< drawn flat-shaded; drawn as imposters; of those, renewed
+    uint32_t flat = 0, imposters = 0, refreshes = 0;  ///< drawn flat-shaded; drawn as imposters (simple or meshed); of those, renewed
+    uint32_t meshed = 0;        ///< of the imposters, meshed ones
 };
 
 class Runtime {
@@ -181,7 +201,10 @@ private:
         double diagonal;                               // object-space bounding-box diagonal
         float last_x = -1, last_y = -1;                // previous frame's screen position (motion)
         ImposterState imposter;                        // the last capture
-        double lifetime_distance = -1, lifetime_m = 0; // how far the viewer walks before a capture from here breaks its bound, and the distance it was computed at
+        // how far the viewer walks before a capture from here breaks its bound (simple, meshed),
+        // the distance and the depth mesh's grid it was computed for
+        double lifetime_distance = -1, lifetime_m[2] = {0, 0};
+        uint32_t lifetime_grid = 0;
         // the level a capture renders, for the projected size and capture error it was found at
         double capture_size_px = -1, capture_error_px = -1;
         uint32_t capture_vertices = 0, capture_triangles = 0;
@@ -193,6 +216,7 @@ private:
         double error_px;       // imposters: the projected error
         uint32_t texture_px;   // imposters: the texture's side
         uint32_t vertices;     // imposters: the level in the texture
+        uint32_t grid = 0;     // meshed imposters: the depth mesh's cells a side
         double full_ms = 0;    // refreshes: the whole cost, paid this frame
     };
     void add_ways(uint32_t id, size_t k, const FrameParams& params, double radians_per_px);
@@ -206,7 +230,7 @@ private:
     void repair_refreshes(double budget_ms, double& predicted);
     void note_viewer(const FrameParams& params);
     void commit_capture(uint32_t id, uint32_t way, size_t k);
-    static bool has_geometry(const ObjectResult& r) noexcept { return r.drawn && (r.representation != Representation::simple_imposter || r.refresh); }
+    static bool has_geometry(const ObjectResult& r) noexcept { return r.drawn && (!is_imposter(r.representation) || r.refresh); }
     double c_for(const Object& o, double m, double fixed_c) const noexcept;
     double pasman_k_px(const Object& o, const ObjectResult& r) const noexcept;
     double projected_error_px(const Object& o, const ObjectResult& r, double triangles) const noexcept;
