@@ -65,6 +65,7 @@ const char* representation_name(Representation r) noexcept {
     case Representation::flat: return "flat";
     case Representation::simple_imposter: return "imposter";
     case Representation::meshed_imposter: return "meshed";
+    case Representation::textured: return "textured";
     }
     return "?";
 }
@@ -256,17 +257,24 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
         const uint32_t j = uint32_t(problem_.ways.size() - problem_.way_begin[k]);
         if (previous == kind.representation && (previous_way == 0 || !kind.refresh)) previous_way = j;
     };
-    if (menu.flat && model_.has_flat()) {
+    // the levels under another rendering algorithm: its coefficients, its error factor
+    auto level_way = [&](double t_tri, double t_vert, double t_pix, double error_factor) {
         Way w;
         w.m = problem_.m;
-        w.per_tri_ms = std::max(1e-12, (model_.flat_t_tri_ms + model_.flat_t_vert_ms * o.vertices_per_triangle) * r.inside_share);
-        const double fill = model_.flat_t_pix_ms * r.coverage_px;
+        w.per_tri_ms = std::max(1e-12, (t_tri + t_vert * o.vertices_per_triangle) * r.inside_share);
+        const double fill = t_pix * r.coverage_px;
         w.hi = problem_.hi[k];
         w.lo = std::min(w.hi, std::max(o.min_triangles, fill / w.per_tri_ms));
         w.setup_ms = model_.t_setup_ms * parts + std::max(0.0, fill - w.per_tri_ms * w.lo);
-        w.error = problem_.error[k] * menu.flat_error_factor;
+        w.error = problem_.error[k] * error_factor;
+        return w;
+    };
+    if (menu.flat && model_.has_flat()) {
+        const Way w = level_way(model_.flat_t_tri_ms, model_.flat_t_vert_ms, model_.flat_t_pix_ms, menu.flat_error_factor);
         if (!dominated_by_smooth(w, k)) push(w, {Representation::flat, false, 0, 0, 0});
     }
+    if (menu.textured && o.textured && model_.has_textured())
+        push(level_way(model_.textured_t_tri_ms, model_.textured_t_vert_ms, model_.textured_t_pix_ms, menu.textured_error_factor), {Representation::textured, false, 0, 0, 0});
     double centre[3], radius;
     world_sphere(o.transform, o.box, o.diagonal, centre, radius);
     const double from_centre = distance3(eye_, centre);
@@ -382,8 +390,10 @@ double Runtime::choose(uint32_t id, size_t k, double triangles, uint32_t way) {
     }
     r.vertices = resolution_for(o, triangles);
     r.triangles = tom::active_triangle_count(*o.mesh, r.vertices);
-    r.predicted_ms = correction_ * (kind.representation == Representation::flat ? model_.flat_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts)
-                                                                                 : model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts));
+    if (kind.representation == Representation::flat) r.predicted_ms = model_.flat_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts);
+    else if (kind.representation == Representation::textured) r.predicted_ms = model_.textured_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts);
+    else r.predicted_ms = model_.object_ms(r.triangles, r.vertices, r.coverage_px, r.inside_share, parts);
+    r.predicted_ms *= correction_;
     r.error_px = projected_error_px(o, r, r.triangles);
     return r.predicted_ms;
 }
@@ -554,7 +564,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     if (!params.correct_model) correction_ = 1.0;
     report_.correction = correction_;
     problem_.budget_ms = (params.budget_ms - model_.frame_fixed_ms()) / correction_;
-    const bool menu = (params.menu.flat && model_.has_flat()) || (params.menu.imposters && model_.has_imposters());
+    const bool menu = (params.menu.flat && model_.has_flat()) || (params.menu.imposters && model_.has_imposters()) || (params.menu.textured && model_.has_textured());
     problem_.ways.clear();
     way_kinds_.clear();
     problem_.way_begin.assign(menu ? n + 1 : 0, 0);
@@ -646,6 +656,7 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         report_.triangles += r.triangles;
         report_.max_error_px = std::max(report_.max_error_px, r.error_px);
         report_.flat += r.representation == Representation::flat;
+        report_.textured += r.representation == Representation::textured;
         if (is_imposter(r.representation)) {
             ++report_.imposters;
             if (r.refresh) {

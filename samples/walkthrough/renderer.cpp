@@ -7,6 +7,7 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
+#include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
 #include <stdexcept>
@@ -40,6 +41,34 @@ const char* kFragment = R"(
 QUALIFIER in vec3 shade;
 out vec4 frag;
 void main() { frag = vec4(shade, 1.0); }
+)";
+
+// Texture mapping: the Gouraud shade of kVertex, multiplied by the image at the vertex's texture
+// coordinates (Funkhouser & Sequin's third rendering algorithm).
+const char* kTexturedVertex = R"(#version 330 core
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec2 texcoord;
+uniform mat4 model;
+uniform mat4 view_projection;
+uniform vec3 color;
+out vec3 shade;
+out vec2 uv;
+void main() {
+    vec3 n = normalize(mat3(model) * normal);
+    float d = 0.15 + 0.65 * max(dot(n, normalize(vec3(0.4, 0.8, 0.5))), 0.0) + 0.3 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.4))), 0.0);
+    shade = color * d;
+    uv = texcoord;
+    gl_Position = view_projection * model * vec4(position, 1.0);
+}
+)";
+
+const char* kTexturedFragment = R"(#version 330 core
+in vec3 shade;
+in vec2 uv;
+uniform sampler2D image;
+out vec4 frag;
+void main() { frag = vec4(shade * texture(image, uv).rgb, 1.0); }
 )";
 
 // A simple imposter: one quad from four corners (a triangle strip of gl_VertexID 0..3), its
@@ -153,7 +182,9 @@ struct Renderer::Impl {
     struct MeshProgram {
         GLuint program = 0;
         GLint u_model = -1, u_vp = -1, u_color = -1;
-    } smooth, flat;
+    } smooth, flat, textured;
+    GLint u_textured_image = -1;
+    std::vector<GLuint> images;
     GLuint imposter_program = 0, vao = 0, quad_vao = 0, quad_instances = 0, index_buffer = 0;
     GLint u_imposter_vp = -1, u_image = -1;
     static constexpr int kInstanceFloats = 12 + 4 + 4 + 1;  // corners, cell, colour and tint, layer
@@ -246,13 +277,23 @@ struct Renderer::Impl {
         glUseProgram(p.program);
         glUniformMatrix4fv(p.u_vp, 1, GL_FALSE, vp);
         glBindVertexArray(vao);
+        if (shading == Shading::textured) {
+            glUniform1i(u_textured_image, 0);
+            glActiveTexture(GL_TEXTURE0);
+        }
         for (const Draw& d : draws) {
             if (d.capture != capture || d.shading != shading) continue;
+            if (shading == Shading::textured) {
+                if (d.image >= images.size()) continue;
+                glBindTexture(GL_TEXTURE_2D, images[d.image]);
+            }
             glBindBuffer(GL_ARRAY_BUFFER, meshes[d.mesh].vbo);
-            glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 24, nullptr);
-            glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 24, reinterpret_cast<void*>(12));
+            glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 32, nullptr);
+            glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 32, reinterpret_cast<void*>(12));
+            glVertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, 32, reinterpret_cast<void*>(24));
             glEnableVertexAttribArray(0);
             glEnableVertexAttribArray(1);
+            glEnableVertexAttribArray(2);
             glUniformMatrix4fv(p.u_model, 1, GL_FALSE, d.model);
             // a mirroring transform (glTF scenes have them) turns counter-clockwise front faces clockwise
             const float* m = d.model;
@@ -356,6 +397,14 @@ Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Imp
         throw std::runtime_error("OSMesa: cannot make the context current");
     impl_->smooth = impl_->make_mesh_program("");
     impl_->flat = impl_->make_mesh_program("flat");
+    {
+        Impl::MeshProgram& t = impl_->textured;
+        t.program = link(kTexturedVertex, kTexturedFragment);
+        t.u_model = glGetUniformLocation(t.program, "model");
+        t.u_vp = glGetUniformLocation(t.program, "view_projection");
+        t.u_color = glGetUniformLocation(t.program, "color");
+        impl_->u_textured_image = glGetUniformLocation(t.program, "image");
+    }
     impl_->imposter_program = link(kImposterVertex, kImposterFragment);
     impl_->u_imposter_vp = glGetUniformLocation(impl_->imposter_program, "view_projection");
     impl_->u_image = glGetUniformLocation(impl_->imposter_program, "image");
@@ -413,19 +462,47 @@ std::string Renderer::description() const {
 }
 
 uint32_t Renderer::add_mesh(const tom::MeshView& mesh) {
-    // interleaved position + normal, the full vertex array once: any level is a prefix of it
-    std::vector<float> data(size_t(mesh.vertex_count) * 6);
-    for (uint32_t v = 0; v < mesh.vertex_count; ++v)
+    // interleaved position, normal, texture coordinates, the full vertex array once: any level is
+    // a prefix of it
+    std::vector<float> data(size_t(mesh.vertex_count) * 8, 0.0f);
+    for (uint32_t v = 0; v < mesh.vertex_count; ++v) {
+        float* out = data.data() + 8 * size_t(v);
         for (int k = 0; k < 3; ++k) {
-            data[6 * size_t(v) + k] = mesh.positions[3 * size_t(v) + k];
-            data[6 * size_t(v) + 3 + k] = mesh.normals ? mesh.normals[3 * size_t(v) + k] : 0.0f;
+            out[k] = mesh.positions[3 * size_t(v) + k];
+            out[3 + k] = mesh.normals ? mesh.normals[3 * size_t(v) + k] : 0.0f;
         }
+        if (mesh.texcoords) out[6] = mesh.texcoords[2 * size_t(v)], out[7] = mesh.texcoords[2 * size_t(v) + 1];
+    }
     Impl::Mesh m;
     glGenBuffers(1, &m.vbo);
     glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
     glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
     impl_->meshes.push_back(m);
     return uint32_t(impl_->meshes.size() - 1);
+}
+
+uint32_t Renderer::add_image(uint32_t width, uint32_t height, const unsigned char* rgba) {
+    GLuint t = 0;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, GLsizei(width), GLsizei(height), 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glGenerateMipmap(GL_TEXTURE_2D);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    impl_->images.push_back(t);
+    return uint32_t(impl_->images.size() - 1);
+}
+
+uint32_t Renderer::add_image(const std::string& path) {
+    int w = 0, h = 0, channels = 0;
+    stbi_set_flip_vertically_on_load(1);  // OpenGL's rows start at the bottom, texture coordinate v = 0 there
+    unsigned char* pixels = stbi_load(path.c_str(), &w, &h, &channels, 4);
+    if (!pixels) throw std::runtime_error("cannot read image '" + path + "': " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown reason"));
+    const uint32_t handle = add_image(uint32_t(w), uint32_t(h), pixels);
+    stbi_image_free(pixels);
+    return handle;
 }
 
 void Renderer::render(const float view[16], const float projection[16], const std::vector<Draw>& draws, const std::vector<uint32_t>& indices,
@@ -452,6 +529,7 @@ void Renderer::render(const float view[16], const float projection[16], const st
         tcr::multiply(cap.projection, cap.view, vp);
         g.draw_meshes(g.smooth, vp, draws, int32_t(c), Shading::smooth);
         g.draw_meshes(g.flat, vp, draws, int32_t(c), Shading::flat);
+        g.draw_meshes(g.textured, vp, draws, int32_t(c), Shading::textured);
         g.keep_depth_mesh(cap, cell);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -461,6 +539,7 @@ void Renderer::render(const float view[16], const float projection[16], const st
     tcr::multiply(projection, view, vp);
     g.draw_meshes(g.smooth, vp, draws, -1, Shading::smooth);
     g.draw_meshes(g.flat, vp, draws, -1, Shading::flat);
+    g.draw_meshes(g.textured, vp, draws, -1, Shading::textured);
     g.draw_imposters(vp, draws);
     g.draw_meshed_imposters(vp, draws);
     glFinish();

@@ -22,10 +22,15 @@ public:
     Renderer(uint32_t width, uint32_t height);
     ~Renderer();
 
-    /// Uploads a mesh's full vertex streams (positions, normals); returns its handle.
+    /// Uploads a mesh's full vertex streams (positions, normals, texture coordinates); returns its handle.
     uint32_t add_mesh(const tom::MeshView& mesh);
+    /// Loads an image (PNG, JPEG, ...: stb_image) as a mipmapped, repeating texture for textured
+    /// draws; returns its handle. \throw std::runtime_error naming the file and stb_image's reason.
+    uint32_t add_image(const std::string& path);
+    /// The same from RGBA pixels in memory (rows from the bottom).
+    uint32_t add_image(uint32_t width, uint32_t height, const unsigned char* rgba);
 
-    enum class Shading : uint8_t { smooth, flat, imposter, meshed };
+    enum class Shading : uint8_t { smooth, flat, imposter, meshed, textured };
     struct Draw {
         uint32_t mesh;
         const float* model;  ///< 4x4 column-major
@@ -38,6 +43,7 @@ public:
         float corners[12] = {}; ///< simple imposters: the quad's corners in world space, texture (0,0), (1,0), (1,1), (0,1)
         float tint = 0;         ///< imposters: how much of `color` to mix into the texture's
         uint32_t tag = 0;       ///< the caller's (the walkthrough: its object), unused here
+        uint32_t image = 0;     ///< textured draws: the image (add_image) its Gouraud shade is multiplied by
     };
     /// A render of objects into a texture slot (a square of side x side, a power of two from 16 to
     /// 256, in a layer of an array texture that the frame's imposters share), before the frame.

@@ -46,7 +46,37 @@ struct World {
     std::vector<const tom::MeshView*> meshes;
     std::vector<std::array<float, 16>> transforms;
     uint64_t full_triangles = 0;
+    // per mesh, per part: its material's base-colour image (a path, found beside the .tom), or
+    // empty; a mesh with texture coordinates and at least one such image is textured
+    std::vector<std::vector<std::string>> part_images;
+    std::vector<uint8_t> textured;
+    // the renderer's handles of those images (-1: none), once it has them (load_images)
+    std::vector<std::vector<int32_t>> image_handles;
 };
+
+// The base-colour image of each part of mesh `m`, looked up beside the .tom as the source
+// wrote it (relative to the model, as OBJ and glTF do; '\\' read as '/'). A missing image is
+// reported and its part drawn without it.
+void find_images(World& w, size_t m, const fs::path& tom_path) {
+    const tom::MeshView& mesh = *w.meshes[m];
+    const tom::Scene& scene = w.files[m].scene();
+    std::vector<std::string> images(tom::part_count(mesh));
+    for (uint32_t p = 0; p < images.size(); ++p) {
+        const int32_t material = tom::part_at(mesh, p).material;
+        if (material < 0 || size_t(material) >= scene.materials.size()) continue;
+        for (const tom::TextureRef& t : scene.materials[size_t(material)].textures) {
+            if (t.role != tom::TextureRole::base_color || t.uri.empty() || t.texcoord != 0) continue;
+            std::string uri = t.uri;
+            std::replace(uri.begin(), uri.end(), '\\', '/');
+            const fs::path path = (tom_path.parent_path() / uri).lexically_normal();
+            if (fs::exists(path)) images[p] = path.string();
+            else std::fprintf(stderr, "warning: %s: part %u's image '%s' is not at %s; drawn without it\n", tom_path.string().c_str(), p, t.uri.c_str(), path.string().c_str());
+        }
+    }
+    const bool any = std::any_of(images.begin(), images.end(), [](const std::string& s) { return !s.empty(); });
+    w.textured.push_back(mesh.texcoords && any);
+    w.part_images.push_back(std::move(images));
+}
 
 World load_world(const std::string& scene_path) {
     World w;
@@ -58,6 +88,8 @@ World load_world(const std::string& scene_path) {
         if (w.files.back().mesh_count() == 0) throw tom::Error(p.string() + ": no mesh");
     }
     for (const tom::File& f : w.files) w.meshes.push_back(&f.mesh(0));
+    for (size_t m = 0; m < w.meshes.size(); ++m)
+        find_images(w, m, fs::path(w.scene.meshes[m]).is_absolute() ? fs::path(w.scene.meshes[m]) : dir / w.scene.meshes[m]);
     for (const walk::Instance& i : w.scene.instances) {
         const tom::MeshView& m = *w.meshes[i.mesh];
         double d2 = 0;
@@ -80,6 +112,22 @@ World load_world(const std::string& scene_path) {
     return w;
 }
 
+// The parts' images into the renderer (each file once); none without a renderer (--simulate).
+void load_images(World& w, walk::Renderer* renderer) {
+    std::map<std::string, int32_t> loaded;
+    w.image_handles.clear();
+    for (const std::vector<std::string>& parts : w.part_images) {
+        std::vector<int32_t> handles(parts.size(), -1);
+        for (size_t p = 0; p < parts.size(); ++p) {
+            if (parts[p].empty() || !renderer) continue;
+            auto it = loaded.find(parts[p]);
+            if (it == loaded.end()) it = loaded.emplace(parts[p], int32_t(renderer->add_image(parts[p]))).first;
+            handles[p] = it->second;
+        }
+        w.image_handles.push_back(std::move(handles));
+    }
+}
+
 tcr::Camera camera_for(uint32_t f, uint32_t frames, uint32_t width, uint32_t height) {
     const walk::CameraPose pose = walk::path_pose(f, frames);
     tcr::Camera c;
@@ -92,7 +140,7 @@ tcr::Camera camera_for(uint32_t f, uint32_t frames, uint32_t width, uint32_t hei
 }
 
 struct Row {
-    uint32_t frame, visible_objects, drawn_objects, flat_objects, imposters, refreshes, meshed;
+    uint32_t frame, visible_objects, drawn_objects, flat_objects, imposters, refreshes, meshed, textured;
     uint64_t visible_triangles, drawn_triangles;
     double predicted_ms, measured_ms, render_ms, cull_ms, optimize_ms, extract_ms, benefit, gap;
 };
@@ -104,6 +152,7 @@ struct Summary {
     double mean = 0, max = 0, std = 0, compute_mean = 0, compute_max = 0, over = 0, prediction_error = 0, drawn = 0, visible = 0, gap = NAN;
     double flat_mean = 0, imposters_mean = 0, refreshes_mean = 0;  // objects drawn flat-shaded, as imposters, imposters renewed, a frame
     double meshed_mean = 0;  // of the imposters, meshed ones, a frame
+    double textured_mean = 0;  // objects drawn texture-mapped, a frame
     // the image against full detail (--quality-every): SSIM and PSNR over the measured frames
     uint32_t quality_frames = 0;
     double ssim_mean = NAN, ssim_min = NAN, psnr_mean = NAN;
@@ -129,6 +178,7 @@ Summary summarize(const std::string& selector, double budget, const std::vector<
         s.imposters_mean += double(r.imposters) / rows.size();
         s.refreshes_mean += double(r.refreshes) / rows.size();
         s.meshed_mean += double(r.meshed) / rows.size();
+        s.textured_mean += double(r.textured) / rows.size();
         if (r.predicted_ms > 0) {
             s.prediction_error += std::abs(r.predicted_ms - r.measured_ms) / r.measured_ms;
             ++predicted;
@@ -149,19 +199,23 @@ std::string base_selector(const std::string& s) { return ends_with_levels(s) ? s
 
 // Every instance of the scene into the runtime, in scene order (its object ids are the instances').
 void add_objects(tcr::Runtime& rt, const World& w) {
-    for (size_t i = 0; i < w.scene.instances.size(); ++i) rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+    for (size_t i = 0; i < w.scene.instances.size(); ++i) {
+        const uint32_t id = rt.add_object(*w.meshes[w.scene.instances[i].mesh], w.transforms[i].data(), w.scene.instances[i].weight);
+        rt.set_textured(id, w.textured[w.scene.instances[i].mesh] != 0);
+    }
 }
 
 // Object colours of the shaded view, and of the warm-up frames (never shown).
 constexpr float kSand[3] = {0.85f, 0.78f, 0.62f}, kGrey[3] = {0.8f, 0.8f, 0.8f};
 // The representation view's colours: smooth-shaded levels, flat-shaded levels, simple and meshed imposters.
 constexpr float kSmoothColor[3] = {0.3f, 0.5f, 0.9f}, kFlatColor[3] = {0.95f, 0.6f, 0.15f}, kImposterColor[3] = {0.85f, 0.2f, 0.75f},
-                kMeshedColor[3] = {0.2f, 0.75f, 0.35f};
+                kMeshedColor[3] = {0.2f, 0.75f, 0.35f}, kTexturedColor[3] = {0.95f, 0.85f, 0.2f};
 const float* representation_color(tcr::Representation r) {
     switch (r) {
     case tcr::Representation::flat: return kFlatColor;
     case tcr::Representation::simple_imposter: return kImposterColor;
     case tcr::Representation::meshed_imposter: return kMeshedColor;
+    case tcr::Representation::textured: return kTexturedColor;
     default: return kSmoothColor;
     }
 }
@@ -187,7 +241,7 @@ struct Options {
     double safety_sigma = 0.35;   // safety allowance in standard deviations of the renderer's noise: less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
     uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
-    std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading and imposters too; "simple": all but meshed imposters
+    std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading, texture mapping and imposters too; "simple": all but meshed imposters
     uint32_t meshed_grid = 8;             // a meshed imposter's depth mesh, cells a side (tcr::Menu)
     double flat_error_factor = 2.0;       // flat shading's projected error over smooth's (tcr::Menu)
     double imposter_max_px = 1.0;         // an imposter is reused while its distortion stays within this
@@ -222,6 +276,9 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
         walk::Renderer::Draw d{mesh_handles[mesh], w.transforms[id].data(), at, 0, {color[0], color[1], color[2]}};
         d.tag = id;
         d.shading = obj.representation == tcr::Representation::flat ? Shading::flat : Shading::smooth;
+        // texture-mapped where the plan says, and in a capture of a textured object (an
+        // imposter keeps the best picture)
+        const bool textured = obj.representation == tcr::Representation::textured || (tcr::is_imposter(obj.representation) && w.textured[mesh]);
         if (tcr::is_imposter(obj.representation)) {
             const tcr::ImposterState& im = rt.imposter(id);
             walk::Renderer::Draw quad = d;
@@ -247,6 +304,13 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
             if (parts[p].index_count > 0) {
                 d.first = at + parts[p].first_index;
                 d.index_count = parts[p].index_count;
+                if (textured && w.image_handles[mesh][p] >= 0) {
+                    walk::Renderer::Draw t = d;
+                    t.shading = Shading::textured;
+                    t.image = uint32_t(w.image_handles[mesh][p]);
+                    draws.push_back(t);
+                    continue;
+                }
                 draws.push_back(d);
             }
         at += size_t(e.triangle_count) * 3;
@@ -270,9 +334,18 @@ struct Reference {
             indices.resize(indices.size() + size_t(mesh.triangle_count) * 3);
             tom::extract(mesh, mesh.vertex_count, indices.data() + first[m], size_t(mesh.triangle_count) * 3);
         }
-        for (size_t id = 0; id < w.scene.instances.size(); ++id) {
+        for (size_t id = 0; id < w.scene.instances.size(); ++id) {  // one draw a part, textured where it has an image
             const uint32_t m = w.scene.instances[id].mesh;
-            draws.push_back({handles[m], w.transforms[id].data(), first[m], w.meshes[m]->triangle_count * 3, {kSand[0], kSand[1], kSand[2]}});
+            const tom::MeshView& mesh = *w.meshes[m];
+            std::vector<tom::PartDraw> parts(tom::part_count(mesh));
+            std::vector<uint32_t> scratch(size_t(mesh.triangle_count) * 3);
+            tom::extract_parts(mesh, mesh.vertex_count, scratch.data(), scratch.size(), parts.data());
+            for (uint32_t p = 0; p < parts.size(); ++p) {
+                if (parts[p].index_count == 0) continue;
+                walk::Renderer::Draw d{handles[m], w.transforms[id].data(), first[m] + parts[p].first_index, parts[p].index_count, {kSand[0], kSand[1], kSand[2]}};
+                if (w.textured[m] && w.image_handles[m][p] >= 0) d.shading = walk::Renderer::Shading::textured, d.image = uint32_t(w.image_handles[m][p]);
+                draws.push_back(d);
+            }
         }
         fs::remove_all(folder);
         fs::create_directories(folder);
@@ -399,13 +472,15 @@ struct PathRun {
         fp.hysteresis = o.hysteresis;
         fp.menu.flat = fp.menu.imposters = (o.representations == "all" || o.representations == "simple") && !levels_only;
         fp.menu.meshed = o.representations == "all" && !levels_only;
+        fp.menu.textured = fp.menu.flat;
         fp.menu.meshed_grid = o.meshed_grid;
         fp.menu.flat_error_factor = o.flat_error_factor;
         fp.menu.imposter_max_px = o.imposter_max_px;
         fp.menu.imposter_error_factor = o.imposter_error_factor;
         fp.menu.refresh_share = o.refresh_share;
-        if (none) {
+        if (none) {  // full detail, each object its best way: texture-mapped where it has a texture
             fp.menu = tcr::Menu();
+            fp.menu.textured = true;
             fp.budget_ms = 1e12;
             fp.max_error_px = 0;
         }
@@ -444,6 +519,7 @@ struct PathRun {
         row.imposters = r.imposters;
         row.refreshes = r.refreshes;
         row.meshed = r.meshed;
+        row.textured = r.textured;
         row.visible_triangles = r.visible_triangles;
         row.drawn_triangles = r.triangles;
         row.benefit = r.benefit;
@@ -484,6 +560,7 @@ struct PathRun {
         renderer->save_png(base + ".png");
         std::vector<walk::Renderer::Draw> coloured = draws;
         for (walk::Renderer::Draw& d : coloured) {
+            if (d.shading == walk::Renderer::Shading::textured) d.shading = walk::Renderer::Shading::smooth;  // the colour alone
             const tcr::ObjectResult& obj = rt.object(d.tag);
             const tom::MeshView& mesh = *w.meshes[w.scene.instances[d.tag].mesh];
             const uint32_t level = tcr::is_imposter(obj.representation) ? tom::active_triangle_count(mesh, rt.imposter(d.tag).vertices) : obj.triangles;
@@ -658,7 +735,7 @@ struct Frame {
 // `repeats` times in the frame (up to 64), toward kCalibrationTriangles a frame, so that even a
 // small level's time stands well above the empty frame's jitter; the median of 7 frames.
 tcr::CostSample sample(const tom::MeshView& mesh, uint32_t handle, const Config& cfg, const tcr::Camera& cam, double empty_ms,
-                       walk::Renderer& renderer, Frame& f, walk::Renderer::Shading shading = walk::Renderer::Shading::smooth) {
+                       walk::Renderer& renderer, Frame& f, walk::Renderer::Shading shading = walk::Renderer::Shading::smooth, uint32_t image = 0) {
     double d2 = 0;
     float c[3];
     for (int k = 0; k < 3; ++k) {
@@ -681,6 +758,7 @@ tcr::CostSample sample(const tom::MeshView& mesh, uint32_t handle, const Config&
         t = {s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, x - s * c[0], y - s * c[1], -cfg.distance - s * c[2], 1};
         f.draws.push_back({handle, t.data(), 0, tris * 3, {kGrey[0], kGrey[1], kGrey[2]}});
         f.draws.back().shading = shading;
+        f.draws.back().image = image;
         pixels += tcr::project_box(cam, t.data(), box).coverage_px;
     }
     const int repeats = std::max(1, std::min(64, int(std::ceil(kCalibrationTriangles / (double(tris) * copies)))));
@@ -840,6 +918,22 @@ void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<
     m.flat_t_tri_ms = fit.model.t_tri_ms;
     m.flat_t_vert_ms = fit.model.t_vert_ms;
     m.flat_t_pix_ms = fit.model.t_pix_ms;
+    // texture mapping: the same draws through the textured program, a 256 x 256 checker bound
+    // (what a texture fetch costs does not depend on the picture)
+    std::vector<unsigned char> checker(256 * 256 * 4);
+    for (size_t i = 0; i < 256 * 256; ++i) {
+        const unsigned char v = ((i % 256) / 16 + (i / 256) / 16) % 2 ? 230 : 60;
+        checker[4 * i] = checker[4 * i + 1] = checker[4 * i + 2] = v, checker[4 * i + 3] = 255;
+    }
+    const uint32_t image = renderer.add_image(256, 256, checker.data());
+    std::vector<tcr::CostSample> textured;
+    for (size_t mi = 0; mi < std::min<size_t>(w.meshes.size(), 2); ++mi)
+        for (const calib::Config& cfg : calib::configs())
+            textured.push_back(calib::sample(*w.meshes[mi], handles[mi], cfg, cam, empty_ms, renderer, frame, walk::Renderer::Shading::textured, image));
+    const tcr::CalibrationResult textured_fit = tcr::fit_cost_model(textured);
+    m.textured_t_tri_ms = textured_fit.model.t_tri_ms;
+    m.textured_t_vert_ms = textured_fit.model.t_vert_ms;
+    m.textured_t_pix_ms = textured_fit.model.t_pix_ms;
     std::vector<double> overheads;
     for (double fraction : {0.4, 0.05})
         for (uint32_t side : {64u, 256u}) overheads.push_back(calib::refresh_overhead(*w.meshes[0], handles[0], fraction, side, m, cam, empty_ms, renderer, frame));
@@ -873,9 +967,11 @@ void calibrate_ways(const World& w, walk::Renderer& renderer, const std::vector<
         m.imposter_t_setup_ms = std::max(1e-6, (r0 - s01 * m.imposter_t_pix_ms) / s00);
     }
     std::fprintf(log,
-                 "ways: flat t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms (fit %.1f%% mean relative error over %zu samples); refresh overhead %.4g ms; "
+                 "ways: flat t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms (fit %.1f%% mean relative error over %zu samples); "
+                 "textured t_tri %.4g ms, t_vert %.4g ms, t_pix %.4g ms (fit %.1f%%); refresh overhead %.4g ms; "
                  "imposter quad %.4g ms + %.4g ms a pixel; meshed imposter + %.4g ms a depth-mesh triangle, its refresh + %.4g ms\n",
-                 m.flat_t_tri_ms, m.flat_t_vert_ms, m.flat_t_pix_ms, 100 * fit.mean_relative_error, flat.size(), m.refresh_t_setup_ms, m.imposter_t_setup_ms,
+                 m.flat_t_tri_ms, m.flat_t_vert_ms, m.flat_t_pix_ms, 100 * fit.mean_relative_error, flat.size(), m.textured_t_tri_ms, m.textured_t_vert_ms,
+                 m.textured_t_pix_ms, 100 * textured_fit.mean_relative_error, m.refresh_t_setup_ms, m.imposter_t_setup_ms,
                  m.imposter_t_pix_ms, m.meshed_t_tri_ms, m.meshed_refresh_t_setup_ms);
 }
 
@@ -981,7 +1077,7 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "error: give --scene (or --make-scene)\n");
             return 2;
         }
-        const World w = load_world(o.scene);
+        World w = load_world(o.scene);
         std::unique_ptr<walk::Renderer> renderer;
         std::vector<uint32_t> handles;
         if (!o.simulate || !calibrate_out.empty()) {
@@ -990,6 +1086,7 @@ int main(int argc, char** argv) {
         } else {
             handles.resize(w.meshes.size());
         }
+        load_images(w, renderer.get());
         if (!calibrate_out.empty()) {
             const tcr::CostModel m = calibrate(w, *renderer, handles, stdout);
             tcr::write_cost_model(calibrate_out, m, "tcrwalk --calibrate on " + renderer->description());
@@ -1046,12 +1143,12 @@ int main(int argc, char** argv) {
             if (!o.out.empty()) {
                 std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
                 csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap,"
-                       "flat_objects,imposters,imposter_refreshes,meshed_imposters\n";
+                       "flat_objects,imposters,imposter_refreshes,meshed_imposters,textured_objects\n";
                 for (const Row& r : rows)
                     csv << r.frame << ',' << r.visible_objects << ',' << r.drawn_objects << ',' << r.visible_triangles << ',' << r.drawn_triangles << ','
                         << r.predicted_ms << ',' << r.measured_ms << ',' << r.render_ms << ',' << r.cull_ms << ',' << r.optimize_ms << ',' << r.extract_ms
                         << ',' << r.benefit << ',' << (std::isnan(r.gap) ? std::string("") : std::to_string(r.gap)) << ',' << r.flat_objects << ','
-                        << r.imposters << ',' << r.refreshes << ',' << r.meshed << '\n';
+                        << r.imposters << ',' << r.refreshes << ',' << r.meshed << ',' << r.textured << '\n';
             }
         }
         if (reference) {
@@ -1082,6 +1179,7 @@ int main(int argc, char** argv) {
             j["psnr_mean"] = or_null(s.psnr_mean);
             j["representations"] = ends_with_levels(s.selector) ? std::string("levels") : o.representations;
             j["flat_objects_mean"] = s.flat_mean;
+            j["textured_objects_mean"] = s.textured_mean;
             j["imposters_drawn_mean"] = s.imposters_mean;
             j["imposter_refreshes_mean"] = s.refreshes_mean;
             j["meshed_imposters_mean"] = s.meshed_mean;
@@ -1093,14 +1191,14 @@ int main(int argc, char** argv) {
             for (const auto& j : out) std::printf("%s\n", j.dump().c_str());
         } else {
             const bool quality = reference != nullptr;
-            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s | %27s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
+            std::printf("\n%-8s | %23s | %17s | %7s | %7s | %12s %12s | %34s%s\n", "", "frame time ms", "compute ms", ">1.1 B", "pred.", "drawn", "visible",
                         "objects a frame", quality ? " | image vs full detail" : "");
-            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s | %6s %6s %6s %6s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
-                        "tris mean", "tris mean", "flat", "impost", "meshed", "renew", quality ? " | SSIM mean    min  PSNR dB" : "");
+            std::printf("%-8s | %7s %7s %7s | %8s %8s | %7s | %7s | %12s %12s | %6s %6s %6s %6s %6s%s\n", "selector", "mean", "max", "std", "mean", "max", "frames", "error",
+                        "tris mean", "tris mean", "flat", "textur", "impost", "meshed", "renew", quality ? " | SSIM mean    min  PSNR dB" : "");
             for (const Summary& s : summaries) {
-                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f | %6.1f %6.1f %6.1f %6.2f", s.selector.c_str(), s.mean, s.max, s.std,
-                            s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible,
-                            s.flat_mean, s.imposters_mean, s.meshed_mean, s.refreshes_mean);
+                std::printf("%-8s | %7.2f %7.2f %7.2f | %8.3f %8.3f | %6.1f%% | %6.1f%% | %12.0f %12.0f | %6.1f %6.1f %6.1f %6.1f %6.2f", s.selector.c_str(), s.mean, s.max,
+                            s.std, s.compute_mean, s.compute_max, 100 * s.over, std::isnan(s.prediction_error) ? 0.0 : 100 * s.prediction_error, s.drawn, s.visible,
+                            s.flat_mean, s.textured_mean, s.imposters_mean, s.meshed_mean, s.refreshes_mean);
                 if (quality) std::printf(" |    %.4f %.4f %8.2f", s.ssim_mean, s.ssim_min, s.psnr_mean);
                 std::printf("\n");
             }

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # The walkthrough end to end on a small scene: a scene file, a calibration on the headless
 # renderer, a short real-rendered path with screenshots, and a simulated path in which the
-# barrier and exact selectors must hold the budget against the calibrated noise.
+# barrier and exact selectors must hold the budget against the calibrated noise. The scene has
+# a textured mesh (the spider of assimp's OBJ models, its images copied beside its .tom).
 set -u
 tools="$1"; walk="$2"; data="$3"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 . "$(dirname "$0")/check.sh"
-"$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
+"$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" "$data/assimp/OBJ/spider.obj" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
+cp "$data"/assimp/OBJ/*.jpg "$work/meshes/"
 check "a scene file is made" "$walk" --make-scene "$work/scene.txt" --meshes "$work"/meshes/*.tom --instances 60 --seed 3
 check "the scene file lists meshes and instances" test "$(grep -c '^instance' "$work/scene.txt")" -eq 60
 check "calibration on the headless renderer" "$walk" --scene "$work/scene.txt" --calibrate "$work/calibration.txt" --width 320 --height 240
@@ -53,6 +55,7 @@ assert k['flat_t_tri_ms'] + k['flat_t_vert_ms'] > 0, k
 assert k['imposter_t_setup_ms'] + 1000 * k['imposter_t_pix_ms'] > 0, k
 assert k['refresh_t_setup_ms'] > 0, k
 assert k['meshed_t_tri_ms'] > 0 and k['meshed_refresh_t_setup_ms'] > 0, k
+assert k['textured_t_tri_ms'] + k['textured_t_vert_ms'] > 0, k
 "
 check "levels alone draw no imposter; the menu's imposters are counted and their renewals bounded" /usr/bin/python3 -c "
 import csv, json
@@ -62,6 +65,8 @@ assert lv['representations'] == 'levels' and menu['representations'] == 'all', (
 assert lv['imposters_drawn_mean'] == 0 and lv['imposter_refreshes_mean'] == 0 and lv['flat_objects_mean'] == 0, lv
 assert 0 <= menu['imposter_refreshes_mean'] <= menu['imposters_drawn_mean'], menu
 assert lv['meshed_imposters_mean'] == 0 and 0 <= menu['meshed_imposters_mean'] <= menu['imposters_drawn_mean'], (lv, menu)
+# the spider's instances have a texture: the menu draws some of them texture-mapped, levels alone none
+assert lv['textured_objects_mean'] == 0 and menu['textured_objects_mean'] > 0, (lv, menu)
 rows = list(csv.DictReader(open('$work/menu/frames-exact.csv')))
 assert all(int(r['imposter_refreshes']) <= int(r['imposters']) and int(r['meshed_imposters']) <= int(r['imposters']) for r in rows), rows
 for r in (lv, menu): assert 0 < r['ssim_mean'] < 1, r

@@ -511,3 +511,47 @@ TEST_CASE("menus: meshed imposters outlast simple ones for a fast viewer and dra
         CHECK(simple_only.meshed == 0);
     }
 }
+
+TEST_CASE("menus: texture mapping for the textured objects alone, costed as calibrated", "[tcr][runtime][menu][textured]") {
+    SceneFixture fx;
+    tcr::CostModel m = model();
+    m.textured_t_tri_ms = 3e-5;  // dearer than smooth shading's 2e-5 a triangle
+    m.textured_t_vert_ms = 1e-5;
+    m.textured_t_pix_ms = 1.5e-6;
+    std::vector<uint32_t> buffer(80000 * 3);
+    for (tcr::SelectorKind k : {tcr::SelectorKind::exact, tcr::SelectorKind::greedy}) {
+        INFO(tcr::selector_name(k));
+        tcr::Runtime rt(m, k);
+        fill_scene(rt, fx.file, 20);  // the minima fit: no object is left out
+        for (uint32_t id = 0; id < rt.object_count(); id += 2) rt.set_textured(id, true);
+        for (double budget : {4.0, 8.0}) {
+            tcr::FrameParams f;
+            f.camera = camera_at(4.0f);
+            f.budget_ms = budget;
+            f.correct_model = false;
+            f.menu.textured = true;
+            const tcr::FrameReport& r = rt.plan_frame(f);
+            INFO("budget " << budget << " visible " << r.visible << " drawn " << r.drawn << " textured " << r.textured << " predicted " << r.predicted_ms);
+            REQUIRE(r.drawn == r.visible);
+            CHECK(r.predicted_ms <= budget * (1 + 1e-9));
+            uint32_t textured = 0, textured_visible = 0;
+            for (uint32_t id = 0; id < rt.object_count(); ++id) {
+                const tcr::ObjectResult& o = rt.object(id);
+                textured_visible += o.visible && id % 2 == 0;
+                if (!o.drawn || o.representation != tcr::Representation::textured) continue;
+                ++textured;
+                CHECK(id % 2 == 0);  // only the objects that have a texture
+                CHECK(o.predicted_ms == Approx(m.textured_ms(o.triangles, o.vertices, o.coverage_px, o.inside_share)));
+                CHECK(rt.indices(id, buffer.data(), buffer.size()).triangle_count == o.triangles);  // drawn from its level
+            }
+            CHECK(textured == r.textured);
+            // half the error for half as much again a triangle: the larger budget textures most of them
+            if (budget > 5) CHECK(textured > textured_visible / 2);
+        }
+        tcr::FrameParams off;
+        off.camera = camera_at(4.0f);
+        off.budget_ms = 20.0;
+        off.correct_model = false;
+        CHECK(rt.plan_frame(off).textured == 0);  // no menu: the levels smooth-shaded
+    }
+}

@@ -5,6 +5,9 @@
 // meshed imposter does too, and seen from elsewhere keeps closer to its object than a simple one.
 
 #include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
 #include <cmath>
 #include <vector>
 
@@ -14,6 +17,8 @@
 #include "support.h"
 #include "tcr/runtime.h"
 #include "tcr/view.h"
+#include "tom/builder/builder.h"
+#include "tom/builder/mesh.h"
 #include "tom/builder/writer.h"
 #include "tom/format.h"
 
@@ -214,4 +219,90 @@ TEST_CASE("walk renderer: a meshed imposter keeps its object's shape as the view
     CHECK(meshed.overlap > simple.overlap + 0.05);
     CHECK(meshed.overlap > 0.8);
     CHECK(meshed.colour < 0.7 * simple.colour);
+}
+
+namespace {
+
+// A square [-1, 1]^2 in the plane z = 0 facing +z, a grid of 4 x 4 cells, texture coordinates
+// (x + 1) / 2, (y + 1) / 2.
+std::vector<uint8_t> textured_square() {
+    tom::Mesh m;
+    const int n = 4;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+            const float x = -1.0f + 2.0f * float(i) / n, y = -1.0f + 2.0f * float(j) / n;
+            m.positions.insert(m.positions.end(), {x, y, 0.0f});
+            m.normals.insert(m.normals.end(), {0.0f, 0.0f, 1.0f});
+            m.texcoords.insert(m.texcoords.end(), {0.5f * (x + 1.0f), 0.5f * (y + 1.0f)});
+        }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const uint32_t a = uint32_t(j * (n + 1) + i), b = a + 1, c = a + uint32_t(n) + 1, d = c + 1;
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+        }
+    tom::clean_mesh(m);
+    return tom::serialize({tom::build(m)});
+}
+
+} // namespace
+
+TEST_CASE("walk renderer: a texture-mapped mesh shows its image where its texture coordinates put it", "[walk][renderer][textured]") {
+    walk::Renderer renderer(kWidth, kHeight);
+    const std::vector<uint8_t> bytes = textured_square();
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size());
+    const tom::MeshView& mesh = file.mesh(0);
+    REQUIRE(mesh.texcoords != nullptr);
+    const uint32_t handle = renderer.add_mesh(mesh);
+    // a 2 x 2 checker, rows from the bottom: red, green / blue, white
+    const unsigned char checker[16] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255};
+    const uint32_t image = renderer.add_image(2, 2, checker);
+    std::vector<uint32_t> indices(size_t(mesh.triangle_count) * 3);
+    tom::extract(mesh, mesh.vertex_count, indices.data(), indices.size());
+    float view[16], projection[16], vp[16];
+    const float eye[3] = {0, 0, 3}, target[3] = {0, 0, 0}, up[3] = {0, 1, 0};
+    tcr::look_at(eye, target, up, view);
+    tcr::perspective(50.0f * 3.14159265f / 180.0f, float(kWidth) / float(kHeight), 0.1f, 100.0f, projection);
+    tcr::multiply(projection, view, vp);
+    static const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    walk::Renderer::Draw d{handle, identity, 0, uint32_t(indices.size()), {1, 1, 1}};
+    // the pixel at the centre of each quadrant, (+-0.5, +-0.5, 0)
+    auto at = [&](const std::vector<unsigned char>& pixels, float x, float y) {
+        const float cx = vp[0] * x + vp[4] * y + vp[12], cy = vp[1] * x + vp[5] * y + vp[13], cw = vp[3] * x + vp[7] * y + vp[15];
+        const size_t px = size_t((cx / cw + 1.0f) * 0.5f * kWidth), py = size_t((cy / cw + 1.0f) * 0.5f * kHeight);
+        return std::array<int, 3>{pixels[4 * (py * kWidth + px)], pixels[4 * (py * kWidth + px) + 1], pixels[4 * (py * kWidth + px) + 2]};
+    };
+    d.shading = walk::Renderer::Shading::textured;
+    d.image = image;
+    renderer.render(view, projection, {d}, indices, indices.size());
+    const std::vector<unsigned char> textured = renderer.read_pixels();
+    const auto red = at(textured, -0.5f, -0.5f), green = at(textured, 0.5f, -0.5f), blue = at(textured, -0.5f, 0.5f), white = at(textured, 0.5f, 0.5f);
+    INFO("red " << red[0] << "," << red[1] << "," << red[2] << " green " << green[0] << "," << green[1] << "," << green[2] << " blue " << blue[0] << ","
+                << blue[1] << "," << blue[2] << " white " << white[0] << "," << white[1] << "," << white[2]);
+    // lit by the front light's 0.47 (its 0.65 x cos), the image's colour at each quadrant
+    CHECK(red[0] > 90);
+    CHECK(red[1] + red[2] < 20);
+    CHECK(green[1] > 90);
+    CHECK(green[0] + green[2] < 20);
+    CHECK(blue[2] > 90);
+    CHECK(blue[0] + blue[1] < 20);
+    CHECK(std::min({white[0], white[1], white[2]}) > 90);
+    // the same draw smooth-shaded: one colour all over
+    d.shading = walk::Renderer::Shading::smooth;
+    renderer.render(view, projection, {d}, indices, indices.size());
+    const std::vector<unsigned char> plain = renderer.read_pixels();
+    CHECK(at(plain, -0.5f, -0.5f) == at(plain, 0.5f, 0.5f));
+    CHECK(at(plain, 0.5f, -0.5f) == at(plain, -0.5f, 0.5f));
+}
+
+TEST_CASE("walk renderer: an image that cannot be read is an error naming it", "[walk][renderer][textured]") {
+    walk::Renderer renderer(kWidth, kHeight);
+    const std::string missing = "/nonexistent/texture.png";
+    CHECK_THROWS_WITH(renderer.add_image(missing), Catch::Contains(missing));
+    const std::string broken = (std::filesystem::temp_directory_path() / "tom_walk_broken.png").string();
+    {
+        std::ofstream out(broken, std::ios::binary);
+        out << "\x89PNG\r\n\x1a\nnot a png at all";
+    }
+    CHECK_THROWS_WITH(renderer.add_image(broken), Catch::Contains(broken));
+    std::filesystem::remove(broken);
 }

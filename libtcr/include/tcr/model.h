@@ -26,6 +26,9 @@ struct CostModel {
     double flat_t_tri_ms = 0.0;     ///< flat shading: per triangle (its set-up is t_setup)
     double flat_t_vert_ms = 0.0;    ///< flat shading: per vertex
     double flat_t_pix_ms = 0.0;     ///< flat shading: per covered pixel
+    double textured_t_tri_ms = 0.0;   ///< texture mapping (Gouraud-lit, modulated by the texture): per triangle
+    double textured_t_vert_ms = 0.0;  ///< texture mapping: per vertex
+    double textured_t_pix_ms = 0.0;   ///< texture mapping: per covered pixel
     double imposter_t_setup_ms = 0.0;  ///< a simple imposter: its textured quad's draw
     double imposter_t_pix_ms = 0.0;    ///< a simple imposter: per covered pixel (texture fetch, alpha test)
     double refresh_t_setup_ms = 0.0;   ///< an imposter's refresh: binding its texture as the target, clearing it, the draw
@@ -48,6 +51,12 @@ struct CostModel {
         const double fill = flat_t_pix_ms * pixels;
         return t_setup_ms * draws + (geometry > fill ? geometry : fill);
     }
+    /// Time of one object drawn texture-mapped (as object_ms, with the texture-mapping coefficients).
+    double textured_ms(double triangles, double vertices, double pixels, double inside_share = 1.0, double draws = 1.0) const noexcept {
+        const double geometry = (textured_t_tri_ms * triangles + textured_t_vert_ms * vertices) * inside_share;
+        const double fill = textured_t_pix_ms * pixels;
+        return t_setup_ms * draws + (geometry > fill ? geometry : fill);
+    }
     /// Time of one simple imposter's quad covering `pixels`.
     double imposter_ms(double pixels) const noexcept { return imposter_t_setup_ms + imposter_t_pix_ms * pixels; }
     /// Time of one meshed imposter covering `pixels` over a depth mesh of `triangles`.
@@ -57,6 +66,7 @@ struct CostModel {
         return refresh_t_setup_ms + object_ms(triangles, vertices, texels, 1.0, draws);
     }
     bool has_flat() const noexcept { return flat_t_tri_ms > 0 || flat_t_vert_ms > 0 || flat_t_pix_ms > 0; }
+    bool has_textured() const noexcept { return textured_t_tri_ms > 0 || textured_t_vert_ms > 0 || textured_t_pix_ms > 0; }
     bool has_imposters() const noexcept { return imposter_t_setup_ms > 0 || imposter_t_pix_ms > 0; }
     bool has_meshed() const noexcept { return has_imposters() && (meshed_t_tri_ms > 0 || meshed_refresh_t_setup_ms > 0); }
     /// Fixed part of a frame: t_init + t_final + safety.

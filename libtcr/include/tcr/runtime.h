@@ -29,10 +29,11 @@
 
 namespace tcr {
 
-/// How an object is drawn (Funkhouser & Sequin's rendering algorithms; Pasman & Jansen's simple
-/// imposter: the object rendered into a texture from one viewpoint, drawn as one quad facing it;
-/// their meshed imposter: the same image over a coarse mesh of the capture's depth buffer).
-enum class Representation : uint8_t { smooth, flat, simple_imposter, meshed_imposter };
+/// How an object is drawn (Funkhouser & Sequin's rendering algorithms: Gouraud-shaded, flat-shaded,
+/// texture-mapped; Pasman & Jansen's simple imposter: the object rendered into a texture from one
+/// viewpoint, drawn as one quad facing it; their meshed imposter: the same image over a coarse
+/// mesh of the capture's depth buffer).
+enum class Representation : uint8_t { smooth, flat, simple_imposter, meshed_imposter, textured };
 inline bool is_imposter(Representation r) noexcept { return r == Representation::simple_imposter || r == Representation::meshed_imposter; }
 const char* representation_name(Representation r) noexcept;
 
@@ -41,6 +42,7 @@ const char* representation_name(Representation r) noexcept;
 /// only the exact and greedy selectors choose among ways; the others keep way 0.
 struct Menu {
     bool flat = false;                ///< flat shading, every level
+    bool textured = false;            ///< texture mapping, every level, for objects that have a texture (Runtime::set_textured)
     bool imposters = false;           ///< simple imposters, for objects whose sphere the eye is well outside
     bool meshed = false;              ///< meshed imposters too, where the cost model has them (CostModel::has_meshed)
     /// A meshed imposter's depth mesh: a grid of this many cells a side over the capture, two
@@ -52,6 +54,10 @@ struct Menu {
     /// facets show the level's approximation (Funkhouser's flat m = 1 in polygons against
     /// Gouraud's m = 2 in vertices); fitted to the measured image by tcrwalk (docs/CALIBRATION.md).
     double flat_error_factor = 2.0;
+    /// Texture mapping's projected error as a multiple of smooth shading's at the same level: the
+    /// texture shows the surface detail that the level's geometry and its plain colour do not
+    /// (Funkhouser's textured benefit above Gouraud's); below 1.
+    double textured_error_factor = 0.5;
     double imposter_max_px = 1.0;     ///< a capture is reused while its distortion (Pasman & Jansen 4.3) stays within this
     /// An imposter's projected error (captured level + distortion + magnification) as it weighs
     /// in the benefit: a billboard also loses the object's parallax and lighting between
@@ -149,6 +155,7 @@ struct FrameReport {
     bool deadline_hit = false;
     uint32_t iterations = 0;
     uint32_t flat = 0, imposters = 0, refreshes = 0;  ///< drawn flat-shaded; drawn as imposters (simple or meshed); of those, renewed
+    uint32_t textured = 0;      ///< drawn texture-mapped
     uint32_t meshed = 0;        ///< of the imposters, meshed ones
 };
 
@@ -161,6 +168,9 @@ public:
     uint32_t add_object(const tom::MeshView& mesh, const float transform[16], float weight = 1.0f);
     void set_transform(uint32_t id, const float transform[16]) noexcept;
     void set_weight(uint32_t id, float weight) noexcept;
+    /// Whether object `id` has a texture to be drawn with (its mesh's texture coordinates and a
+    /// material's image, which the renderer holds): only such objects are offered texture mapping.
+    void set_textured(uint32_t id, bool textured) noexcept { objects_[id].textured = textured; }
     void set_selector(SelectorKind selector) noexcept { selector_ = selector; }
     SelectorKind selector() const noexcept { return selector_; }
     void set_cost_model(const CostModel& model) noexcept { model_ = model; }
@@ -193,6 +203,7 @@ private:
         const tom::MeshView* mesh;
         float transform[16];
         float weight;
+        bool textured = false;
         Box box;
         double triangles, min_triangles, vertices_per_triangle;
         bool has_curve;
