@@ -1,14 +1,13 @@
 #!/usr/bin/env bash
 # The walkthrough end to end on a small scene: a scene file, a calibration on the headless
 # renderer, a short real-rendered path with screenshots, and a simulated path in which the
-# barrier and exact selectors must hold the budget against the calibrated noise. The scene has
-# a textured mesh (the spider of assimp's OBJ models, its images copied beside its .tom).
+# barrier and exact selectors must hold the budget against the calibrated noise; then a second
+# scene with a textured mesh (the spider of assimp's OBJ models, its images beside its .tom).
 set -u
 tools="$1"; walk="$2"; data="$3"; src="$(cd "$(dirname "$0")/../.." && pwd)"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 . "$(dirname "$0")/check.sh"
-"$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" "$data/assimp/OBJ/spider.obj" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
-cp "$data"/assimp/OBJ/*.jpg "$work/meshes/"
+"$tools/tombuild" "$data/meshes/fandisk.off" "$data/meshes/cow.off" "$data/meshes/elephant.off" -o "$work/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
 check "a scene file is made" "$walk" --make-scene "$work/scene.txt" --meshes "$work"/meshes/*.tom --instances 60 --seed 3
 check "the scene file lists meshes and instances" test "$(grep -c '^instance' "$work/scene.txt")" -eq 60
 check "calibration on the headless renderer" "$walk" --scene "$work/scene.txt" --calibrate "$work/calibration.txt" --width 320 --height 240
@@ -65,8 +64,6 @@ assert lv['representations'] == 'levels' and menu['representations'] == 'all', (
 assert lv['imposters_drawn_mean'] == 0 and lv['imposter_refreshes_mean'] == 0 and lv['flat_objects_mean'] == 0, lv
 assert 0 <= menu['imposter_refreshes_mean'] <= menu['imposters_drawn_mean'], menu
 assert lv['meshed_imposters_mean'] == 0 and 0 <= menu['meshed_imposters_mean'] <= menu['imposters_drawn_mean'], (lv, menu)
-# the spider's instances have a texture: the menu draws some of them texture-mapped, levels alone none
-assert lv['textured_objects_mean'] == 0 and menu['textured_objects_mean'] > 0, (lv, menu)
 rows = list(csv.DictReader(open('$work/menu/frames-exact.csv')))
 assert all(int(r['imposter_refreshes']) <= int(r['imposters']) and int(r['meshed_imposters']) <= int(r['imposters']) for r in rows), rows
 for r in (lv, menu): assert 0 < r['ssim_mean'] < 1, r
@@ -158,5 +155,26 @@ assert -1 <= j['lag1_autocorrelation'] <= 1, j
 "
 check "the noise test needs the renderer" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --noise-test 40 --simulate 2>/dev/null; test \$? -eq 2"
 check "a missing scene is an error" bash -c "! '$walk' --scene '$work/none.txt' --calibration '$work/calibration.txt' 2>/dev/null"
+
+# a textured scene: the spider (four parts, each its own image) among fandisks
+tex="$work/textured"
+"$tools/tombuild" "$data/assimp/OBJ/spider.obj" "$data/meshes/fandisk.off" -o "$tex/meshes" -q -j 2 || { echo "tombuild failed"; exit 1; }
+cp "$data"/assimp/OBJ/*.jpg "$tex/meshes/"
+check "a textured scene file is made" "$walk" --make-scene "$tex/scene.txt" --meshes "$tex"/meshes/*.tom --instances 20 --seed 5
+check "a real path on the textured scene" "$walk" --scene "$tex/scene.txt" --calibration "$work/calibration.txt" --selector none,exact,exact-levels \
+  --frames 20 --budget-ms "$budget" --width 320 --height 240 --out "$tex/run" --quality-every 10
+check "full detail is texture-mapped; the menu draws the spiders texture-mapped, the levels alone plain" /usr/bin/python3 -c "
+import json
+runs = {r['selector']: r for r in json.load(open('$tex/run/summary.json'))}
+assert runs['none']['ssim_mean'] == 1.0 and runs['none']['textured_objects_mean'] > 0, runs['none']
+assert runs['exact']['textured_objects_mean'] > 0 and runs['exact-levels']['textured_objects_mean'] == 0, runs
+"
+# one image missing is reported by name and its part drawn plain; one that is not an image
+# stops the run with an error naming it
+mv "$tex/meshes/SpiderTex.jpg" "$tex/SpiderTex.jpg.kept"
+check "a missing image is reported by name and the run goes on" bash -c "'$walk' --scene '$tex/scene.txt' --calibration '$work/calibration.txt' --selector exact --frames 10 --width 160 --height 120 --json 2>'$tex/missing.err' >/dev/null && grep -q 'SpiderTex.jpg' '$tex/missing.err'"
+printf 'not a jpeg' > "$tex/meshes/SpiderTex.jpg"
+check "an unreadable image is an error naming it" bash -c "'$walk' --scene '$tex/scene.txt' --calibration '$work/calibration.txt' --selector exact --frames 10 --width 160 --height 120 2>'$tex/broken.err' >/dev/null; test \$? -eq 1 && grep -q 'SpiderTex.jpg' '$tex/broken.err'"
+mv "$tex/SpiderTex.jpg.kept" "$tex/meshes/SpiderTex.jpg"
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]
