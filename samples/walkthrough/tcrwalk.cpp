@@ -327,22 +327,22 @@ struct Reference {
     std::string folder;             // OUT/quality: SELECTOR-FRAME.png beside reference-FRAME.png
 
     Reference(const World& w, const std::vector<uint32_t>& handles, const std::string& out) : folder((fs::path(out) / "quality").string()) {
+        // each mesh's full triangles once, with its part ranges; every instance draws them
+        std::vector<std::vector<tom::PartDraw>> parts(w.meshes.size());
         std::vector<size_t> first(w.meshes.size());
         for (size_t m = 0; m < w.meshes.size(); ++m) {
             const tom::MeshView& mesh = *w.meshes[m];
             first[m] = indices.size();
             indices.resize(indices.size() + size_t(mesh.triangle_count) * 3);
-            tom::extract(mesh, mesh.vertex_count, indices.data() + first[m], size_t(mesh.triangle_count) * 3);
+            parts[m].resize(tom::part_count(mesh));
+            tom::extract_parts(mesh, mesh.vertex_count, indices.data() + first[m], size_t(mesh.triangle_count) * 3, parts[m].data());
         }
         for (size_t id = 0; id < w.scene.instances.size(); ++id) {  // one draw a part, textured where it has an image
             const uint32_t m = w.scene.instances[id].mesh;
-            const tom::MeshView& mesh = *w.meshes[m];
-            std::vector<tom::PartDraw> parts(tom::part_count(mesh));
-            std::vector<uint32_t> scratch(size_t(mesh.triangle_count) * 3);
-            tom::extract_parts(mesh, mesh.vertex_count, scratch.data(), scratch.size(), parts.data());
-            for (uint32_t p = 0; p < parts.size(); ++p) {
-                if (parts[p].index_count == 0) continue;
-                walk::Renderer::Draw d{handles[m], w.transforms[id].data(), first[m] + parts[p].first_index, parts[p].index_count, {kSand[0], kSand[1], kSand[2]}};
+            for (uint32_t p = 0; p < parts[m].size(); ++p) {
+                const tom::PartDraw& part = parts[m][p];
+                if (part.index_count == 0) continue;
+                walk::Renderer::Draw d{handles[m], w.transforms[id].data(), first[m] + part.first_index, part.index_count, {kSand[0], kSand[1], kSand[2]}};
                 if (w.textured[m] && w.image_handles[m][p] >= 0) d.shading = walk::Renderer::Shading::textured, d.image = uint32_t(w.image_handles[m][p]);
                 draws.push_back(d);
             }
