@@ -10,7 +10,9 @@
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
+#include <initializer_list>
 #include <stdexcept>
+#include <string>
 
 #include "tcr/runtime.h"
 #include "tcr/view.h"
@@ -19,63 +21,62 @@ namespace walk {
 
 namespace {
 
-// The mesh shaders, smooth or flat: QUALIFIER is "" (Gouraud, interpolated) or "flat" (the
-// provoking vertex's shade over the whole triangle).
+// The mesh shaders, one source for Funkhouser & Sequin's three rendering algorithms, chosen by
+// the defines in front of it (mesh_program_source): FLAT gives the provoking vertex's shade to
+// the whole triangle, TEXTURED multiplies the Gouraud shade by the image at the vertex's texture
+// coordinates; neither is Gouraud shading.
 const char* kVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
+#ifdef TEXTURED
+layout(location = 2) in vec2 texcoord;
+out vec2 uv;
+#endif
 uniform mat4 model;
 uniform mat4 view_projection;
 uniform vec3 color;
-QUALIFIER out vec3 shade;
+SHADE out vec3 shade;
 void main() {
     vec3 n = normalize(mat3(model) * normal);
     // two directional lights and an ambient term, lit per vertex
     float d = 0.15 + 0.65 * max(dot(n, normalize(vec3(0.4, 0.8, 0.5))), 0.0) + 0.3 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.4))), 0.0);
     shade = color * d;
+#ifdef TEXTURED
+    uv = texcoord;
+#endif
     gl_Position = view_projection * model * vec4(position, 1.0);
 }
 )";
 
 const char* kFragment = R"(
-QUALIFIER in vec3 shade;
+SHADE in vec3 shade;
+#ifdef TEXTURED
+in vec2 uv;
+uniform sampler2D image;
+#endif
 out vec4 frag;
-void main() { frag = vec4(shade, 1.0); }
-)";
-
-// Texture mapping: the Gouraud shade of kVertex, multiplied by the image at the vertex's texture
-// coordinates (Funkhouser & Sequin's third rendering algorithm).
-const char* kTexturedVertex = R"(#version 330 core
-layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 normal;
-layout(location = 2) in vec2 texcoord;
-uniform mat4 model;
-uniform mat4 view_projection;
-uniform vec3 color;
-out vec3 shade;
-out vec2 uv;
 void main() {
-    vec3 n = normalize(mat3(model) * normal);
-    float d = 0.15 + 0.65 * max(dot(n, normalize(vec3(0.4, 0.8, 0.5))), 0.0) + 0.3 * max(dot(n, normalize(vec3(-0.6, 0.2, -0.4))), 0.0);
-    shade = color * d;
-    uv = texcoord;
-    gl_Position = view_projection * model * vec4(position, 1.0);
+#ifdef TEXTURED
+    frag = vec4(shade * texture(image, uv).rgb, 1.0);
+#else
+    frag = vec4(shade, 1.0);
+#endif
 }
 )";
 
-const char* kTexturedFragment = R"(#version 330 core
-in vec3 shade;
-in vec2 uv;
-uniform sampler2D image;
-out vec4 frag;
-void main() { frag = vec4(shade * texture(image, uv).rgb, 1.0); }
-)";
-
-// A simple imposter: one quad from four corners (a triangle strip of gl_VertexID 0..3), its
-// texture alpha-tested so the object's outline, not the quad, shows.
-// An imposter is an instance of a four-vertex strip: its quad's corners, its cell in the array
-// texture, its layer, colour and tint come per instance, so a chunk's imposters are one draw.
-const char* kImposterVertex = R"(#version 330 core
+// The imposters' vertex shader. A simple imposter (no define) is one quad from four corners,
+// an instance of a four-vertex strip (gl_VertexID 0..3); a meshed imposter (MESHED) is its depth
+// mesh's vertices in world space, each with its texture point in the capture. Either way the
+// capture's cell, colour and tint and layer come with each instance or vertex, so a chunk's
+// imposters are one draw.
+const char* kImposterVertex = R"(
+#ifdef MESHED
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec2 uv_in;
+layout(location = 2) in vec4 cell_in;
+layout(location = 3) in vec4 look_in;
+layout(location = 4) in float layer_in;
+#else
 layout(location = 0) in vec3 c0;
 layout(location = 1) in vec3 c1;
 layout(location = 2) in vec3 c2;
@@ -83,48 +84,32 @@ layout(location = 3) in vec3 c3;
 layout(location = 4) in vec4 cell_in;   // the capture's square in its layer: origin, side, half a texel (texture units)
 layout(location = 5) in vec4 look_in;   // colour, tint
 layout(location = 6) in float layer_in;
+#endif
 uniform mat4 view_projection;
 out vec2 uv;
 flat out vec4 cell;
 flat out vec4 look;
 flat out float layer;
 void main() {
+    cell = cell_in;
+    look = look_in;
+    layer = layer_in;
+#ifdef MESHED
+    uv = uv_in;
+    gl_Position = view_projection * vec4(position, 1.0);
+#else
     const int corner[4] = int[4](0, 1, 3, 2);
     const vec2 uvs[4] = vec2[4](vec2(0, 0), vec2(1, 0), vec2(1, 1), vec2(0, 1));
     vec3 corners[4] = vec3[4](c0, c1, c2, c3);
     int c = corner[gl_VertexID];
     uv = uvs[c];
-    cell = cell_in;
-    look = look_in;
-    layer = layer_in;
     gl_Position = view_projection * vec4(corners[c], 1.0);
-}
-)";
-
-// A meshed imposter: its depth mesh's vertices in world space, each with its texture point in
-// the capture and, repeated, its cell, colour and tint and layer, so a chunk's meshes are one draw.
-const char* kMeshedVertex = R"(#version 330 core
-layout(location = 0) in vec3 position;
-layout(location = 1) in vec2 uv_in;
-layout(location = 2) in vec4 cell_in;
-layout(location = 3) in vec4 look_in;
-layout(location = 4) in float layer_in;
-uniform mat4 view_projection;
-out vec2 uv;
-flat out vec4 cell;
-flat out vec4 look;
-flat out float layer;
-void main() {
-    uv = uv_in;
-    cell = cell_in;
-    look = look_in;
-    layer = layer_in;
-    gl_Position = view_projection * vec4(position, 1.0);
+#endif
 }
 )";
 
 // Both imposters' fragments: the capture's texel, clamped to its cell, alpha-tested.
-const char* kImposterFragment = R"(#version 330 core
+const char* kImposterFragment = R"(
 in vec2 uv;
 flat in vec4 cell;
 flat in vec4 look;
@@ -166,12 +151,11 @@ GLuint link(const std::string& vertex, const std::string& fragment) {
     return program;
 }
 
-// "#version 330 core" and the qualifier in front of a mesh shader
-std::string with_qualifier(const char* source, const char* qualifier) {
-    std::string s = std::string("#version 330 core\n") + source;
-    const size_t at = s.find("QUALIFIER");
-    s.replace(at, 9, qualifier);
-    return s;
+// A shader source behind "#version 330 core" and its defines (each "NAME" or "NAME VALUE").
+std::string with_defines(const char* source, std::initializer_list<const char*> defines) {
+    std::string s = "#version 330 core\n";
+    for (const char* d : defines) s += std::string("#define ") + d + "\n";
+    return s + source;
 }
 
 } // namespace
@@ -220,9 +204,10 @@ struct Renderer::Impl {
     std::vector<Cell> cells;                  // by slot
     std::vector<Cell> free_cells[kLevels];    // by log2(side / kMinCell)
 
-    MeshProgram make_mesh_program(const char* qualifier) {
+    // a mesh program for one rendering algorithm (the defines of kVertex and kFragment)
+    MeshProgram make_mesh_program(std::initializer_list<const char*> defines) {
         MeshProgram p;
-        p.program = link(with_qualifier(kVertex, qualifier), with_qualifier(kFragment, qualifier));
+        p.program = link(with_defines(kVertex, defines), with_defines(kFragment, defines));
         p.u_model = glGetUniformLocation(p.program, "model");
         p.u_vp = glGetUniformLocation(p.program, "view_projection");
         p.u_color = glGetUniformLocation(p.program, "color");
@@ -395,17 +380,11 @@ Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Imp
     impl_->color.resize(size_t(width) * height * 4);
     if (!OSMesaMakeCurrent(impl_->context, impl_->color.data(), GL_UNSIGNED_BYTE, GLsizei(width), GLsizei(height)))
         throw std::runtime_error("OSMesa: cannot make the context current");
-    impl_->smooth = impl_->make_mesh_program("");
-    impl_->flat = impl_->make_mesh_program("flat");
-    {
-        Impl::MeshProgram& t = impl_->textured;
-        t.program = link(kTexturedVertex, kTexturedFragment);
-        t.u_model = glGetUniformLocation(t.program, "model");
-        t.u_vp = glGetUniformLocation(t.program, "view_projection");
-        t.u_color = glGetUniformLocation(t.program, "color");
-        impl_->u_textured_image = glGetUniformLocation(t.program, "image");
-    }
-    impl_->imposter_program = link(kImposterVertex, kImposterFragment);
+    impl_->smooth = impl_->make_mesh_program({"SHADE"});
+    impl_->flat = impl_->make_mesh_program({"SHADE flat"});
+    impl_->textured = impl_->make_mesh_program({"SHADE", "TEXTURED"});
+    impl_->u_textured_image = glGetUniformLocation(impl_->textured.program, "image");
+    impl_->imposter_program = link(with_defines(kImposterVertex, {}), with_defines(kImposterFragment, {}));
     impl_->u_imposter_vp = glGetUniformLocation(impl_->imposter_program, "view_projection");
     impl_->u_image = glGetUniformLocation(impl_->imposter_program, "image");
     glGenVertexArrays(1, &impl_->quad_vao);
@@ -421,7 +400,7 @@ Renderer::Renderer(uint32_t width, uint32_t height) : impl_(std::make_unique<Imp
         glVertexAttribDivisor(a, 1);
         offset += size_t(sizes[a]);
     }
-    impl_->meshed_program = link(kMeshedVertex, kImposterFragment);
+    impl_->meshed_program = link(with_defines(kImposterVertex, {"MESHED"}), with_defines(kImposterFragment, {}));
     impl_->u_meshed_vp = glGetUniformLocation(impl_->meshed_program, "view_projection");
     impl_->u_meshed_image = glGetUniformLocation(impl_->meshed_program, "image");
     glGenVertexArrays(1, &impl_->meshed_vao);
