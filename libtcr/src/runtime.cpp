@@ -101,6 +101,10 @@ void depth_mesh(const float view[16], const float projection[16], const float* d
     const double right[3] = {view[0], view[4], view[8]}, up[3] = {view[1], view[5], view[9]}, back[3] = {view[2], view[6], view[10]};
     double eye[3];
     eye_of(view, eye);
+    if (grid == 0) {  // one vertex: the capture's centre
+        for (int k = 0; k < 3; ++k) positions[k] = float(eye[k] - centre * back[k]);
+        return;
+    }
     const double cell = double(side) / grid;
     for (uint32_t j = 0; j <= grid; ++j)
         for (uint32_t i = 0; i <= grid; ++i) {

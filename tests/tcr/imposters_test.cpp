@@ -238,3 +238,17 @@ TEST_CASE("a meshed imposter's depth mesh: on the capture's rays, at the object 
             CHECK(from_eye_along_axis == Approx(expected).epsilon(1e-4));
         }
 }
+
+TEST_CASE("a depth mesh of grid 0 is the capture's centre alone", "[tcr][imposters][meshed]") {
+    tcr::ImposterState s;
+    s.valid = true;
+    s.eye[0] = 2, s.eye[1] = -1, s.eye[2] = 7;
+    s.centre[0] = 0.5f, s.centre[1] = 0.25f, s.centre[2] = -1;
+    s.radius = 1.5f;
+    float view[16], projection[16];
+    tcr::imposter_camera(s, view, projection);
+    const std::vector<float> depth(16, 0.5f);
+    float position[3] = {NAN, NAN, NAN};
+    tcr::depth_mesh(view, projection, depth.data(), 4, 0, position);
+    for (int k = 0; k < 3; ++k) CHECK(position[k] == Approx(s.centre[k]).margin(1e-4));
+}

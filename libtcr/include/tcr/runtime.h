@@ -118,7 +118,9 @@ void imposter_quad(const ImposterState& s, float corners[12]) noexcept;
 /// cell: inside the object its own depth, at its outline the outline's, never the far plane (the
 /// paper's stretched edges, section 6.2; the nearest depth instead would pull the outline forward
 /// and exaggerate its parallax). Where no texel within a cell holds the object, at the depth of
-/// the capture's centre, as a simple imposter's quad./// `view` and `projection` are the capture's (imposter_camera). Texture coordinates are (i, j) / grid.
+/// the capture's centre, as a simple imposter's quad. `view` and `projection` are the capture's
+/// (imposter_camera). Texture coordinates are (i, j) / grid. A grid of 0 gives one vertex, the
+/// capture's centre (a mesh with no triangles).
 void depth_mesh(const float view[16], const float projection[16], const float* depth, uint32_t side, uint32_t grid, float* positions) noexcept;
 
 struct ObjectResult {
