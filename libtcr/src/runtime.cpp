@@ -338,7 +338,7 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
             }
             const uint32_t vertices = mo.capture_vertices, triangles = mo.capture_triangles;
             const uint32_t side = power_of_two_at_least(needed_px, menu.texture_min, menu.texture_max);
-            const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts);
+            const double refresh_ms = model_.refresh_ms(triangles, vertices, double(side) * side, parts, o.textured);  // a textured object is captured texture-mapped
             const double d = from_centre - radius;
             const uint32_t grid = meshed ? menu.meshed_grid : 0;
             if (mo.lifetime_distance < 0 || std::abs(d - mo.lifetime_distance) > 0.1 * d || mo.lifetime_grid != grid) {  // Pasman's lifetime changes slowly with distance

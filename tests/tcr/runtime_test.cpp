@@ -555,3 +555,32 @@ TEST_CASE("menus: texture mapping for the textured objects alone, costed as cali
         CHECK(rt.plan_frame(off).textured == 0);  // no menu: the levels smooth-shaded
     }
 }
+
+TEST_CASE("menus: a textured object's capture is costed texture-mapped", "[tcr][runtime][menu][textured]") {
+    SceneFixture fx;
+    tcr::CostModel m = imposter_model();
+    m.textured_t_tri_ms = 6e-4;  // three times smooth shading's 2e-4 a triangle
+    m.textured_t_pix_ms = 1e-5;
+    tcr::Runtime rt(m, tcr::SelectorKind::exact);
+    fill_far(rt, fx.file);
+    for (uint32_t id = 0; id < rt.object_count(); id += 2) rt.set_textured(id, true);
+    uint32_t refreshed[2] = {0, 0};  // plain, textured
+    for (int frame = 0; frame < 20; ++frame) {
+        rt.plan_frame(menu_frame(4.0f, true));  // texture mapping itself is off the menu: captures still are mapped
+        for (uint32_t id = 0; id < rt.object_count(); ++id) {
+            const tcr::ObjectResult& o = rt.object(id);
+            if (!o.drawn || o.representation != tcr::Representation::simple_imposter || !o.refresh) continue;
+            const tcr::ImposterState& s = rt.imposter(id);
+            const bool textured = id % 2 == 0;
+            const double texels = double(s.texture_px) * s.texture_px, parts = tom::part_count(fx.file.mesh(0));
+            const double expected = m.imposter_ms(o.coverage_px) + m.refresh_ms(s.triangles, s.vertices, texels, parts, textured);
+            INFO("object " << id << " textured " << textured);
+            CHECK(o.predicted_ms == Approx(expected).epsilon(1e-9));
+            CHECK(expected != Approx(m.imposter_ms(o.coverage_px) + m.refresh_ms(s.triangles, s.vertices, texels, parts, !textured)));
+            ++refreshed[textured];
+        }
+    }
+    INFO("refreshed plain " << refreshed[0] << " textured " << refreshed[1]);
+    CHECK(refreshed[0] > 5);
+    CHECK(refreshed[1] > 5);
+}

@@ -61,9 +61,11 @@ struct CostModel {
     double imposter_ms(double pixels) const noexcept { return imposter_t_setup_ms + imposter_t_pix_ms * pixels; }
     /// Time of one meshed imposter covering `pixels` over a depth mesh of `triangles`.
     double meshed_ms(double pixels, double triangles) const noexcept { return imposter_ms(pixels) + meshed_t_tri_ms * triangles; }
-    /// Time of one refresh: the object at (triangles, vertices), whole, into a texture of `texels`.
-    double refresh_ms(double triangles, double vertices, double texels, double draws = 1.0) const noexcept {
-        return refresh_t_setup_ms + object_ms(triangles, vertices, texels, 1.0, draws);
+    /// Time of one refresh: the object at (triangles, vertices), whole, into a texture of `texels`;
+    /// texture-mapped when `textured` and texture mapping is calibrated, else smooth-shaded.
+    double refresh_ms(double triangles, double vertices, double texels, double draws = 1.0, bool textured = false) const noexcept {
+        const bool mapped = textured && has_textured();
+        return refresh_t_setup_ms + (mapped ? textured_ms(triangles, vertices, texels, 1.0, draws) : object_ms(triangles, vertices, texels, 1.0, draws));
     }
     bool has_flat() const noexcept { return flat_t_tri_ms > 0 || flat_t_vert_ms > 0 || flat_t_pix_ms > 0; }
     bool has_textured() const noexcept { return textured_t_tri_ms > 0 || textured_t_vert_ms > 0 || textured_t_pix_ms > 0; }

@@ -171,7 +171,8 @@ public:
     void set_transform(uint32_t id, const float transform[16]) noexcept;
     void set_weight(uint32_t id, float weight) noexcept;
     /// Whether object `id` has a texture to be drawn with (its mesh's texture coordinates and a
-    /// material's image, which the renderer holds): only such objects are offered texture mapping.
+    /// material's image, which the renderer holds): only such objects are offered texture mapping,
+    /// and their imposters' captures, drawn texture-mapped, are costed so (CostModel::refresh_ms).
     void set_textured(uint32_t id, bool textured) noexcept { objects_[id].textured = textured; }
     void set_selector(SelectorKind selector) noexcept { selector_ = selector; }
     SelectorKind selector() const noexcept { return selector_; }
