@@ -234,6 +234,7 @@ struct Options {
     double budget_ms = 40;
     uint32_t frames = 300;
     bool simulate = false, json = false;
+    bool sequential = false;      // each selector's whole path in turn instead of frame by frame (run_paths)
     uint32_t width = 640, height = 480;
     double optimize_share = 0.1;  // the optimiser's deadline, as a share of the budget
     double hysteresis = 0.05;
@@ -260,9 +261,12 @@ void ensure(std::vector<uint32_t>& v, size_t n) {
 // needed), one draw per object, or per part of a multi-part object (as the cost model counts
 // them), in `color` and the shading the runtime chose; an imposter as its quad or depth mesh,
 // after, when the runtime renews it, its level drawn into its texture (a capture, which for a
-// meshed imposter also remakes its depth mesh). Returns the frame's index count.
+// meshed imposter also remakes its depth mesh). Object id's texture is the renderer's slot
+// `slots + id`, so runs that share a renderer keep their captures apart. Returns the frame's
+// index count.
 size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<uint32_t>& mesh_handles, const float color[3],
-                     std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws, std::vector<walk::Renderer::Capture>& captures) {
+                     std::vector<uint32_t>& indices, std::vector<walk::Renderer::Draw>& draws, std::vector<walk::Renderer::Capture>& captures,
+                     uint32_t slots = 0) {
     using Shading = walk::Renderer::Shading;
     ensure(indices, size_t(rt.last_frame().triangles) * 3);
     draws.clear();
@@ -283,11 +287,11 @@ size_t extract_frame(const World& w, const tcr::Runtime& rt, const std::vector<u
             const tcr::ImposterState& im = rt.imposter(id);
             walk::Renderer::Draw quad = d;
             quad.shading = im.grid ? Shading::meshed : Shading::imposter;
-            quad.texture = id;
+            quad.texture = slots + id;
             if (!im.grid) tcr::imposter_quad(im, quad.corners);
             draws.push_back(quad);
             if (!obj.refresh) continue;
-            walk::Renderer::Capture c{id, im.texture_px, {}, {}, im.grid};
+            walk::Renderer::Capture c{slots + id, im.texture_px, {}, {}, im.grid};
             tcr::imposter_camera(im, c.view, c.projection);
             d.capture = int32_t(captures.size());
             captures.push_back(c);
@@ -407,6 +411,7 @@ struct PathRun {
     const std::vector<uint32_t>& mesh_handles;
     const bool none;           // full detail, no budget
     const bool levels_only;    // "SELECTOR-levels": TOM levels smooth-shaded, whatever --representations says
+    const uint32_t slots;      // its imposters' first texture slot in the shared renderer
     tcr::CostModel model;
     tcr::Runtime rt;
     std::vector<uint32_t> indices;
@@ -419,8 +424,9 @@ struct PathRun {
     std::array<double, 8> recent_cpu{};
 
     PathRun(const World& world, const std::string& selector, const Options& options, const tcr::CostModel& calibrated, walk::Renderer* r,
-            const std::vector<uint32_t>& handles)
-        : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), levels_only(ends_with_levels(selector)), model(allowance(calibrated, options)),
+            const std::vector<uint32_t>& handles, uint32_t first_slot)
+        : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), levels_only(ends_with_levels(selector)), slots(first_slot),
+          model(allowance(calibrated, options)),
           rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise) {
         add_objects(rt, w);
     }
@@ -450,7 +456,7 @@ struct PathRun {
             recent_cpu[k] = r.cull_ms + r.optimize_ms;
             ensure(indices, size_t(r.triangles) * 3);  // outside the timing
             const auto extract_start = Clock::now();
-            const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws, captures);
+            const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws, captures, slots);
             if (k > 0 && r.triangles > 0) extract_per_triangle = std::max(extract_per_triangle, ms_since(extract_start) / double(r.triangles));
             if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at, captures);
         }
@@ -525,7 +531,7 @@ struct PathRun {
         row.benefit = r.benefit;
         row.gap = r.gap;
         const auto extract_start = Clock::now();
-        index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws, captures);
+        index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws, captures, slots);
         row.extract_ms = ms_since(extract_start);
         double render_ms;
         if (renderer) {
@@ -579,31 +585,54 @@ struct PathRun {
     }
 };
 
-// A selector's run: the warm-up, then 8 frames at the path's first position, planned, drawn and
-// fed back as every frame is but not recorded (the runtime's model correction starts from this
-// scene's measured frames instead of the calibration's isolated objects, which would put the
-// first frames over the budget while the correction caught up), then the recorded path, with
-// screenshots at A, B and C.
-Summary run(const World& w, const std::string& selector, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
-            const std::vector<uint32_t>& mesh_handles, std::vector<Row>& rows, const Reference* reference) {
-    PathRun path(w, selector, o, calibrated, renderer, mesh_handles);
-    path.warm_up();
+// The selectors' runs along the path, interleaved: each selector's warm-up, then 8 frames at the
+// path's first position, planned, drawn and fed back as every frame is but not recorded (the
+// runtime's model correction starts from this scene's measured frames instead of the
+// calibration's isolated objects, which would put the first frames over the budget while the
+// correction caught up), then the recorded path, frame f of every selector in turn before frame
+// f + 1, with screenshots at A, B and C. Interleaved, every selector meets the machine's slow and
+// fast spells alike (run one after another, exact-levels drew 313k to 460k triangles a frame over
+// one stretch of the path in three runs, more than the selectors differ); `--sequential` runs
+// them one after another.
+// Each run's imposters have their own texture slots in the shared renderer.
+std::vector<Summary> run_paths(const World& w, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
+                               const std::vector<uint32_t>& mesh_handles, std::vector<std::vector<Row>>& rows, const Reference* reference) {
+    const uint32_t objects = uint32_t(w.scene.instances.size());
+    std::vector<std::unique_ptr<PathRun>> paths;
+    for (size_t k = 0; k < o.selectors.size(); ++k)
+        paths.push_back(std::make_unique<PathRun>(w, o.selectors[k], o, calibrated, renderer, mesh_handles, uint32_t(k) * objects));
     uint32_t shots[3];
     walk::viewpoints(o.frames, shots);
-    rows.clear();
-    const int64_t settle = path.none ? 0 : 8;  // full detail has no budget to settle on
-    for (int64_t step = -settle; step < int64_t(o.frames); ++step) {
+    rows.assign(paths.size(), {});
+    const int64_t settle = 8;
+    // one selector's step (full detail has no budget to settle on: it starts at the path)
+    auto step_of = [&](size_t k, int64_t step) {
+        PathRun& path = *paths[k];
+        if (path.none && step < 0) return;
         const uint32_t f = uint32_t(std::max<int64_t>(step, 0));
         size_t index_count = 0;
         const Row row = path.frame(f, size_t(step + settle), index_count);
-        if (step < 0) continue;
-        rows.push_back(row);
+        if (step < 0) return;
+        rows[k].push_back(row);
+        const std::string& selector = o.selectors[k];
         const bool measured = reference && renderer && f % o.quality_every == 0;
         if (measured) reference->save(*renderer, selector, f);  // (off the clock: the frame was timed)
         if (renderer && !o.out.empty() && (f == shots[0] || f == shots[1] || f == shots[2]))
             path.save_shots(selector, f == shots[0] ? 'A' : (f == shots[1] ? 'B' : 'C'), f, index_count);
+    };
+    if (o.sequential) {
+        for (size_t k = 0; k < paths.size(); ++k) {
+            paths[k]->warm_up();
+            for (int64_t step = -settle; step < int64_t(o.frames); ++step) step_of(k, step);
+        }
+    } else {
+        for (const std::unique_ptr<PathRun>& path : paths) path->warm_up();
+        for (int64_t step = -settle; step < int64_t(o.frames); ++step)
+            for (size_t k = 0; k < paths.size(); ++k) step_of(k, step);
     }
-    return summarize(selector, o.budget_ms, rows);
+    std::vector<Summary> summaries;
+    for (size_t k = 0; k < paths.size(); ++k) summaries.push_back(summarize(o.selectors[k], o.budget_ms, rows[k]));
+    return summaries;
 }
 
 // The renderer's own variation, which no selector can remove: viewpoint A's frame, as the exact
@@ -1029,6 +1058,9 @@ int main(int argc, char** argv) {
     app.add_option("--budget-ms", o.budget_ms, "Frame budget in ms (default 40)")->check(CLI::PositiveNumber);
     app.add_option("--frames", o.frames, "Frames along the path (default 300)")->check(CLI::Range(10u, 100000u));
     app.add_flag("--simulate", o.simulate, "No OpenGL: frame times from the calibrated model plus noise");
+    app.add_flag("--sequential", o.sequential,
+                 "Run each selector's whole path in turn (default: frame by frame, every selector at frame f before frame f + 1, so all meet the "
+                 "machine's slow and fast spells alike)");
     app.add_option("--out", o.out, "Folder for CSV, summary and screenshots");
     app.add_flag("--json", o.json, "Print one JSON summary per selector");
     app.add_option("--width", o.width, "Viewport width (default 640)");
@@ -1136,12 +1168,12 @@ int main(int argc, char** argv) {
             std::printf("%s, %zu objects, %llu triangles at full detail, %u frames, budget %.1f ms%s\n", o.scene.c_str(), w.scene.instances.size(),
                         static_cast<unsigned long long>(w.full_triangles), o.frames, o.budget_ms,
                         o.simulate ? " (simulated)" : (", " + renderer->description()).c_str());
-        std::vector<Summary> summaries;
-        std::vector<Row> rows;
-        for (const std::string& sel : o.selectors) {
-            summaries.push_back(run(w, sel, o, model, o.simulate ? nullptr : renderer.get(), handles, rows, reference.get()));
+        std::vector<std::vector<Row>> runs;
+        std::vector<Summary> summaries = run_paths(w, o, model, o.simulate ? nullptr : renderer.get(), handles, runs, reference.get());
+        for (size_t k = 0; k < o.selectors.size(); ++k) {
+            const std::vector<Row>& rows = runs[k];
             if (!o.out.empty()) {
-                std::ofstream csv(fs::path(o.out) / ("frames-" + sel + ".csv"));
+                std::ofstream csv(fs::path(o.out) / ("frames-" + o.selectors[k] + ".csv"));
                 csv << "frame,visible_objects,drawn_objects,visible_triangles,drawn_triangles,predicted_ms,measured_ms,render_ms,cull_ms,optimize_ms,extract_ms,benefit,gap,"
                        "flat_objects,imposters,imposter_refreshes,meshed_imposters,textured_objects\n";
                 for (const Row& r : rows)

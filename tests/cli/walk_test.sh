@@ -69,6 +69,11 @@ assert all(int(r['imposter_refreshes']) <= int(r['imposters']) and int(r['meshed
 for r in (lv, menu): assert 0 < r['ssim_mean'] < 1, r
 "
 check "--representations levels is a menu of levels for every selector" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --selector exact --representations levels --frames 10 --budget-ms '$budget' --width 320 --height 240 --out '$work/lv' --json | /usr/bin/python3 -c 'import json, sys; r = [json.loads(l) for l in sys.stdin if l.startswith(\"{\")]; assert r and all(x[\"imposters_drawn_mean\"] == 0 for x in r), r'"
+# the selectors take the path frame by frame, or with --sequential one after another: either way
+# each writes its own rows, frame 0 to the last
+for mode in "" --sequential; do
+  check "a real path ${mode:-interleaved}: a row a frame for each selector" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --selector static,exact --frames 12 --budget-ms '$budget' --width 320 --height 240 --out '$work/order$mode' $mode && for s in static exact; do test \"\$(cut -d, -f1 '$work/order$mode'/frames-\$s.csv | tail -n +2 | tr '\\n' ' ')\" = '0 1 2 3 4 5 6 7 8 9 10 11 ' || exit 1; done"
+done
 check "--quality-every with --simulate is a usage error" bash -c "'$walk' --scene '$work/scene.txt' --calibration '$work/calibration.txt' --simulate --quality-every 5 --out '$work/q' --frames 10; test \$? -eq 2"
 check "the summary has the documented keys" /usr/bin/python3 -c "
 import json
