@@ -19,7 +19,7 @@ struct CostModel {
     double t_vert_ms = 0.0;   ///< per vertex
     double t_pix_ms = 0.0;    ///< per covered pixel
     double safety_ms = 0.0;   ///< allowance for the system's own noise
-    double noise_rel = 0.0;   ///< measured relative standard deviation of identical frames (informational; 0 unknown)
+    double noise_rel = 0.0;   ///< measured relative variation of identical frames, frame to frame (informational; 0 unknown)
     // The other ways to draw an object (Funkhouser & Sequin's rendering algorithms, Pasman &
     // Jansen's imposters), each calibrated on its own; 0 where not calibrated, and a runtime
     // offers no way whose coefficients are all 0.
