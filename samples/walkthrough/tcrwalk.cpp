@@ -39,18 +39,22 @@ namespace {
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-// The relative variation of times from one to the next: the root mean square of successive
-// differences over sqrt(2) (von Neumann's), over the mean. For independent noise it is the
-// standard deviation; a slow spell of the machine, which the runtime's correction from the
+// The relative variation of times from one to the next: the median of the successive
+// differences' sizes, scaled to a standard deviation (1.048 = 1 / (0.6745 sqrt 2) for normal
+// noise), over the mean. A slow spell of the machine, which the runtime's correction from the
 // previous frame follows, barely adds to it (one calibration's 31 frames stepped from 230 to
-// 310 ms: 4.0% frame to frame, 13.5% standard deviation, and the safety allowance sized
-// from the latter took 1.9 ms of a 40 ms budget).
+// 310 ms: 4.0% frame to frame by root mean square, 13.5% standard deviation, and the safety
+// allowance sized from the latter took 1.9 ms of a 40 ms budget), nor does a burst of a few
+// noisy frames (the root mean square of the differences was 11.5% in one calibration and 4.0%
+// in the noise test run right after it).
 double frame_to_frame(const std::vector<double>& times) {
     if (times.size() < 2) return 0.0;
-    double mean = 0, squares = 0;
+    double mean = 0;
     for (double t : times) mean += t / double(times.size());
-    for (size_t k = 1; k < times.size(); ++k) squares += (times[k] - times[k - 1]) * (times[k] - times[k - 1]);
-    return mean > 0 ? std::sqrt(squares / (2.0 * double(times.size() - 1))) / mean : 0.0;
+    std::vector<double> steps;
+    for (size_t k = 1; k < times.size(); ++k) steps.push_back(std::abs(times[k] - times[k - 1]));
+    std::nth_element(steps.begin(), steps.begin() + ptrdiff_t(steps.size() / 2), steps.end());
+    return mean > 0 ? 1.048 * steps[steps.size() / 2] / mean : 0.0;
 }
 
 // The scene with its meshes mapped and each instance's transform.
@@ -436,12 +440,15 @@ struct PathRun {
     double overhead_ms = 0;         // the planning time reserved for the next frame
     double previous_render_ms = 0;  // what the runtime predicts (extraction and rendering), fed back
     std::array<double, 8> recent_cpu{};
+    const double calibrated_safety_ms;  // the allowance's floor: the calibration's (the empty frame's spread)
+    std::vector<double> recent_ratios;  // measured / predicted, the last kNoiseFrames rendered frames
+    static constexpr size_t kNoiseFrames = 31;
 
     PathRun(const World& world, const std::string& selector, const Options& options, const tcr::CostModel& calibrated, walk::Renderer* r,
             const std::vector<uint32_t>& handles, uint32_t first_slot)
         : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), levels_only(ends_with_levels(selector)), slots(first_slot),
           model(allowance(calibrated, options)),
-          rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise) {
+          rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise), calibrated_safety_ms(calibrated.safety_ms) {
         add_objects(rt, w);
     }
 
@@ -523,6 +530,20 @@ struct PathRun {
     // per-triangle cost.
     void note_planning_time() { overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end())); }
 
+    // The safety allowance follows the renderer's noise as this run meets it: `safety_sigma`
+    // times the frame-to-frame variation of measured over predicted over the last 31 frames,
+    // times the budget (from 11 frames on; the calibration's noise_rel before). A calibration
+    // measures the noise once, for seconds, and this machine's varies by the minute: three
+    // calibrations in a row measured 1.6%, 7.4% and 7.8%, and one at 11.5% set aside 4.6 ms
+    // of 40 for a whole run whose noise test then measured 4.0%.
+    void follow_noise(double ratio) {
+        if (recent_ratios.size() == kNoiseFrames) recent_ratios.erase(recent_ratios.begin());
+        recent_ratios.push_back(ratio);
+        if (recent_ratios.size() < 11) return;
+        model.safety_ms = std::max(calibrated_safety_ms, o.safety_sigma * frame_to_frame(recent_ratios) * o.budget_ms);
+        rt.set_cost_model(model);
+    }
+
     // One frame: plan, extract, render (or simulate), and what the runtime is fed back.
     Row frame(uint32_t f, size_t slot, size_t& index_count) {
         const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
@@ -566,6 +587,7 @@ struct PathRun {
         row.predicted_ms = r.predicted_ms - model.safety_ms + r.cull_ms + r.optimize_ms;
         recent_cpu[slot % recent_cpu.size()] = r.cull_ms + r.optimize_ms;
         note_planning_time();
+        if (renderer && !none) follow_noise(row.measured_ms / std::max(1e-9, row.predicted_ms));
         previous_render_ms = renderer ? render_ms + row.extract_ms : render_ms;
         return row;
     }
@@ -827,7 +849,7 @@ double frame_noise(const tom::MeshView& mesh, uint32_t handle, const tcr::Camera
     f.indices.resize(size_t(mesh.triangle_count) * 3);
     tom::extract(mesh, mesh.vertex_count, f.indices.data(), f.indices.size());
     for (walk::Renderer::Draw& d : f.draws) d.index_count = mesh.triangle_count * 3, d.mesh = handle;
-    const std::vector<double> times = time_frames(renderer, cam, f.draws, f.indices, f.indices.size(), 31);
+    const std::vector<double> times = time_frames(renderer, cam, f.draws, f.indices, f.indices.size(), 61);
     double mean = 0, var = 0;
     for (double t : times) mean += t / times.size();
     for (double t : times) var += (t - mean) * (t - mean) / times.size();
