@@ -257,7 +257,7 @@ struct Options {
     double optimize_share = 0.1;  // the optimiser's deadline, as a share of the budget
     double hysteresis = 0.05;
     double noise = 1.0;           // simulated: noise in standard deviations of the calibrated noise (clamped to +-2)
-    double safety_sigma = 1.0;    // safety allowance in the renderer's frame-to-frame noise (noise_rel): less lets more frames over 1.1x the budget, more leaves the budget underused
+    double safety_sigma = 0.75;   // safety allowance in the renderer's frame-to-frame noise (noise_rel): less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
     uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
     std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading, texture mapping and imposters too; "simple": all but meshed imposters
@@ -1106,7 +1106,7 @@ int main(int argc, char** argv) {
     app.add_option("--width", o.width, "Viewport width (default 640)");
     app.add_option("--height", o.height, "Viewport height (default 480)");
     app.add_option("--hysteresis", o.hysteresis, "Relative dead band against the previous frame (default 0.05)");
-    app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in multiples of the calibrated frame-to-frame noise (noise_rel) times the budget (default 1)");
+    app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in multiples of the calibrated frame-to-frame noise (noise_rel) times the budget (default 0.75)");
     app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
     app.add_option("--quality-every", o.quality_every,
                    "Compare every K-th recorded frame with the same view at full detail (SSIM, PSNR by scikit-image; needs --out, not --simulate)")
