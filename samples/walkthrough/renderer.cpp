@@ -22,9 +22,9 @@ namespace walk {
 namespace {
 
 // The mesh shaders, one source for Funkhouser & Sequin's three rendering algorithms, chosen by
-// the defines in front of it (mesh_program_source): FLAT gives the provoking vertex's shade to
-// the whole triangle, TEXTURED multiplies the Gouraud shade by the image at the vertex's texture
-// coordinates; neither is Gouraud shading.
+// the defines in front of it (with_defines): SHADE is the shade's interpolation qualifier, empty
+// for Gouraud shading or "flat" for the provoking vertex's shade over the whole triangle;
+// TEXTURED multiplies the Gouraud shade by the image at the vertex's texture coordinates.
 const char* kVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;

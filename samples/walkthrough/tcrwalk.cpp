@@ -41,12 +41,10 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 // The relative variation of times from one to the next: the median of the successive
 // differences' sizes, scaled to a standard deviation (1.048 = 1 / (0.6745 sqrt 2) for normal
-// noise), over the mean. A slow spell of the machine, which the runtime's correction from the
-// previous frame follows, barely adds to it (one calibration's 31 frames stepped from 230 to
-// 310 ms: 4.0% frame to frame by root mean square, 13.5% standard deviation, and the safety
-// allowance sized from the latter took 1.9 ms of a 40 ms budget), nor does a burst of a few
-// noisy frames (the root mean square of the differences was 11.5% in one calibration and 4.0%
-// in the noise test run right after it).
+// noise), over the mean. Unlike the standard deviation, a slow spell of the machine, which the
+// runtime's correction from the previous frame follows, barely adds to it (one calibration's
+// frames stepped from 230 to 310 ms: 13.5% standard deviation, where frame to frame they
+// varied by a few percent), and the median keeps a burst of a few noisy frames out.
 double frame_to_frame(const std::vector<double>& times) {
     if (times.size() < 2) return 0.0;
     double mean = 0;
@@ -257,7 +255,7 @@ struct Options {
     double optimize_share = 0.1;  // the optimiser's deadline, as a share of the budget
     double hysteresis = 0.05;
     double noise = 1.0;           // simulated: noise in standard deviations of the calibrated noise (clamped to +-2)
-    double safety_sigma = 0.75;   // safety allowance in the renderer's frame-to-frame noise (noise_rel): less lets more frames over 1.1x the budget, more leaves the budget underused
+    double safety_sigma = 0.75;   // safety allowance in the renderer's frame-to-frame noise (noise_rel, then the run's own: PathRun::follow_noise): less lets more frames over 1.1x the budget, more leaves the budget underused
     uint64_t seed = 1;
     uint32_t quality_every = 0;   // every this-th recorded frame is compared with full detail (0: none)
     std::string representations = "all";  // "levels": TOM levels smooth-shaded only; "all": flat shading, texture mapping and imposters too; "simple": all but meshed imposters
@@ -1106,7 +1104,7 @@ int main(int argc, char** argv) {
     app.add_option("--width", o.width, "Viewport width (default 640)");
     app.add_option("--height", o.height, "Viewport height (default 480)");
     app.add_option("--hysteresis", o.hysteresis, "Relative dead band against the previous frame (default 0.05)");
-    app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in multiples of the calibrated frame-to-frame noise (noise_rel) times the budget (default 0.75)");
+    app.add_option("--safety-sigma", o.safety_sigma, "Safety allowance in multiples of the frame-to-frame noise (the calibration's noise_rel, from the 11th rendered frame the run's own) times the budget (default 0.75)");
     app.add_option("--seed", o.seed, "Seed for --make-scene and simulated noise (default 1)");
     app.add_option("--quality-every", o.quality_every,
                    "Compare every K-th recorded frame with the same view at full detail (SSIM, PSNR by scikit-image; needs --out, not --simulate)")
