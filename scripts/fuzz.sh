@@ -9,7 +9,7 @@
 # TOM_FUZZ_BUILD=DIR builds and fuzzes in DIR instead (two runs at once need two folders).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-targets=(reader_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
+targets=(reader_fuzz export_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
          builder_fuzz calibration_fuzz scene_fuzz capi_fuzz)
 if [ "${1:-}" = "list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 [ $# -ge 2 ] || { echo "usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]" >&2; exit 2; }
@@ -21,7 +21,7 @@ cmake --build "$build" -j "$(nproc)" >/dev/null
 
 dict_of() {
   case "$1" in
-    reader_fuzz|capi_fuzz) echo tom ;;
+    reader_fuzz|export_fuzz|capi_fuzz) echo tom ;;
     import_off_fuzz|builder_fuzz) echo off ;;
     import_obj_fuzz) echo obj ;;
     import_ply_fuzz) echo ply ;;
@@ -40,7 +40,7 @@ seed() {
   cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/" 2>/dev/null || true
   local tools="$root/build/tools" data="$root/data"
   case "$t" in
-    reader_fuzz|capi_fuzz)
+    reader_fuzz|export_fuzz|capi_fuzz)
       if [ -x "$tools/tombuild" ] && [ ! -f "$corpus/grid64-32bit.tom" ]; then
         /usr/bin/python3 -c "
 n = 64

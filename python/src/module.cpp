@@ -325,13 +325,24 @@ PYBIND11_MODULE(_tom, m) {
             for (const tom::Material& mat : f.file.scene().materials) {
                 py::list textures;
                 for (const tom::TextureRef& t : mat.textures)
-                    textures.append(py::dict(py::arg("role") = tom::to_string(t.role), py::arg("texcoord") = t.texcoord, py::arg("uri") = t.uri, py::arg("mime_type") = t.mime_type));
+                    textures.append(py::dict(py::arg("role") = tom::to_string(t.role), py::arg("texcoord") = t.texcoord, py::arg("uri") = t.uri, py::arg("mime_type") = t.mime_type,
+                                             py::arg("image") = t.image >= 0 ? py::object(py::int_(t.image)) : py::object(py::none())));
                 out.append(py::dict(py::arg("name") = mat.name, py::arg("base_color") = std::vector<float>(mat.base_color, mat.base_color + 4),
                                     py::arg("metallic") = mat.metallic, py::arg("roughness") = mat.roughness, py::arg("double_sided") = mat.double_sided,
                                     py::arg("textures") = textures));
             }
             return out;
-        }, "The materials, as dicts.")
+        }, "The materials, as dicts; a texture's image is an index into images, or None when it is a file (its uri).")
+        .def_property_readonly("images", [](const std::shared_ptr<FileHolder>& f) {
+            py::list out;
+            const py::object base = py::cast(f);
+            for (const tom::Image& image : f->file.scene().images) {
+                py::array_t<uint8_t> bytes({size_t(image.bytes)}, {sizeof(uint8_t)}, image.data, base);
+                bytes.attr("setflags")(py::arg("write") = false);
+                out.append(py::dict(py::arg("name") = image.name, py::arg("mime_type") = image.mime_type, py::arg("data") = bytes));
+            }
+            return out;
+        }, "The images embedded in the source and stored in the file, as dicts; data is a read-only uint8 view into the file (no copy).")
         .def_property_readonly("instances", [](const FileHolder& f) {
             py::list out;
             for (const tom::Instance& i : tom::draw_list(f.file.scene(), f.file.mesh_count())) {

@@ -39,6 +39,7 @@ class File:
     provenance: str | None
     meshes: list[FileMesh]
     materials: list[dict[str, Any]]
+    images: list[dict[str, Any]]
     instances: list[dict[str, Any]]
     def __len__(self) -> int: ...
 

@@ -476,9 +476,22 @@ uint32_t Renderer::add_image(uint32_t width, uint32_t height, const unsigned cha
 
 uint32_t Renderer::add_image(const std::string& path) {
     int w = 0, h = 0, channels = 0;
-    stbi_set_flip_vertically_on_load(1);  // OpenGL's rows start at the bottom, texture coordinate v = 0 there
+    // rows uploaded top row first: texture coordinate v = 0 is the image's top row, as in glTF
+    // and the .tom (OBJ's and PLY's v are flipped on import)
+    stbi_set_flip_vertically_on_load(0);
     unsigned char* pixels = stbi_load(path.c_str(), &w, &h, &channels, 4);
     if (!pixels) throw std::runtime_error("cannot read image '" + path + "': " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown reason"));
+    const uint32_t handle = add_image(uint32_t(w), uint32_t(h), pixels);
+    stbi_image_free(pixels);
+    return handle;
+}
+
+uint32_t Renderer::add_image(const uint8_t* encoded, size_t bytes, const std::string& name) {
+    int w = 0, h = 0, channels = 0;
+    stbi_set_flip_vertically_on_load(0);  // as add_image(path)
+    if (bytes > size_t(INT32_MAX)) throw std::runtime_error("cannot read image " + name + ": " + std::to_string(bytes) + " bytes");
+    unsigned char* pixels = stbi_load_from_memory(encoded, int(bytes), &w, &h, &channels, 4);
+    if (!pixels) throw std::runtime_error("cannot read image " + name + ": " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown reason"));
     const uint32_t handle = add_image(uint32_t(w), uint32_t(h), pixels);
     stbi_image_free(pixels);
     return handle;

@@ -27,7 +27,10 @@ public:
     /// Loads an image (PNG, JPEG, ...: stb_image) as a mipmapped, repeating texture for textured
     /// draws; returns its handle. \throw std::runtime_error naming the file and stb_image's reason.
     uint32_t add_image(const std::string& path);
-    /// The same from RGBA pixels in memory (rows from the bottom).
+    /// The same from an encoded image in memory (an image stored in a .tom); `name` stands for it
+    /// in messages. \throw std::runtime_error naming it and stb_image's reason.
+    uint32_t add_image(const uint8_t* encoded, size_t bytes, const std::string& name);
+    /// The same from RGBA pixels in memory (rows in the order of texture coordinate v, from 0).
     uint32_t add_image(uint32_t width, uint32_t height, const unsigned char* rgba);
 
     enum class Shading : uint8_t { smooth, flat, imposter, meshed, textured };

@@ -333,7 +333,22 @@ int main(int argc, char** argv) {
             check_levels(&v);
         }
         CHECK(multi == 4);
+        CHECK(tom_file_image_count(parts_file) == 0);
         tom_file_close(parts_file);
+    }
+    if (argc > 4) { /* a GLB whose texture's PNG lives in its binary buffer: stored, handed out in place */
+        tom_file* box = NULL;
+        tom_image image;
+        int32_t shown = -2;
+        CHECK(tom_file_open(argv[4], &box) == TOM_OK);
+        CHECK(tom_file_image_count(box) == 1);
+        CHECK(tom_file_image(box, 0, &image) == TOM_OK);
+        CHECK(strcmp(image.mime_type, "image/png") == 0);
+        CHECK(image.bytes > 8 && memcmp(image.data, "\x89PNG\r\n\x1a\n", 8) == 0);
+        CHECK(tom_file_texture_image(box, 0, 0, &shown) == TOM_OK && shown == 0);
+        CHECK(tom_file_image(box, 1, &image) == TOM_ERROR_ARGUMENT);
+        CHECK(tom_file_texture_image(box, 0, 1, &shown) == TOM_ERROR_ARGUMENT);
+        tom_file_close(box);
     }
 
     tom_file_close(memory);

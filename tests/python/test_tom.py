@@ -223,3 +223,35 @@ def test_provenance_names_the_input_tombuild_read(bunny):
     assert prov["input"]["bytes"] == os.path.getsize(f"{DATA}/meshes/bunny00.off")
     assert prov["input"]["digest"].startswith("xxh3-128:") and len(prov["input"]["digest"]) == 9 + 32
     assert prov["sources"] == [] and prov["options"]["build"]["predicate"] == "quadric"
+
+
+def glb_image_bytes(path):
+    """The bytes of each image in a GLB's binary chunk, read with nothing but struct and json."""
+    import struct
+    data = open(path, "rb").read()
+    json_bytes = struct.unpack_from("<I", data, 12)[0]
+    doc = json.loads(data[20:20 + json_bytes])
+    binary = data[20 + json_bytes + 8:]
+    out = []
+    for image in doc.get("images", []):
+        view = doc["bufferViews"][image["bufferView"]]
+        start = view.get("byteOffset", 0)
+        out.append((image["mimeType"], binary[start:start + view["byteLength"]]))
+    return out
+
+
+def test_embedded_images_are_stored_byte_for_byte_and_viewed_in_place(tmp_path):
+    source = f"{DATA}/assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"
+    f = tom.open(str(tombuild(tmp_path, source, "--no-error-curve")))
+    (mime, expected), = glb_image_bytes(source)
+    (image,) = f.images
+    assert image["mime_type"] == mime == "image/png"
+    assert image["data"].dtype == np.uint8 and bytes(image["data"]) == expected
+    with pytest.raises(ValueError):
+        image["data"][0] = 0  # a read-only view
+    assert np.shares_memory(image["data"], f.images[0]["data"])  # into the mapping, not a copy
+    assert f.materials[0]["textures"][0]["image"] == 0 and f.materials[0]["textures"][0]["uri"] == ""
+    # a texture whose image is a file keeps its URI and names no stored image
+    g = tom.open(str(tombuild(tmp_path, f"{DATA}/assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf", "--no-error-curve")))
+    assert g.images == [] and g.materials[0]["textures"][0]["image"] is None
+    assert g.materials[0]["textures"][0]["uri"] == "CesiumLogoFlat.png"

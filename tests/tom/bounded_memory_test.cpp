@@ -103,22 +103,34 @@ std::vector<HostileFile> hostile_tom_files() {
     std::string sections = good;
     put32(sections, 28, 2000000000);
     fix_header(sections);
-    std::string vertices = good;
+    // the good file with one field of the mesh header set to `value`, checksums recomputed;
+    // `at` receives the field's file offset
     const uint32_t section_count = get32(good, 28);
-    for (uint32_t s = 0; s < section_count; ++s) {
-        const size_t entry = 64 + 32 * size_t(s);
-        if (good.compare(entry, 4, "MESH") != 0) continue;
-        uint64_t offset, length;
-        std::memcpy(&offset, &good[entry + 8], 8);
-        std::memcpy(&length, &good[entry + 16], 8);
-        put32(vertices, size_t(offset), 2000000000);
-        put32(vertices, entry + 24, tom::crc32(&vertices[size_t(offset)], size_t(length)));
-    }
-    put32(vertices, 40, tom::crc32(&vertices[64], 32 * size_t(section_count)));
-    fix_header(vertices);
+    auto with_mesh_field = [&](size_t field, uint32_t value, size_t& at) {
+        std::string b = good;
+        for (uint32_t s = 0; s < section_count; ++s) {
+            const size_t entry = 64 + 32 * size_t(s);
+            if (good.compare(entry, 4, "MESH") != 0) continue;
+            uint64_t offset, length;
+            std::memcpy(&offset, &good[entry + 8], 8);
+            std::memcpy(&length, &good[entry + 16], 8);
+            at = size_t(offset) + field;
+            put32(b, at, value);
+            put32(b, entry + 24, tom::crc32(&b[size_t(offset)], size_t(length)));
+        }
+        put32(b, 40, tom::crc32(&b[64], 32 * size_t(section_count)));
+        fix_header(b);
+        return b;
+    };
+    size_t at = 0;
+    const std::string vertices = with_mesh_field(0, 2000000000, at);
+    // the fuzzing run's file: a material index in a file without materials sent the exporters
+    // into a loop up to it
+    const std::string material = with_mesh_field(16, 1196310868, at);
     return {{"meshes.tom", meshes, ": byte 24, mesh_count: 2000000000"},
             {"sections.tom", sections, ": byte 32, section_table:"},
-            {"vertices.tom", vertices, ": byte 204, mesh 0 index_size:"}};  // 2 bytes cannot index 2^31 vertices
+            {"vertices.tom", vertices, ": byte 204, mesh 0 index_size:"},  // 2 bytes cannot index 2^31 vertices
+            {"material.tom", material, ": byte " + std::to_string(at) + ", mesh 0 material: material 1196310868 is not among the 0 stored"}};
 }
 
 // Runs `read_file` on each file in a child whose address space is capped; returns what each gave:

@@ -38,6 +38,8 @@ uint64_t get64(const std::vector<uint8_t>& b, size_t at) {
 }
 void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(&b[at], &v, 4); }
 
+constexpr int kLastRule = 21;  // the last numbered validation rule of docs/FORMAT.md
+
 struct Section {
     std::string type;
     size_t entry;
@@ -490,7 +492,7 @@ TEST_CASE("provenance (PROV, since 1.5): stored as given, file-level, once (rule
     const std::vector<uint8_t> b = tom::serialize({coarse_sphere()}, with);
     const tom::File f = tom::File::from_bytes(b.data(), b.size(), "prov.tom");
     CHECK(f.provenance() == with.provenance);
-    CHECK(f.version_minor() == 5);
+    CHECK(f.version_minor() == tom::format_version_minor);
     CHECK(tom::File::from_bytes(plain.data(), plain.size(), "plain.tom").provenance().empty());
     // the same provenance gives the same bytes; the meshes' sections are those of a file without it
     CHECK(tom::serialize({coarse_sphere()}, with) == b);
@@ -557,10 +559,15 @@ TEST_CASE("scenes: materials with texture references and instances survive the r
         CHECK(std::equal(scene.instances[i].transform, scene.instances[i].transform + 16, got.instances[i].transform));
     }
     CHECK(f.mesh(0).material == 1);
-    // without a scene: nothing stored, and the draw list is every mesh once
+    // without a scene: no instance, so the draw list is every mesh once; the materials the
+    // meshes name are stored as defaults (rule 17: every index names a stored material)
     const std::vector<uint8_t> bare = tom::serialize({a, b});
     const tom::File g = tom::File::from_bytes(bare.data(), bare.size());
-    CHECK(g.scene().materials.empty());
+    REQUIRE(g.scene().materials.size() == 2);
+    CHECK((g.scene().materials[1].name == "material 1" && g.scene().materials[1].base_color[0] == 1.0f && g.scene().materials[1].textures.empty()));
+    tom::TomMesh far = a;
+    far.material = 65536;
+    CHECK_THROWS_WITH(tom::serialize({far}), Catch::Contains("names material 65536 but the scene stores none"));
     const std::vector<tom::Instance> all = tom::draw_list(g.scene(), g.mesh_count());
     REQUIRE(all.size() == 2);
     CHECK((all[0].mesh == 0 && all[1].mesh == 1 && all[1].transform[0] == 1.0f && all[1].transform[12] == 0.0f));
@@ -606,6 +613,88 @@ TEST_CASE("scenes: materials with texture references and instances survive the r
     CHECK(rule_of(c) == 18);
 }
 
+TEST_CASE("rule 17 without MATL: a material index must name a stored material, as the fuzzing run's file did not", "[format][corrupt][scene]") {
+    tom::TomMesh m = small_mesh();
+    const std::vector<uint8_t> good = tom::serialize({m});  // material -1, no MATL
+    REQUIRE(rule_of(good) == 0);
+    std::vector<uint8_t> c = good;
+    put32(c, find(sections_of(c), "MESH").offset + 16, 1196310868u);
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    CHECK(message_of(c).find("mesh 0 material: material 1196310868 is not among the 0 stored") != std::string::npos);
+    put32(c, find(sections_of(c), "MESH").offset + 16, uint32_t(-7));
+    fix_checksums(c);
+    CHECK(rule_of(c) == 17);
+    CHECK(message_of(c).find("material -7 is neither -1 (none) nor a stored material") != std::string::npos);
+}
+
+TEST_CASE("images (IMAG, since 1.6): stored byte for byte, viewed in place, and rule 21", "[format][corrupt][scene]") {
+    tom::TomMesh a = small_mesh();
+    a.material = 1;
+    tom::Scene scene = small_scene(1);
+    // two images: the textured material's normal texture shows the second; its base colour stays a file
+    scene.images.push_back(tom::make_image("first", "image/png", {0x89, 'P', 'N', 'G', 1, 2, 3}));
+    scene.images.push_back(tom::make_image("", "image/jpeg", std::vector<uint8_t>(1000, 0xAB)));
+    scene.materials[1].textures[1].image = 1;
+    const std::vector<uint8_t> good = tom::serialize({a}, scene);
+    const tom::File f = tom::File::borrow(good.data(), good.size(), "images.tom");
+    REQUIRE(f.scene().images.size() == 2);
+    for (size_t i = 0; i < 2; ++i) {
+        const tom::Image &got = f.scene().images[i], &want = scene.images[i];
+        CHECK(got.name == want.name);
+        CHECK(got.mime_type == want.mime_type);
+        REQUIRE(got.bytes == want.bytes);
+        CHECK(std::memcmp(got.data, want.data, want.bytes) == 0);
+        CHECK((got.data >= good.data() && got.data + got.bytes <= good.data() + good.size()));  // in place
+        CHECK((got.data - good.data()) % 16 == 0);  // each image at a multiple of 16
+        CHECK(got.owner == nullptr);
+    }
+    CHECK(f.scene().materials[1].textures[0].image == -1);
+    CHECK(f.scene().materials[1].textures[0].uri == "images/albedo.png");
+    CHECK(f.scene().materials[1].textures[1].image == 1);
+    CHECK(tom::serialize({a}, scene) == good);  // deterministic
+    // a texture showing an image the scene does not hold cannot be written
+    tom::Scene bad = scene;
+    bad.materials[1].textures[1].image = 2;
+    CHECK_THROWS_WITH(tom::serialize({a}, bad), Catch::Contains("shows image 2 of 2"));
+
+    const Section& imag = find(sections_of(good), "IMAG");
+    const size_t records = imag.offset + 16 + 4 * 2;  // two texture records
+    std::vector<uint8_t> c = good;
+    put32(c, imag.offset + 4, 3);  // three textures announced, MATL stores two
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    CHECK(message_of(c).find("IMAG texture_count: 3 where MATL stores 2 textures") != std::string::npos);
+    c = good;
+    put32(c, imag.offset, 1000000);  // a million images announced
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    CHECK(message_of(c).find("runs past the end of the section") != std::string::npos);
+    c = good;
+    put32(c, imag.offset + 16 + 4, 2);  // texture 1 shows image 2 of 2
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    CHECK(message_of(c).find("image 2 is not among the 2 stored") != std::string::npos);
+    c = good;
+    put32(c, records + 32 + 8, uint32_t(imag.bytes));  // image 1's bytes run past the section
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    CHECK(message_of(c).find("image 1 data") != std::string::npos);
+    c = good;
+    put32(c, records, 8);  // image 0's bytes inside the records
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    c = good;
+    put32(c, records + 16 + 4, 0);  // an empty MIME type
+    fix_checksums(c);
+    CHECK(rule_of(c) == 21);
+    CHECK(message_of(c).find("image 0 mime_type: is empty") != std::string::npos);
+    c = good;
+    put32(c, imag.entry + 4, 0);  // a file-level section claimed by mesh 0
+    fix_checksums(c);
+    CHECK(rule_of(c) == 9);
+}
+
 TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {
     tom::TomMesh with_material = small_mesh();
     with_material.material = 0;
@@ -634,7 +723,7 @@ TEST_CASE("random corruption never crashes and never yields an out-of-range inde
             // every rejection names the file, a numbered rule of FORMAT.md and a place inside the file
             REQUIRE(std::string(e.what()).find("fuzz.tom") != std::string::npos);
             REQUIRE(e.rule() >= 1);
-            REQUIRE(e.rule() <= 19);
+            REQUIRE(e.rule() <= kLastRule);
             REQUIRE(e.offset() <= b.size());
             ++rules[e.rule()];
         }

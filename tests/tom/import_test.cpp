@@ -163,8 +163,8 @@ namespace {
 
 using CornerSet = std::set<std::pair<std::array<float, 3>, std::array<float, 2>>>;
 
-// The (position, uv) pairs an OBJ file's faces use, read from its text; a corner without `vt`
-// has (0, 0).
+// The (position, uv) pairs an OBJ file's faces use, read from its text, v flipped into glTF's
+// convention (v = 0 at the image's top row); a corner without `vt` has (0, 0).
 CornerSet obj_corners(const std::string& path) {
     std::ifstream in(path);
     std::vector<std::array<float, 3>> v;
@@ -181,6 +181,7 @@ CornerSet obj_corners(const std::string& path) {
         } else if (tag == "vt") {
             std::array<float, 2> t{};
             ls >> t[0] >> t[1];
+            t[1] = float(1.0 - double(t[1]));
             vt.push_back(t);
         } else if (tag == "f") {
             for (std::string corner; ls >> corner;) {

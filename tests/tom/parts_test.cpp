@@ -455,7 +455,10 @@ TEST_CASE("parts with different attribute sets: the mesh holds the union, each p
     tom::GlbMesh g;
     g.mesh = &v;
     g.vertex_counts = {v.vertex_count, tom::vertex_count_for_fraction(v, 0.1)};
-    tom::export_glb(glb, {g});
+    CHECK_THROWS_WITH(tom::export_glb(glb, {g}), Catch::Contains("a mesh refers to material 1, but 0 are stored"));
+    tom::Scene two;
+    two.materials.resize(2);
+    tom::export_glb(glb, {g}, two);
     const nlohmann::json doc = glb_json(glb);
     for (const auto& m : doc["meshes"]) {
         REQUIRE(m["primitives"].size() == 2);

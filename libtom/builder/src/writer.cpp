@@ -1,9 +1,11 @@
 // Serialisation of TOM meshes into the .tom format (docs/FORMAT.md).
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -102,6 +104,32 @@ std::vector<uint8_t> coarse_bytes(const TomMesh& mesh) {
     return out;
 }
 
+// The largest material index the meshes name (mesh or part), -1 for none.
+int32_t largest_material(const std::vector<TomMesh>& meshes) {
+    int32_t top = -1;
+    for (const TomMesh& m : meshes) {
+        top = std::max(top, m.material);
+        for (const Part& p : m.parts) top = std::max(top, p.material);
+    }
+    return top;
+}
+
+// Meshes that name materials of a scene that stores none (the builder's own arrays, an
+// engine's material ids) get default materials "material K" up to the largest, so that every
+// index in the file names a stored material (rule 17). \throw ArgumentError past 65536.
+Scene with_placeholder_materials(const Scene& scene, int32_t top) {
+    constexpr int32_t max_placeholders = 65536;
+    if (top >= max_placeholders)
+        throw ArgumentError("serialize: a mesh names material " + std::to_string(top) + " but the scene stores none; at most " +
+                            std::to_string(max_placeholders) + " default materials are written in their place");
+    Scene out = scene;
+    for (int32_t k = 0; k <= top; ++k) {
+        out.materials.emplace_back();
+        out.materials.back().name = "material " + std::to_string(k);
+    }
+    return out;
+}
+
 uint32_t choose_index_size(const TomMesh& mesh, IndexSize requested) {
     if (requested == IndexSize::bits32) return 4;
     return mesh.vertex_count() <= 65536 ? 2 : 4;
@@ -111,13 +139,22 @@ uint32_t choose_index_size(const TomMesh& mesh, IndexSize requested) {
 
 std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options) { return serialize(meshes, Scene{}, options); }
 
-std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options) {
+std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& given_scene, const WriteOptions& options) {
+    const int32_t top_material = largest_material(meshes);
+    std::optional<Scene> placeholders;
+    if (given_scene.materials.empty() && top_material >= 0) placeholders = with_placeholder_materials(given_scene, top_material);
+    const Scene& scene = placeholders ? *placeholders : given_scene;
     for (const Instance& inst : scene.instances)
         if (inst.mesh >= meshes.size())
             throw ArgumentError("serialize: an instance names mesh " + std::to_string(inst.mesh) + " of " + std::to_string(meshes.size()));
+    for (const Material& m : scene.materials)
+        for (const TextureRef& t : m.textures)
+            if (t.image >= 0 && size_t(t.image) >= scene.images.size())
+                throw ArgumentError("serialize: material '" + m.name + "' shows image " + std::to_string(t.image) + " of " + std::to_string(scene.images.size()));
     std::vector<PendingSection> sections;
     if (!scene.materials.empty()) sections.push_back({sec_materials, file_level, detail::encode_materials(scene.materials)});
     if (!scene.instances.empty()) sections.push_back({sec_instances, file_level, detail::encode_instances(scene.instances)});
+    if (!scene.images.empty()) sections.push_back({sec_images, file_level, detail::encode_images(scene)});
     if (!options.provenance.empty())
         sections.push_back({sec_provenance, file_level, std::vector<uint8_t>(options.provenance.begin(), options.provenance.end())});
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {

@@ -355,6 +355,30 @@ tom_status tom_file_material(const tom_file* file, uint32_t index, tom_material*
     return TOM_OK;
 }
 
+uint32_t tom_file_image_count(const tom_file* file) { return file ? uint32_t(file->file.scene().images.size()) : 0; }
+
+tom_status tom_file_image(const tom_file* file, uint32_t index, tom_image* out) {
+    if (!file) return null_argument("tom_file_image", "file");
+    if (!out) return null_argument("tom_file_image", "out");
+    const std::vector<tom::Image>& images = file->file.scene().images;
+    if (index >= images.size())
+        return fail(TOM_ERROR_ARGUMENT, "tom_file_image: image " + std::to_string(index) + " of a file with " + std::to_string(images.size()));
+    const tom::Image& image = images[index];
+    *out = {image.name.c_str(), image.mime_type.c_str(), image.data, image.bytes};
+    return TOM_OK;
+}
+
+tom_status tom_file_texture_image(const tom_file* file, uint32_t material, uint32_t texture, int32_t* image) {
+    if (!file) return null_argument("tom_file_texture_image", "file");
+    if (!image) return null_argument("tom_file_texture_image", "image");
+    const std::vector<tom::Material>& materials = file->file.scene().materials;
+    if (material >= materials.size() || texture >= materials[material].textures.size())
+        return fail(TOM_ERROR_ARGUMENT, "tom_file_texture_image: texture " + std::to_string(texture) + " of material " + std::to_string(material) +
+                                            " is not stored (" + std::to_string(materials.size()) + " materials)");
+    *image = materials[material].textures[texture].image;
+    return TOM_OK;
+}
+
 uint32_t tom_file_instance_count(const tom_file* file) { return file ? uint32_t(file->draw.size()) : 0; }
 
 tom_status tom_file_instance(const tom_file* file, uint32_t index, tom_instance* out) {

@@ -11,6 +11,7 @@
 #include <set>
 #include <string>
 
+#include "import_backends.h"
 #include "tom/errors.h"
 #include "tom/builder/writer.h"
 #include "tom/format.h"
@@ -96,6 +97,27 @@ std::string unused_name(const std::string& base, const std::vector<std::string>&
     return name;
 }
 
+// OBJ keeps textures as files: stored image k of the scene is written beside the OBJ as
+// STEM.image-K.EXT (EXT from its MIME type) by write_stored_images, and named so in the .mtl.
+std::filesystem::path stored_image_file(const std::string& obj_path, int32_t k, const Image& image) {
+    const std::string& mime = image.mime_type;
+    const std::string ext = mime == "image/png" ? "png" : mime == "image/jpeg" ? "jpg" : mime == "image/webp" ? "webp" : mime == "image/ktx2" ? "ktx2"
+                          : mime == "image/avif" ? "avif" : mime == "image/gif" ? "gif" : mime == "image/bmp" ? "bmp" : "bin";
+    std::filesystem::path p(obj_path);
+    return p.replace_filename(p.stem().string() + ".image-" + std::to_string(k) + "." + ext);
+}
+
+// The stored images that the first `used` materials show, each once.
+void write_stored_images(const Scene& scene, size_t used, const std::string& obj_path) {
+    std::set<int32_t> written;
+    for (size_t k = 0; k < used && k < scene.materials.size(); ++k)
+        for (const TextureRef& t : scene.materials[k].textures)
+            if (t.image >= 0 && written.insert(t.image).second) {
+                const Image& image = scene.images[size_t(t.image)];
+                write_bytes_atomically(stored_image_file(obj_path, t.image, image).string(), image.data, size_t(image.bytes));
+            }
+}
+
 // The .mtl of `names`: the scene's first `stored` materials, then default entries (the
 // materials the scene lacks, the groups without one).
 std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, size_t stored, const std::string& texture_dir, const std::string& obj_path) {
@@ -112,9 +134,9 @@ std::string mtl_text(const Scene& scene, const std::vector<std::string>& names, 
         append(out, "Kd %.6g %.6g %.6g\nd %.6g\n", m.base_color[0], m.base_color[1], m.base_color[2], m.base_color[3]);
         if (m.emissive[0] != 0 || m.emissive[1] != 0 || m.emissive[2] != 0) append(out, "Ke %.6g %.6g %.6g\n", m.emissive[0], m.emissive[1], m.emissive[2]);
         for (const TextureRef& t : m.textures) {
-            if (t.uri.empty()) continue;  // embedded in the source: not kept
-            std::string uri = t.uri;
-            if (!texture_dir.empty() && uri.find("://") == std::string::npos)
+            std::string uri = t.image >= 0 ? stored_image_file(obj_path, t.image, scene.images[size_t(t.image)]).filename().string() : t.uri;
+            if (uri.empty()) continue;
+            if (t.image < 0 && !texture_dir.empty() && uri.find("://") == std::string::npos)
                 uri = fs::relative(fs::absolute(fs::path(texture_dir) / uri), out_dir).generic_string();
             const char* key = t.role == TextureRole::base_color ? "map_Kd"
                             : t.role == TextureRole::normal     ? "norm"
@@ -150,7 +172,7 @@ std::string obj_text(const std::vector<ExportPart>& parts, const std::vector<std
     if (s.texcoords)
         for (const ExportPart& part : parts)
             for (uint32_t v = 0; v < part.vertex_count; ++v)
-                append(out, "vt %.9g %.9g\n", part.mesh->texcoords[2 * size_t(v)], part.mesh->texcoords[2 * size_t(v) + 1]);
+                append(out, "vt %.9g %.9g\n", part.mesh->texcoords[2 * size_t(v)], detail::flip_v(part.mesh->texcoords[2 * size_t(v) + 1]));
     if (s.normals)
         for (const ExportPart& part : parts)
             for (uint32_t v = 0; v < part.vertex_count; ++v) {
@@ -200,7 +222,10 @@ std::string ply_bytes(const std::vector<ExportPart>& parts) {
         for (uint32_t v = 0; v < part.vertex_count; ++v) {
             put(m.positions + 3 * size_t(v), 12);
             if (s.normals) put(m.normals + 3 * size_t(v), 12);
-            if (s.texcoords) put(m.texcoords + 2 * size_t(v), 8);
+            if (s.texcoords) {
+                const float st[2] = {m.texcoords[2 * size_t(v)], detail::flip_v(m.texcoords[2 * size_t(v) + 1])};
+                put(st, 8);
+            }
             if (s.colors)
                 for (int k = 0; k < 4; ++k) {
                     const float c = std::min(1.0f, std::max(0.0f, m.colors[4 * size_t(v) + size_t(k)]));
@@ -232,12 +257,19 @@ void export_meshes(const std::string& path, const std::vector<ExportPart>& parts
     const std::string ext = extension_of(path);
     std::string bytes;
     if (ext == "obj") {
-        std::vector<std::string> materials = material_names(scene, max_material(parts) + 1);
+        // the names are as many as the materials referenced, and every reference must be stored:
+        // a count the meshes merely declare is never looped over
+        const int top = max_material(parts);
+        if (top >= 0 && size_t(top) >= scene.materials.size())
+            throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(top) + ", but " +
+                          std::to_string(scene.materials.size()) + " are stored");
+        std::vector<std::string> materials = material_names(scene, top + 1);
         const size_t stored = materials.size();
         if (!materials.empty() && any_without_material(parts)) materials.push_back(unused_name("default", materials));
         const std::filesystem::path mtl = std::filesystem::path(path).replace_extension(".mtl");
         if (!materials.empty()) {
             const std::string text = mtl_text(scene, materials, stored, texture_dir, path);
+            write_stored_images(scene, stored, path);
             write_bytes_atomically(mtl.string(), text.data(), text.size());
         }
         bytes = obj_text(parts, materials, mtl.filename().string());

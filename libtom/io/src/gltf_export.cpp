@@ -6,6 +6,8 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <set>
+#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
@@ -33,7 +35,8 @@ struct Writer {
         while (bin.size() % 4) bin.push_back(0);
         const size_t offset = bin.size();
         bin.insert(bin.end(), static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + bytes);
-        views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}});
+        views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}});
+        if (target) views.back()["target"] = target;  // 0: an image's bytes, no vertex or index data
         return int(views.size() - 1);
     }
     int accessor(int view_index, int component, size_t count, const char* type, json extra = json::object()) {
@@ -59,24 +62,82 @@ std::vector<float> unit_vectors(const float* src, uint32_t count, size_t width) 
     return out;
 }
 
-// The scene's materials (factors, and textures whose images are files: `texture_dir` is the folder
-// their stored URIs are relative to, rewritten relative to the output; empty keeps them as
-// stored); placeholders when the file stores no materials but meshes refer to some.
-void write_materials(json& doc, const Scene& scene, int max_material, const std::string& texture_dir, const std::string& path) {
-    if (scene.materials.empty()) {
-        if (max_material < 0) return;
-        doc["materials"] = json::array();
-        for (int k = 0; k <= max_material; ++k) doc["materials"].push_back({{"name", "material " + std::to_string(k)}});
-        return;
-    }
-    if (size_t(max_material + 1) > scene.materials.size())
-        throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(max_material) + " of " + std::to_string(scene.materials.size()));
-    namespace fs = std::filesystem;
-    const fs::path out_dir = fs::absolute(fs::path(path)).parent_path();
+// The glTF texture of an image of type `mime`: image codecs past PNG and JPEG are shown through
+// their extension (which the output then uses and requires: it has no fallback image).
+const char* image_extension(const std::string& mime) {
+    if (mime == "image/webp") return "EXT_texture_webp";
+    if (mime == "image/ktx2") return "KHR_texture_basisu";
+    if (mime == "image/avif") return "EXT_texture_avif";
+    return nullptr;
+}
+
+std::vector<uint8_t> read_image_file(const std::filesystem::path& file, const std::string& path) {
+    std::FILE* f = std::fopen(file.string().c_str(), "rb");
+    if (!f) throw IoError("cannot write '" + path + "': cannot read image '" + file.string() + "' to embed it");
+    std::vector<uint8_t> bytes;
+    uint8_t chunk[65536];
+    for (size_t n; (n = std::fread(chunk, 1, sizeof chunk, f)) > 0;) bytes.insert(bytes.end(), chunk, chunk + n);
+    std::fclose(f);
+    return bytes;
+}
+
+// The scene's materials with their factors and textures. Images stored in the file are embedded
+// in the binary buffer; images that were files keep their URIs (`texture_dir`: the folder those
+// are relative to, rewritten relative to the output; empty keeps them as stored), or are read and
+// embedded too with `embed_external`. Every material a mesh refers to must be stored.
+struct MaterialWriter {
+    Writer& w;
+    const Scene& scene;
+    const std::string& texture_dir;
+    bool embed_external;
+    const std::string& path;
     json images = json::array(), textures = json::array();
-    std::map<std::string, int> texture_of;  // one glTF texture per distinct URI
-    doc["materials"] = json::array();
-    for (const Material& m : scene.materials) {
+    std::map<std::string, int> texture_of{};  // one glTF texture per image ("#k" for stored image k, else its URI)
+    std::set<std::string> extensions{};       // used and required
+
+    // a glTF image (and its texture) for reference `t`; -1 when it has neither bytes nor a URI
+    int texture_for(const TextureRef& t) {
+        namespace fs = std::filesystem;
+        std::string key = t.image >= 0 ? "#" + std::to_string(t.image) : t.uri;
+        if (key.empty()) return -1;
+        fs::path file;
+        if (t.image < 0) {
+            std::string uri = t.uri;
+            std::replace(uri.begin(), uri.end(), '\\', '/');
+            const bool local = uri.find("://") == std::string::npos;
+            if (local && !texture_dir.empty()) file = fs::absolute(fs::path(texture_dir) / uri);
+            else if (local) file = fs::path(uri);
+            if (local && !texture_dir.empty() && !embed_external)
+                key = fs::relative(file, fs::absolute(fs::path(path)).parent_path()).generic_string();
+        }
+        const auto [it, fresh] = texture_of.emplace(key, int(textures.size()));
+        if (!fresh) return it->second;
+        json image;
+        std::string mime = t.mime_type;
+        if (t.image >= 0) {
+            const Image& stored = scene.images[size_t(t.image)];
+            image = {{"bufferView", w.view(stored.data, size_t(stored.bytes), 0)}, {"mimeType", stored.mime_type}};
+            if (!stored.name.empty()) image["name"] = stored.name;
+            mime = stored.mime_type;
+        } else if (embed_external && !file.empty()) {
+            const std::vector<uint8_t> bytes = read_image_file(file, path);
+            if (mime.empty()) mime = sniff_image_type(bytes.data(), bytes.size());
+            if (mime.empty()) throw IoError("cannot write '" + path + "': the type of image '" + file.string() + "' is unknown");
+            image = {{"bufferView", w.view(bytes.data(), bytes.size(), 0)}, {"mimeType", mime}};
+        } else {
+            image = {{"uri", key}};
+        }
+        images.push_back(image);
+        json texture = {{"source", images.size() - 1}};
+        if (const char* ext = image_extension(mime)) {
+            texture = {{"extensions", {{ext, {{"source", images.size() - 1}}}}}};
+            extensions.insert(ext);
+        }
+        textures.push_back(texture);
+        return it->second;
+    }
+
+    json material(const Material& m) {
         json pbr = {{"baseColorFactor", m.base_color}, {"metallicFactor", m.metallic}, {"roughnessFactor", m.roughness}};
         json mat = {{"name", m.name}, {"pbrMetallicRoughness", json::object()}};
         if (m.emissive[0] != 0 || m.emissive[1] != 0 || m.emissive[2] != 0) mat["emissiveFactor"] = m.emissive;
@@ -84,17 +145,9 @@ void write_materials(json& doc, const Scene& scene, int max_material, const std:
         if (m.alpha_mode == AlphaMode::mask) mat["alphaCutoff"] = m.alpha_cutoff;
         if (m.double_sided) mat["doubleSided"] = true;
         for (const TextureRef& t : m.textures) {
-            if (t.uri.empty()) continue;  // embedded in the source: not kept
-            std::string uri = t.uri;
-            if (!texture_dir.empty() && uri.find("://") == std::string::npos)
-                uri = fs::relative(fs::absolute(fs::path(texture_dir) / uri), out_dir).generic_string();
-            auto [it, fresh] = texture_of.emplace(uri, int(textures.size()));
-            if (fresh) {
-                json image = {{"uri", uri}};
-                images.push_back(image);
-                textures.push_back({{"source", images.size() - 1}});
-            }
-            const json info = {{"index", it->second}, {"texCoord", t.texcoord}};
+            const int index = texture_for(t);
+            if (index < 0) continue;
+            const json info = {{"index", index}, {"texCoord", t.texcoord}};
             switch (t.role) {
             case TextureRole::base_color: pbr["baseColorTexture"] = info; break;
             case TextureRole::metallic_roughness: pbr["metallicRoughnessTexture"] = info; break;
@@ -104,17 +157,29 @@ void write_materials(json& doc, const Scene& scene, int max_material, const std:
             }
         }
         mat["pbrMetallicRoughness"] = pbr;
-        doc["materials"].push_back(mat);
+        return mat;
     }
-    if (!images.empty()) {
-        doc["images"] = images;
-        doc["textures"] = textures;
+};
+
+void write_materials(json& doc, Writer& w, const Scene& scene, int max_material, const std::string& texture_dir, bool embed_external,
+                     const std::string& path, std::set<std::string>& extensions) {
+    if (max_material >= 0 && size_t(max_material) >= scene.materials.size())
+        throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(max_material) + ", but " +
+                      std::to_string(scene.materials.size()) + " are stored");
+    if (scene.materials.empty()) return;
+    MaterialWriter mw{w, scene, texture_dir, embed_external, path};
+    doc["materials"] = json::array();
+    for (const Material& m : scene.materials) doc["materials"].push_back(mw.material(m));
+    if (!mw.images.empty()) {
+        doc["images"] = mw.images;
+        doc["textures"] = mw.textures;
     }
+    extensions.insert(mw.extensions.begin(), mw.extensions.end());
 }
 
 } // namespace
 
-void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene, const std::string& texture_dir) {
+void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene, const std::string& texture_dir, bool embed_images) {
     Writer w;
     size_t levels = 0;
     for (const GlbMesh& m : meshes) levels = std::max(levels, m.vertex_counts.size());
@@ -197,6 +262,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
     doc["nodes"] = json::array();
     json roots = json::array();
     const Instance untransformed;  // its transform is the identity
+    bool has_lods = false;
     for (const Instance& inst : draw_list(scene, uint32_t(meshes.size()))) {
         const std::vector<int>& lm = level_mesh[inst.mesh];
         if (lm[0] < 0) continue;
@@ -217,13 +283,18 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
         }
         if (!ids.empty()) {
             doc["nodes"][index]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
-            doc["extensionsUsed"] = {"MSFT_lod"};
+            has_lods = true;
         }
     }
     if (roots.empty()) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
     doc["scenes"] = {{{"nodes", roots}}};
     doc["scene"] = 0;
-    write_materials(doc, scene, max_material, texture_dir, path);
+    std::set<std::string> required;  // image codecs without a fallback
+    write_materials(doc, w, scene, max_material, texture_dir, embed_images, path, required);
+    std::set<std::string> used = required;
+    if (has_lods) used.insert("MSFT_lod");
+    if (!used.empty()) doc["extensionsUsed"] = used;
+    if (!required.empty()) doc["extensionsRequired"] = required;
     while (w.bin.size() % 4) w.bin.push_back(0);
     doc["buffers"] = {{{"byteLength", w.bin.size()}}};
     doc["bufferViews"] = w.views;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "gltf_carried.h"
 #include "gltf_meshopt.h"
 #include "gltf_references.h"
 #include "gltf_schema.h"
@@ -22,8 +23,13 @@ namespace tom::detail {
 
 namespace {
 
-// Textures are not decoded: accept every image as it is.
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; }
+// Images are not decoded: each embedded one (a buffer view, a data: URI) is kept byte for byte,
+// by its index in the document.
+bool keep_image(tinygltf::Image*, const int index, std::string*, std::string*, int, int, const unsigned char* bytes, int size, void* user) {
+    auto& kept = *static_cast<EmbeddedImages*>(user);
+    if (index >= 0 && size > 0) kept[index].assign(bytes, bytes + size);
+    return true;
+}
 
 std::string one_line(std::string s) {
     for (char& c : s)
@@ -244,7 +250,8 @@ void mark_own_attributes(std::vector<Mesh>& primitives) {
 
 ImportResult import_gltf(const std::string& path, bool binary) {
     tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(skip_image, nullptr);
+    EmbeddedImages embedded;
+    loader.SetImageLoader(keep_image, &embedded);
     std::vector<uint8_t> bytes = read_whole_file(path);
     nlohmann::json doc = check_gltf_schema(bytes, binary, path);
     const size_t slash = path.find_last_of('/');
@@ -274,9 +281,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     for (const tinygltf::Buffer& b : model.buffers)  // external buffers (images are not read)
         if (!b.uri.empty() && !tinygltf::IsDataURI(b.uri)) result.sources.push_back(b.uri);
     for (const std::string& ext : model.extensionsRequired)
-        if (ext != "KHR_draco_mesh_compression" && ext != "KHR_materials_pbrSpecularGlossiness" && ext != "KHR_texture_transform" &&
-            ext != "KHR_materials_unlit" && ext != "KHR_mesh_quantization" && ext != "EXT_meshopt_compression")
-            throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
+        if (!can_read_required(ext)) throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
+    result.dropped = gltf_dropped(doc);
     if (meshopt) decode_meshopt(model, doc, path);
     const bool quantized = std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_mesh_quantization") != model.extensionsUsed.end();
 
@@ -351,7 +357,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
         result.meshes.push_back(join_parts(primitives, stem + "/" + mesh_name));
     }
-    result.scene = gltf_scene(model, mesh_parts, path);
+    result.scene = gltf_scene(model, mesh_parts, embedded, path);
     if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
     return result;
 }

@@ -18,12 +18,18 @@
 
 namespace tom::detail {
 
+/// The bytes of the images embedded in a glTF (buffer views, data: URIs), by image index.
+using EmbeddedImages = std::map<int, std::vector<uint8_t>>;
+
 /// The materials of `model` and its default scene's node tree flattened into instances:
 /// `mesh_parts[m]` lists the imported meshes (indices into ImportResult::meshes) made from the
 /// triangle primitives of glTF mesh m; each node with a mesh gives one instance per part, with
-/// the node's world transform. \throw ImportError naming `path` and the node for a cycle or a
-/// node tree that would give more than 1,000,000 instances.
-Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path);
+/// the node's world transform. A texture whose image is in `embedded` shows that image, stored
+/// in the scene (Scene::images, once per source image); others keep the image's URI.
+/// \throw ImportError naming `path` and the node for a cycle or a node tree that would give
+/// more than 1,000,000 instances.
+Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
+                 const std::string& path);
 
 /// Bakes the KHR_texture_transform of material `material` (its base colour texture's, else the
 /// first of its textures that has one) into the TEXCOORD set it applies to: .tom keeps texture

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 
 #include "gltf_model.h"
 #include "tom/errors.h"
@@ -13,24 +14,59 @@ namespace {
 
 constexpr size_t max_instances = 1000000;
 
-void texture_ref(const tinygltf::Model& model, int texture, int texcoord, TextureRole role, Material& out) {
-    if (texture < 0 || size_t(texture) >= model.textures.size()) return;
-    const int source = model.textures[size_t(texture)].source;
-    TextureRef ref;
-    ref.role = role;
-    ref.texcoord = texcoord > 0 ? uint32_t(texcoord) : 0u;
-    if (source >= 0 && size_t(source) < model.images.size()) {
-        const tinygltf::Image& image = model.images[size_t(source)];
-        ref.mime_type = image.mimeType;
-        if (image.uri.rfind("data:", 0) == 0) {  // embedded as a data URI: keep its type, not its bytes
-            const size_t end = image.uri.find_first_of(";,");
-            if (ref.mime_type.empty() && end != std::string::npos) ref.mime_type = image.uri.substr(5, end - 5);
-        } else {
-            ref.uri = image.uri;
-        }
+// The image extensions whose `source` stands in for (or beside) a texture's own.
+constexpr const char* image_extensions[] = {"EXT_texture_webp", "KHR_texture_basisu", "EXT_texture_avif"};
+
+// The image a texture shows: its own `source`, else an image extension's (a texture in WebP or
+// KTX2 alone has no `source`); -1 for none.
+int texture_source(const tinygltf::Texture& texture) {
+    if (texture.source >= 0) return texture.source;
+    for (const char* ext : image_extensions) {
+        const auto it = texture.extensions.find(ext);
+        if (it != texture.extensions.end() && it->second.IsObject() && it->second.Get("source").IsNumber()) return it->second.Get("source").GetNumberAsInt();
     }
-    out.textures.push_back(std::move(ref));
+    return -1;
 }
+
+// Materials with their texture references; the images embedded in the source are stored in the
+// scene once each, the others referenced by URI.
+struct MaterialReader {
+    const tinygltf::Model& model;
+    const EmbeddedImages& embedded;
+    Scene& scene;
+    std::map<int, int32_t> stored{};  // source image -> Scene::images index
+
+    int32_t store_image(int source) {
+        const auto bytes = embedded.find(source);
+        if (bytes == embedded.end()) return -1;
+        const auto [it, fresh] = stored.emplace(source, int32_t(scene.images.size()));
+        if (fresh) {
+            const tinygltf::Image& image = model.images[size_t(source)];
+            std::string mime = image.mimeType;
+            if (mime.empty()) mime = sniff_image_type(bytes->second.data(), bytes->second.size());
+            if (mime.empty()) mime = "application/octet-stream";
+            scene.images.push_back(make_image(image.name, mime, bytes->second));
+        }
+        return it->second;
+    }
+
+    void texture_ref(int texture, int texcoord, TextureRole role, Material& out) {
+        if (texture < 0 || size_t(texture) >= model.textures.size()) return;
+        const int source = texture_source(model.textures[size_t(texture)]);
+        TextureRef ref;
+        ref.role = role;
+        ref.texcoord = texcoord > 0 ? uint32_t(texcoord) : 0u;
+        if (source >= 0 && size_t(source) < model.images.size()) {
+            const tinygltf::Image& image = model.images[size_t(source)];
+            ref.image = store_image(source);
+            ref.mime_type = ref.image >= 0 ? scene.images[size_t(ref.image)].mime_type : image.mimeType;
+            if (ref.image < 0 && image.uri.rfind("data:", 0) != 0) ref.uri = image.uri;
+        }
+        out.textures.push_back(std::move(ref));
+    }
+
+    Material material(const tinygltf::Material& m);
+};
 
 // A material's five texture slots of the metallic-roughness model: texture index, TEXCOORD set,
 // the slot's extensions (KHR_texture_transform) and the role it plays.
@@ -50,7 +86,7 @@ std::array<TextureSlot, texture_role_count> texture_slots(const tinygltf::Materi
              {m.emissiveTexture.index, m.emissiveTexture.texCoord, &m.emissiveTexture.extensions, TextureRole::emissive}}};
 }
 
-Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
+Material MaterialReader::material(const tinygltf::Material& m) {
     Material out;
     out.name = m.name;
     const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
@@ -61,7 +97,7 @@ Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
     out.alpha_mode = m.alphaMode == "MASK" ? AlphaMode::mask : m.alphaMode == "BLEND" ? AlphaMode::blend : AlphaMode::opaque;
     out.alpha_cutoff = float(m.alphaCutoff);
     out.double_sided = m.doubleSided;
-    for (const TextureSlot& slot : texture_slots(m)) texture_ref(model, slot.index, slot.texcoord, slot.role, out);
+    for (const TextureSlot& slot : texture_slots(m)) texture_ref(slot.index, slot.texcoord, slot.role, out);
     // the specular-glossiness extension's diffuse colour and texture stand for the base colour
     const auto sg = m.extensions.find("KHR_materials_pbrSpecularGlossiness");
     if (sg != m.extensions.end() && sg->second.IsObject()) {
@@ -70,7 +106,7 @@ Material material(const tinygltf::Model& model, const tinygltf::Material& m) {
             for (int k = 0; k < 4; ++k) out.base_color[k] = float(diffuse.Get(k).GetNumberAsDouble());
         const tinygltf::Value& tex = sg->second.Get("diffuseTexture");
         if (tex.IsObject() && tex.Get("index").IsNumber() && pbr.baseColorTexture.index < 0)
-            texture_ref(model, tex.Get("index").GetNumberAsInt(), tex.Get("texCoord").IsNumber() ? tex.Get("texCoord").GetNumberAsInt() : 0,
+            texture_ref(tex.Get("index").GetNumberAsInt(), tex.Get("texCoord").IsNumber() ? tex.Get("texCoord").GetNumberAsInt() : 0,
                         TextureRole::base_color, out);
     }
     return out;
@@ -185,9 +221,11 @@ std::string bake_texture_transform(const tinygltf::Model& model, int material, M
                     : "";
 }
 
-Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path) {
+Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
+                 const std::string& path) {
     Scene scene;
-    for (const tinygltf::Material& m : model.materials) scene.materials.push_back(material(model, m));
+    MaterialReader reader{model, embedded, scene};
+    for (const tinygltf::Material& m : model.materials) scene.materials.push_back(reader.material(m));
     const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
     if (size_t(which) < model.scenes.size()) {
         Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};

@@ -18,6 +18,9 @@ ImportResult import_gltf(const std::string& path, bool binary);
 /// \throw ImportError naming the file and the face or count at fault
 std::optional<ImportResult> read_simple_binary_ply(const std::string& path, const std::vector<uint8_t>& bytes);
 std::string file_stem(const std::string& path);
+/// A texture coordinate v between OBJ's and PLY's convention (v = 0 at the image's bottom row)
+/// and glTF's, which .tom files use (v = 0 at its top row); its own inverse. The exporters use it too.
+inline float flip_v(float v) { return float(1.0 - double(v)); }
 /// The whole file; IoError when it cannot be read.
 std::vector<uint8_t> read_whole_file(const std::string& path);
 /// The materials named by an OBJ's `usemtl` lines (`names`, in that order) from its `mtllib`

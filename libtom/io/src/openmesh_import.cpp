@@ -70,7 +70,8 @@ class Importer : public OpenMesh::IO::ImporterT<OmMesh> {
                 // the polygon's own vertex, or the copy OpenMesh made of its corner (in order)
                 size_t corner = size_t(std::find(polygon_.begin(), polygon_.end(), v) - polygon_.begin());
                 if (corner == polygon_.size() && size_t(v.idx()) >= first_copy_) corner = size_t(v.idx()) - first_copy_;
-                if (corner < uv.size()) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(uv[corner][0], uv[corner][1]));
+                // v flipped into glTF's convention here, so that a corner without one keeps (0, 0)
+                if (corner < uv.size()) mesh_.set_texcoord2D(h, OmMesh::TexCoord2D(uv[corner][0], flip_v(uv[corner][1])));
             }
     }
 
@@ -297,7 +298,8 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
         for (size_t w = 0; w < n; ++w) {
             const auto t = corner_uv ? OmMesh::TexCoord2D(wedges[w].second[0], wedges[w].second[1]) : om.texcoord2D(OmMesh::VertexHandle(int(wedges[w].first)));
             mesh.texcoords[2 * w] = float(t[0]);
-            mesh.texcoords[2 * w + 1] = float(t[1]);
+            // OBJ's and PLY's v grows up the image, glTF's and the .tom's down (corners: flipped as read)
+            mesh.texcoords[2 * w + 1] = corner_uv ? float(t[1]) : flip_v(float(t[1]));
         }
     }
     if (opt.check(OpenMesh::IO::Options::VertexColor)) {

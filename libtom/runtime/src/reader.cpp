@@ -42,6 +42,13 @@ struct File::Impl {
     }
 
     void validate(const OpenOptions& options);
+    // rule 17: -1 (none) or one of the `stored` materials
+    void check_material(int32_t material, uint64_t offset, const std::string& field, size_t stored) const {
+        if (material == -1 || (material >= 0 && size_t(material) < stored)) return;
+        fail(offset, field, 17,
+             material < 0 ? "material " + std::to_string(material) + " is neither -1 (none) nor a stored material"
+                          : "material " + std::to_string(material) + " is not among the " + std::to_string(stored) + " stored");
+    }
     void validate_parts(const SectionInfo& sec, uint32_t attributes, MeshView& v, const std::string& mesh_field) const;
 };
 
@@ -133,6 +140,7 @@ void File::Impl::validate(const OpenOptions& options) {
     const SectionInfo* materials_section = nullptr;
     const SectionInfo* instances_section = nullptr;
     const SectionInfo* provenance_section = nullptr;
+    const SectionInfo* images_section = nullptr;
     sections.resize(section_count);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
@@ -152,9 +160,12 @@ void File::Impl::validate(const OpenOptions& options) {
         if (options.verify_checksums && crc32(data + s.offset, s.bytes) != s.checksum)
             fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
         // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
-        if (type == sec_materials || type == sec_instances || type == sec_provenance) {
+        if (type == sec_materials || type == sec_instances || type == sec_provenance || type == sec_images) {
             if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
-            const SectionInfo*& file_slot = type == sec_materials ? materials_section : type == sec_instances ? instances_section : provenance_section;
+            const SectionInfo*& file_slot = type == sec_materials ? materials_section
+                                          : type == sec_instances ? instances_section
+                                          : type == sec_images    ? images_section
+                                                                  : provenance_section;
             if (file_slot) fail(e, field, 9, "the file has this section twice");
             file_slot = &s;
             continue;
@@ -291,19 +302,20 @@ void File::Impl::validate(const OpenOptions& options) {
         }
         if (ms.parts) validate_parts(*ms.parts, attributes, v, mesh_field);
     }
-    // rules 17 and 18: the scene
-    if (materials_section) {
+    // rules 17 and 18: the scene; a material index names a stored material or none (-1), also
+    // when the file stores no materials, so that no reader or exporter follows an index the
+    // file merely declares
+    if (materials_section)
         scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
-        for (uint32_t mi = 0; mi < mesh_count; ++mi) {
-            const MeshView& v = meshes[mi];
-            if (v.material >= 0 && size_t(v.material) >= scene.materials.size())
-                fail(per_mesh[mi].mesh->offset + m_material, "mesh " + std::to_string(mi) + " material", 17,
-                     "material " + std::to_string(v.material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
-            for (uint32_t p = 0; p < v.part_count && v.parts; ++p)
-                if (v.parts[p].material >= 0 && size_t(v.parts[p].material) >= scene.materials.size())
-                    fail(per_mesh[mi].parts->offset + parts_header_bytes + uint64_t(p) * part_record_bytes + 8, "mesh " + std::to_string(mi) + " part " + std::to_string(p) + " material", 17,
-                         "material " + std::to_string(v.parts[p].material) + " is not among the " + std::to_string(scene.materials.size()) + " stored");
-        }
+    // rule 21: the images embedded in the source, and which texture shows which
+    if (images_section) detail::decode_images(data + images_section->offset, images_section->bytes, images_section->offset, path, scene);
+    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+        const MeshView& v = meshes[mi];
+        const std::string field = "mesh " + std::to_string(mi);
+        check_material(v.material, per_mesh[mi].mesh->offset + m_material, field + " material", scene.materials.size());
+        for (uint32_t p = 0; p < v.part_count && v.parts; ++p)
+            check_material(v.parts[p].material, per_mesh[mi].parts->offset + parts_header_bytes + uint64_t(p) * part_record_bytes + 8,
+                           field + " part " + std::to_string(p) + " material", scene.materials.size());
     }
     if (provenance_section) provenance = std::string_view(reinterpret_cast<const char*>(data + provenance_section->offset), provenance_section->bytes);
     if (instances_section)

@@ -1,6 +1,7 @@
 // Scenes: the MATL and INST sections (docs/FORMAT.md) and the draw list.
 
 #include <cmath>
+#include <cstring>
 
 #include "format_layout.h"
 #include "scene_codec.h"
@@ -42,6 +43,7 @@ namespace detail {
 namespace {
 
 constexpr uint32_t scene_header_bytes = 16, material_record_bytes = 64, texture_record_bytes = 24, instance_record_bytes = 80;
+constexpr uint32_t image_record_bytes = 32, no_image = 0xFFFFFFFFu;
 
 // Strings follow the fixed records; a record holds (offset from the section start, bytes).
 class StringArea {
@@ -57,6 +59,14 @@ public:
             out_.insert(out_.end(), s.begin(), s.end());
         }
         while (out_.size() % 4) out_.push_back(0);
+    }
+    // after finish(): a block of bytes at a multiple of 16 from the section start (which is
+    // itself 16-aligned in the file), its (u64 offset, u64 bytes) stored at `slot`
+    void put_block(size_t slot, const uint8_t* data, uint64_t bytes) {
+        while (out_.size() % 16) out_.push_back(0);
+        store_u64(&out_[slot], uint64_t(out_.size()));
+        store_u64(&out_[slot + 8], bytes);
+        if (bytes) out_.insert(out_.end(), data, data + bytes);
     }
 
 private:
@@ -142,6 +152,30 @@ std::vector<uint8_t> encode_instances(const std::vector<Instance>& instances) {
     return out;
 }
 
+std::vector<uint8_t> encode_images(const Scene& scene) {
+    if (scene.images.empty()) return {};
+    uint32_t textures = 0;
+    for (const Material& m : scene.materials) textures += uint32_t(m.textures.size());
+    const size_t records = scene_header_bytes + 4 * size_t(textures);
+    std::vector<uint8_t> out(records + image_record_bytes * scene.images.size(), 0);
+    store_u32(&out[0], uint32_t(scene.images.size()));
+    store_u32(&out[4], textures);
+    size_t at = scene_header_bytes;
+    for (const Material& m : scene.materials)
+        for (const TextureRef& t : m.textures) {
+            store_u32(&out[at], t.image < 0 ? no_image : uint32_t(t.image));
+            at += 4;
+        }
+    StringArea strings(out);
+    for (size_t i = 0; i < scene.images.size(); ++i) {
+        strings.put(&out[records + image_record_bytes * i + 16], scene.images[i].mime_type);
+        strings.put(&out[records + image_record_bytes * i + 24], scene.images[i].name);
+    }
+    strings.finish();
+    for (size_t i = 0; i < scene.images.size(); ++i) strings.put_block(records + image_record_bytes * i, scene.images[i].data, scene.images[i].bytes);
+    return out;
+}
+
 std::vector<Material> decode_materials(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path) {
     const SectionReader in{data, bytes, offset, path, "MATL", 17};
     in.need(0, scene_header_bytes, "header");
@@ -206,6 +240,65 @@ std::vector<Instance> decode_instances(const uint8_t* data, uint64_t bytes, uint
     return out;
 }
 
+void decode_images(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path, Scene& scene) {
+    const SectionReader in{data, bytes, offset, path, "IMAG", 21};
+    in.need(0, scene_header_bytes, "header");
+    const uint64_t count = load_u32(data), textures = load_u32(data + 4);
+    uint64_t stored_textures = 0;
+    for (const Material& m : scene.materials) stored_textures += m.textures.size();
+    if (textures != stored_textures)
+        in.fail(4, "texture_count", std::to_string(textures) + " where MATL stores " + std::to_string(stored_textures) + " textures");
+    const uint64_t records = scene_header_bytes + 4 * textures;
+    const uint64_t records_end = records + image_record_bytes * count;
+    in.need(scene_header_bytes, records_end - scene_header_bytes, std::to_string(textures) + " texture images and " + std::to_string(count) + " image records");
+    scene.images.assign(count, Image{});
+    for (uint64_t i = 0; i < count; ++i) {
+        const uint64_t r = records + image_record_bytes * i;
+        const std::string field = "image " + std::to_string(i);
+        Image& image = scene.images[i];
+        const uint64_t at = load_u64(data + r), n = load_u64(data + r + 8);
+        if (at < records_end || at > bytes || n > bytes - at)
+            in.fail(r, field + " data", std::to_string(n) + " bytes at " + std::to_string(at) + " are not in the section's data area");
+        image.data = data + at;
+        image.bytes = n;
+        image.mime_type = in.string_at(r + 16, records_end, field + " mime_type");
+        if (image.mime_type.empty()) in.fail(r + 16, field + " mime_type", "is empty");
+        image.name = in.string_at(r + 24, records_end, field + " name");
+    }
+    uint64_t at = scene_header_bytes;
+    for (Material& m : scene.materials)
+        for (TextureRef& t : m.textures) {
+            const uint32_t image = load_u32(data + at);
+            if (image != no_image && image >= count)
+                in.fail(at, "texture " + std::to_string((at - scene_header_bytes) / 4) + " image",
+                        "image " + std::to_string(image) + " is not among the " + std::to_string(count) + " stored");
+            t.image = image == no_image ? -1 : int32_t(image);
+            at += 4;
+        }
+}
+
 } // namespace detail
+
+Image make_image(std::string name, std::string mime_type, std::vector<uint8_t> bytes) {
+    auto held = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
+    Image image;
+    image.name = std::move(name);
+    image.mime_type = std::move(mime_type);
+    image.data = held->data();
+    image.bytes = held->size();
+    image.owner = std::move(held);
+    return image;
+}
+
+const char* sniff_image_type(const uint8_t* p, uint64_t n) noexcept {
+    auto starts = [&](const char* magic, uint64_t len, uint64_t at = 0) { return n >= at + len && std::memcmp(p + at, magic, len) == 0; };
+    if (starts("\x89PNG\r\n\x1a\n", 8)) return "image/png";
+    if (starts("\xFF\xD8\xFF", 3)) return "image/jpeg";
+    if (starts("RIFF", 4) && starts("WEBP", 4, 8)) return "image/webp";
+    if (starts("\xABKTX 20\xBB\r\n\x1A\n", 12)) return "image/ktx2";
+    if (starts("GIF8", 4)) return "image/gif";
+    if (starts("BM", 2)) return "image/bmp";
+    return "";
+}
 
 } // namespace tom

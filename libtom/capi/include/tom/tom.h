@@ -206,6 +206,21 @@ tom_status tom_file_material(const tom_file* file, uint32_t index, tom_material*
 uint32_t tom_file_instance_count(const tom_file* file);
 tom_status tom_file_instance(const tom_file* file, uint32_t index, tom_instance* out);
 
+/* An image embedded in the source asset and stored in the file (format 1.6), byte for byte:
+ * PNG, JPEG, WebP, KTX2, ... never decoded. */
+typedef struct tom_image {
+    const char* name;       /* the source's name for it, terminated, possibly "" */
+    const char* mime_type;  /* "image/png", "image/jpeg", ..., terminated, never "" */
+    const uint8_t* data;    /* `bytes` bytes in the file's mapping (no copy), valid until tom_file_close */
+    uint64_t bytes;
+} tom_image;
+
+uint32_t tom_file_image_count(const tom_file* file);
+tom_status tom_file_image(const tom_file* file, uint32_t index, tom_image* out);
+/* Which stored image texture `texture` of material `material` shows: *image is its index for
+ * tom_file_image, or -1 when the image is a file named by the texture's uri. */
+tom_status tom_file_texture_image(const tom_file* file, uint32_t material, uint32_t texture, int32_t* image);
+
 /* ---- building ------------------------------------------------------------------------- */
 
 /* Memory the library hands to the caller (tom_build_memory's bytes). NULL functions mean

@@ -15,7 +15,7 @@
 namespace tom {
 
 constexpr uint32_t format_version_major = 1;
-constexpr uint32_t format_version_minor = 5;
+constexpr uint32_t format_version_minor = 6;
 
 struct OpenOptions {
     bool verify_checksums = true;  ///< CRC-32 of every section; costs one pass over the file
@@ -54,7 +54,8 @@ public:
     uint64_t file_bytes() const noexcept;
     uint32_t mesh_count() const noexcept;
     const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count()
-    /// Materials and instances (empty when the file has none; see tom::draw_list).
+    /// Materials, instances and stored images (empty when the file has none; see tom::draw_list).
+    /// The images' bytes are views into the file, valid while it lives.
     const Scene& scene() const noexcept;
     /// What made the file (section PROV, since 1.5): text the writer chose, for tombuild a JSON
     /// object with the input's digest, the files it read and the options (docs/FORMAT.md); empty

@@ -1,9 +1,11 @@
 #pragma once
 // A file's scene: the materials its meshes refer to and the instances that place the meshes in
 // the world (a glTF node tree flattened into world transforms). Stored in the file-level
-// sections MATL and INST (docs/FORMAT.md); textures are referenced, never decoded.
+// sections MATL, INST and IMAG (docs/FORMAT.md); textures are referenced, and images stored or
+// referenced, never decoded.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,17 @@ struct TextureRef {
     uint32_t texcoord = 0;   ///< which TEXCOORD_n it samples with
     std::string uri;         ///< as written in the source (relative to it), or empty for an image embedded in the source
     std::string mime_type;   ///< e.g. "image/png" when the source says, or empty
+    int32_t image = -1;      ///< the image stored in the file (Scene::images) for an image embedded in the source, else -1
+};
+
+/// An image embedded in the source asset (a GLB's buffer view, a data: URI), stored in the file
+/// byte for byte (section IMAG, since 1.6): PNG, JPEG, WebP, KTX2, ... never decoded.
+struct Image {
+    std::string name;        ///< the source's name for it, or empty
+    std::string mime_type;   ///< "image/png", "image/jpeg", "image/webp", "image/ktx2", ...; never empty
+    const uint8_t* data = nullptr;  ///< `bytes` bytes: into the File's mapping (valid while it lives), or held by `owner`
+    uint64_t bytes = 0;
+    std::shared_ptr<const void> owner;  ///< keeps `data` alive where no File holds it (an import's images); null for a File's
 };
 
 enum class AlphaMode : uint32_t { opaque = 0, mask = 1, blend = 2 };
@@ -45,7 +58,15 @@ struct Instance {
 struct Scene {
     std::vector<Material> materials;  ///< a mesh's `material` indexes this list
     std::vector<Instance> instances;  ///< empty: draw every mesh once, untransformed
+    std::vector<Image> images;        ///< the images embedded in the source; a TextureRef's `image` indexes this list
 };
+
+/// An image of `bytes` bytes held by the Image itself (copied once), e.g. for tom::serialize.
+Image make_image(std::string name, std::string mime_type, std::vector<uint8_t> bytes);
+
+/// The MIME type that an image's first bytes announce ("image/png", "image/jpeg", "image/webp",
+/// "image/ktx2", "image/gif", "image/bmp"), or "" when they announce none of these.
+const char* sniff_image_type(const uint8_t* data, uint64_t bytes) noexcept;
 
 /// What to draw for a whole file: the scene's instances, or, when it has none, every mesh once
 /// with the identity transform (node = mesh index).

@@ -29,7 +29,10 @@ struct WriteOptions {
 /// mesh's material index past the scene's materials): no writer call produces a file the reader
 /// rejects.
 std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const WriteOptions& options = {});
-/// The same with a scene: its materials and instances are stored in the file-level sections.
+/// The same with a scene: its materials, instances and images are stored in the file-level
+/// sections. Meshes that name materials of a scene that stores none get default materials
+/// ("material K", up to the largest index named, at most 65536), so that every material index in
+/// the file names a stored material.
 /// \pre every instance names a mesh < meshes.size() (\throw tom::ArgumentError otherwise).
 std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& scene, const WriteOptions& options = {});
 

@@ -29,9 +29,10 @@ struct ExportPart {
 /// vn, colours as "v x y z r g b"; an `o` per mesh, a `usemtl` per part with a material, and
 /// beside it a .mtl of the same stem with the materials: Kd, d, Ke and the texture maps, their
 /// URIs rewritten relative to the output when `texture_dir` names the folder they are relative
-/// to) or .ply (binary little-endian, colours as uchar rgba, and with materials an int
+/// to; an image stored in the file is written beside the OBJ as STEM.image-K.EXT) or .ply (binary little-endian, colours as uchar rgba, and with materials an int
 /// `material_index` per face, -1 for none). Files are written to temporary names and renamed.
-/// \throw IoError when the extension is unknown or a file cannot be written.
+/// \throw IoError when the extension is unknown, a file cannot be written, or a mesh refers to a
+/// material the scene does not store.
 void export_meshes(const std::string& path, const std::vector<ExportPart>& parts, const Scene& scene = {}, const std::string& texture_dir = "");
 
 /// One mesh of a .tom file at one or more resolutions, for export_glb().
@@ -48,11 +49,15 @@ struct GlbMesh {
 /// fit). One node per instance of `scene` (instances index `meshes`), with its world transform;
 /// without instances, one untransformed node per mesh. With several resolutions, each node's
 /// coarser levels are nodes of their own listed by its MSFT_lod extension (coarser in order).
-/// The scene's materials are written with their factors and the textures stored by URI
-/// (`texture_dir`: the folder those URIs are relative to, i.e. the source asset's; they are
-/// rewritten relative to the output; empty keeps them as stored); images that were embedded in
-/// the source are not kept. Without stored materials, referenced ones get placeholders.
-/// Written to a temporary name and renamed. \throw IoError when it cannot be written.
-void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene = {}, const std::string& texture_dir = "");
+/// The scene's materials are written with their factors and textures: images stored in the file
+/// (embedded in the source) are embedded in the output's binary buffer, byte for byte; images
+/// that were files keep their URIs (`texture_dir`: the folder those are relative to, i.e. the
+/// source asset's; they are rewritten relative to the output; empty keeps them as stored), or
+/// with `embed_images` are read from there and embedded too. A WebP, KTX2 or AVIF image is shown
+/// through EXT_texture_webp, KHR_texture_basisu or EXT_texture_avif (used and required).
+/// Written to a temporary name and renamed. \throw IoError when it cannot be written, when an
+/// image to embed cannot be read, or when a mesh refers to a material the scene does not store.
+void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene = {}, const std::string& texture_dir = "",
+                bool embed_images = false);
 
 } // namespace tom

@@ -17,6 +17,9 @@ struct ImportResult {
     std::vector<Mesh> meshes;           ///< one per triangle primitive (glTF) or one for the file
     std::vector<std::string> skipped;   ///< primitives not imported and why (points, lines, ...)
     std::vector<std::string> warnings;  ///< problems the reader worked around (one line each)
+    /// What the file holds that the .tom does not keep, one phrase each ("skins (1)", "animations
+    /// (2)", "extension KHR_lights_punctual", ...): empty when nothing is lost. glTF only.
+    std::vector<std::string> dropped;
     Scene scene;                        ///< glTF: materials, and the default scene's nodes as instances of `meshes`
     /// The other files the input names and the import reads (a glTF's external buffers, an
     /// OBJ's `mtllib` libraries, read or found missing), relative to the input's folder as the

@@ -1,0 +1,128 @@
+// What a glTF import keeps and what it names as dropped (see the header). The lists follow what
+// the importer, the .tom format and the glTF exporter carry: geometry with the streams POSITION,
+// NORMAL, TANGENT, TEXCOORD_0/1 and COLOR_0; metallic-roughness materials and their textures;
+// images (embedded ones stored, external ones by URI); the default scene's mesh nodes as
+// instances with their names and world transforms.
+
+#include "gltf_carried.h"
+
+#include <algorithm>
+#include <set>
+
+namespace tom::detail {
+
+namespace {
+
+// decoded on import (compression, quantization, texture transforms baked into TEXCOORD) or
+// carried through to the exported glTF (image codecs)
+const std::set<std::string> carried_extensions = {
+    "KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization", "KHR_texture_transform",
+    "EXT_texture_webp",           "KHR_texture_basisu",      "EXT_texture_avif",
+};
+
+const std::set<std::string> carried_attributes = {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0"};
+
+size_t size_of(const nlohmann::json& doc, const char* key) {
+    const auto it = doc.find(key);
+    return it != doc.end() && it->is_array() ? it->size() : 0;
+}
+
+// objects anywhere in the document with a non-empty "extras"
+size_t count_extras(const nlohmann::json& j) {
+    size_t n = 0;
+    if (j.is_object()) {
+        const auto it = j.find("extras");
+        if (it != j.end() && !it->is_null() && !(it->is_object() && it->empty())) ++n;
+        for (const auto& [key, value] : j.items())
+            if (key != "extras") n += count_extras(value);
+    } else if (j.is_array()) {
+        for (const auto& value : j) n += count_extras(value);
+    }
+    return n;
+}
+
+std::string counted(const std::string& what, size_t n) { return what + " (" + std::to_string(n) + ")"; }
+
+// the primitives' attributes the format has no stream for, and how many primitives have targets
+void scan_primitives(const nlohmann::json& doc, std::set<std::string>& attributes, size_t& morphed) {
+    const auto meshes = doc.find("meshes");
+    if (meshes == doc.end() || !meshes->is_array()) return;
+    for (const auto& mesh : *meshes) {
+        const auto primitives = mesh.find("primitives");
+        if (primitives == mesh.end() || !primitives->is_array()) continue;
+        for (const auto& prim : *primitives) {
+            const auto attr = prim.find("attributes");
+            if (attr != prim.end() && attr->is_object())
+                for (const auto& [name, value] : attr->items())
+                    if (!carried_attributes.count(name)) attributes.insert(name);
+            const auto targets = prim.find("targets");
+            if (targets != prim.end() && targets->is_array() && !targets->empty()) ++morphed;
+        }
+    }
+}
+
+// nodes of the default scene's tree that carry no mesh: the tree is flattened into instances
+size_t nodes_without_mesh(const nlohmann::json& doc) {
+    size_t n = 0;
+    const auto nodes = doc.find("nodes");
+    if (nodes == doc.end() || !nodes->is_array()) return 0;
+    for (const auto& node : *nodes)
+        if (node.is_object() && !node.contains("mesh")) ++n;
+    return n;
+}
+
+// texture-info properties the materials do not keep
+void scan_materials(const nlohmann::json& doc, std::vector<std::string>& out) {
+    const auto materials = doc.find("materials");
+    if (materials == doc.end() || !materials->is_array()) return;
+    size_t scaled = 0, strength = 0;
+    for (const auto& m : *materials) {
+        if (!m.is_object()) continue;
+        const auto normal = m.find("normalTexture");
+        if (normal != m.end() && normal->is_object() && normal->value("scale", 1.0) != 1.0) ++scaled;
+        const auto occlusion = m.find("occlusionTexture");
+        if (occlusion != m.end() && occlusion->is_object() && occlusion->value("strength", 1.0) != 1.0) ++strength;
+    }
+    if (scaled) out.push_back(counted("normalTexture scale", scaled));
+    if (strength) out.push_back(counted("occlusionTexture strength", strength));
+}
+
+} // namespace
+
+bool can_read_required(const std::string& extension) {
+    if (carried_extensions.count(extension)) return true;
+    static const std::set<std::string> no_geometry = {"KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit", "KHR_lights_punctual",
+                                                      "KHR_materials_variants", "KHR_xmp_json_ld", "EXT_lights_image_based"};
+    return no_geometry.count(extension) || extension.rfind("KHR_materials_", 0) == 0;
+}
+
+std::vector<std::string> gltf_dropped(const nlohmann::json& doc) {
+    std::vector<std::string> out;
+    if (const size_t n = size_of(doc, "skins")) out.push_back(counted("skins", n));
+    if (const size_t n = size_of(doc, "animations")) out.push_back(counted("animations", n));
+    std::set<std::string> attributes;
+    size_t morphed = 0;
+    scan_primitives(doc, attributes, morphed);
+    if (morphed) out.push_back("morph targets (in " + std::to_string(morphed) + " primitive" + (morphed == 1 ? ")" : "s)"));
+    if (!attributes.empty()) {
+        std::string list;
+        for (const std::string& a : attributes) list += (list.empty() ? "" : ", ") + a;
+        out.push_back((attributes.size() == 1 ? "attribute " : "attributes ") + list);
+    }
+    if (const size_t n = size_of(doc, "cameras")) out.push_back(counted("cameras", n));
+    if (const size_t n = size_of(doc, "scenes"); n > 1) out.push_back(counted("scenes other than the default", n - 1));
+    if (const size_t n = nodes_without_mesh(doc))
+        out.push_back("node tree (flattened into instances: " + std::to_string(n) + " node" + (n == 1 ? "" : "s") + " without a mesh)");
+    const auto used = doc.find("extensionsUsed");
+    if (used != doc.end() && used->is_array())
+        for (const auto& e : *used)
+            if (e.is_string() && !carried_extensions.count(e.get<std::string>())) out.push_back("extension " + e.get<std::string>());
+    scan_materials(doc, out);
+    if (const size_t n = size_of(doc, "samplers")) out.push_back(counted("texture samplers", n));
+    if (const size_t n = count_extras(doc)) out.push_back(counted("extras", n));
+    const auto asset = doc.find("asset");
+    if (asset != doc.end() && asset->is_object() && asset->contains("copyright")) out.push_back("asset copyright");
+    return out;
+}
+
+} // namespace tom::detail

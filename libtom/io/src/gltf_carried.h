@@ -1,0 +1,25 @@
+#pragma once
+// What of a glTF document the toolkit carries into a .tom and back out, and what it does not: the
+// importer's answer to "was anything lost?" (ImportResult::dropped).
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace tom::detail {
+
+/// Whether an asset that lists `extension` in extensionsRequired can be read: the extensions the
+/// importer decodes or carries, and those that change no geometry (materials, lights, image
+/// codecs); an extension that places or shapes geometry otherwise (EXT_mesh_gpu_instancing,
+/// KHR_technique_webgl, an unknown one) cannot.
+bool can_read_required(const std::string& extension);
+
+/// The features of `doc` that the .tom does not keep, one phrase each, in a fixed order:
+/// "skins (1)", "animations (2)", "morph targets (in 3 primitives)", "attributes JOINTS_0,
+/// WEIGHTS_0", "cameras (1)", "node tree (flattened into instances: 2 nodes without a mesh)",
+/// "extension KHR_lights_punctual", "texture samplers (2)", "extras (4)", ... Empty when
+/// nothing is lost.
+std::vector<std::string> gltf_dropped(const nlohmann::json& doc);
+
+} // namespace tom::detail

@@ -1,0 +1,315 @@
+// Nothing lost without a word: images embedded in a glTF (a GLB's buffer view, a data: URI) are
+// stored in the .tom byte for byte and written again by the exporters; WebP and KTX2 textures are
+// carried, not refused; what a glTF holds that the .tom does not keep (skins, animations, morph
+// targets, cameras, extensions, ...) is named; an OBJ's texture coordinates reach glTF the right
+// way up and come back unchanged; a material index that names no stored material is never
+// followed.
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "support.h"
+#include "tom/builder/builder.h"
+#include "tom/builder/writer.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/io/export.h"
+#include "tom/io/import.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<uint8_t> file_bytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A GLB's JSON and binary chunk, read with nothing but the container's layout.
+struct Glb {
+    nlohmann::json doc;
+    std::vector<uint8_t> bin;
+
+    explicit Glb(const std::vector<uint8_t>& b) {
+        REQUIRE(b.size() >= 20);
+        uint32_t json_bytes;
+        std::memcpy(&json_bytes, &b[12], 4);
+        doc = nlohmann::json::parse(b.begin() + 20, b.begin() + 20 + json_bytes);
+        if (b.size() > 28 + size_t(json_bytes)) bin.assign(b.begin() + 28 + json_bytes, b.end());
+    }
+    // the bytes of image `i` (from its buffer view)
+    std::vector<uint8_t> image(size_t i) const {
+        const nlohmann::json& view = doc["bufferViews"][doc["images"][i]["bufferView"].get<size_t>()];
+        const size_t at = view.value("byteOffset", size_t(0)), n = view["byteLength"].get<size_t>();
+        REQUIRE(at + n <= bin.size());
+        return std::vector<uint8_t>(bin.begin() + long(at), bin.begin() + long(at + n));
+    }
+    // the image that material `m`'s base colour texture shows
+    size_t base_color_image(size_t m) const {
+        const nlohmann::json& texture = doc["textures"][doc["materials"][m]["pbrMetallicRoughness"]["baseColorTexture"]["index"].get<size_t>()];
+        if (texture.contains("source")) return texture["source"].get<size_t>();
+        return texture["extensions"].begin().value()["source"].get<size_t>();
+    }
+    std::vector<uint8_t> bytes() const {
+        std::string json = doc.dump();
+        json.append((4 - json.size() % 4) % 4, ' ');
+        auto le32 = [](std::vector<uint8_t>& out, uint32_t v) { out.insert(out.end(), reinterpret_cast<uint8_t*>(&v), reinterpret_cast<uint8_t*>(&v) + 4); };
+        std::vector<uint8_t> out;
+        le32(out, 0x46546C67);
+        le32(out, 2);
+        le32(out, uint32_t(12 + 8 + json.size() + 8 + bin.size()));
+        le32(out, uint32_t(json.size()));
+        le32(out, 0x4E4F534A);
+        out.insert(out.end(), json.begin(), json.end());
+        le32(out, uint32_t(bin.size()));
+        le32(out, 0x004E4942);
+        out.insert(out.end(), bin.begin(), bin.end());
+        return out;
+    }
+};
+
+fs::path work_dir(const char* name) {
+    const fs::path dir = fs::temp_directory_path() / "tom_fidelity_test" / name;
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+// Imports `source`, builds and stores it, and opens the stored bytes.
+struct Stored {
+    tom::ImportResult imported;
+    std::vector<uint8_t> bytes;
+    tom::File file;
+};
+Stored store(const std::string& source) {
+    tom::ImportResult r = tom::import_file(source);
+    std::vector<tom::TomMesh> built;
+    for (tom::Mesh& m : r.meshes) {
+        tom::clean_mesh(m);
+        built.push_back(tom::build(m));
+    }
+    std::vector<uint8_t> bytes = tom::serialize(built, r.scene);
+    tom::File file = tom::File::from_bytes(bytes.data(), bytes.size(), source);
+    return {std::move(r), std::move(bytes), std::move(file)};
+}
+
+// Every mesh of `file` at full resolution, as export_glb takes them.
+std::vector<tom::GlbMesh> full_detail(const tom::File& file) {
+    std::vector<tom::GlbMesh> out;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) out.push_back({&file.mesh(i), {file.mesh(i).vertex_count}});
+    return out;
+}
+
+bool has(const std::vector<std::string>& list, const std::string& item) { return std::find(list.begin(), list.end(), item) != list.end(); }
+
+} // namespace
+
+TEST_CASE("images embedded in a GLB or a data: URI are stored byte for byte and embedded again", "[fidelity][images]") {
+    const std::vector<uint8_t> png = file_bytes(test::sample("assimp/glTF2/BoxTextured-glTF/CesiumLogoFlat.png"));
+    REQUIRE(png.size() > 1000);
+    // the same image in a GLB's binary chunk and in a data: URI
+    for (const char* source : {"assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", "assimp/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf"}) {
+        INFO(source);
+        const Stored s = store(test::sample(source));
+        REQUIRE(s.file.scene().images.size() == 1);
+        const tom::Image& image = s.file.scene().images[0];
+        CHECK(image.mime_type == "image/png");
+        REQUIRE(image.bytes == png.size());
+        CHECK(std::memcmp(image.data, png.data(), png.size()) == 0);
+        // in place: a borrowed file's image lies inside the caller's bytes
+        const tom::File mapped = tom::File::borrow(s.bytes.data(), s.bytes.size());
+        CHECK((mapped.scene().images[0].data > s.bytes.data() && mapped.scene().images[0].data + png.size() <= s.bytes.data() + s.bytes.size()));
+        REQUIRE(s.file.scene().materials.size() == 1);
+        CHECK(s.file.scene().materials[0].textures.at(0).image == 0);
+        CHECK(s.file.scene().materials[0].textures.at(0).uri.empty());
+        // glTF out: the image in the binary chunk again, the validator's way (bufferView + mimeType)
+        const fs::path dir = work_dir("images");
+        tom::export_glb((dir / "box.glb").string(), full_detail(s.file), s.file.scene());
+        const Glb out(file_bytes(dir / "box.glb"));
+        REQUIRE(out.doc["images"].size() == 1);
+        CHECK(out.doc["images"][0]["mimeType"] == "image/png");
+        CHECK(out.image(out.base_color_image(0)) == png);
+        // OBJ out: the image as a file beside it, named by the .mtl
+        tom::ExportPart part;
+        part.mesh = &s.file.mesh(0);
+        part.vertex_count = part.mesh->vertex_count;
+        part.indices.resize(size_t(part.mesh->triangle_count) * 3);
+        tom::extract(*part.mesh, part.vertex_count, part.indices.data(), part.indices.size());
+        tom::export_meshes((dir / "box.obj").string(), {part}, s.file.scene());
+        CHECK(file_bytes(dir / "box.image-0.png") == png);
+        std::ifstream mtl(dir / "box.mtl");
+        const std::string text((std::istreambuf_iterator<char>(mtl)), std::istreambuf_iterator<char>());
+        CHECK(text.find("map_Kd box.image-0.png") != std::string::npos);
+    }
+}
+
+TEST_CASE("an image that is a file stays a URI, or is embedded on request", "[fidelity][images]") {
+    const std::string source = test::sample("assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf");
+    const Stored s = store(source);
+    CHECK(s.file.scene().images.empty());
+    REQUIRE(s.file.scene().materials.at(0).textures.size() == 1);
+    CHECK(s.file.scene().materials[0].textures[0].image == -1);
+    CHECK(s.file.scene().materials[0].textures[0].uri == "CesiumLogoFlat.png");
+    const fs::path dir = work_dir("external");
+    const std::string texture_dir = fs::path(source).parent_path().string();
+    tom::export_glb((dir / "uri.glb").string(), full_detail(s.file), s.file.scene(), texture_dir);
+    const Glb by_uri(file_bytes(dir / "uri.glb"));
+    CHECK(by_uri.doc["images"][0]["uri"] == fs::relative(fs::path(texture_dir) / "CesiumLogoFlat.png", dir).generic_string());
+    tom::export_glb((dir / "embedded.glb").string(), full_detail(s.file), s.file.scene(), texture_dir, true);
+    const Glb embedded(file_bytes(dir / "embedded.glb"));
+    CHECK(!embedded.doc["images"][0].contains("uri"));
+    CHECK(embedded.image(0) == file_bytes(fs::path(texture_dir) / "CesiumLogoFlat.png"));
+    // an image to embed that is not there is an error naming it, and no output is left
+    CHECK_THROWS_WITH(tom::export_glb((dir / "missing.glb").string(), full_detail(s.file), s.file.scene(), dir.string(), true),
+                      Catch::Contains("cannot read image") && Catch::Contains("CesiumLogoFlat.png"));
+    CHECK(!fs::exists(dir / "missing.glb"));
+}
+
+TEST_CASE("WebP and KTX2 textures are carried with their extension, not refused", "[fidelity][images]") {
+    const Glb box(file_bytes(test::sample("assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb")));
+    const std::vector<uint8_t> image = box.image(0);
+    const std::pair<const char*, const char*> codecs[] = {{"EXT_texture_webp", "image/webp"}, {"KHR_texture_basisu", "image/ktx2"}};
+    for (const auto& [extension, mime] : codecs) {
+        INFO(extension);
+        // the box with its texture in that codec alone (the bytes stay the PNG's: nothing decodes them)
+        Glb variant = box;
+        variant.doc["images"][0]["mimeType"] = mime;
+        variant.doc["textures"][0] = {{"extensions", {{extension, {{"source", 0}}}}}};
+        variant.doc["extensionsUsed"] = {extension};
+        variant.doc["extensionsRequired"] = {extension};
+        const fs::path dir = work_dir("codecs");
+        const fs::path path = dir / "variant.glb";
+        const std::vector<uint8_t> bytes = variant.bytes();
+        std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+        const Stored s = store(path.string());
+        REQUIRE(s.file.scene().images.size() == 1);
+        CHECK(s.file.scene().images[0].mime_type == mime);
+        CHECK(!has(s.imported.dropped, std::string("extension ") + extension));
+        tom::export_glb((dir / "out.glb").string(), full_detail(s.file), s.file.scene());
+        const Glb out(file_bytes(dir / "out.glb"));
+        CHECK(out.doc["extensionsRequired"] == nlohmann::json::array({extension}));
+        CHECK(out.doc["textures"][0]["extensions"][extension]["source"] == 0);
+        CHECK(out.doc["images"][0]["mimeType"] == mime);
+        CHECK(out.image(out.base_color_image(0)) == image);
+    }
+    // an extension that changes how geometry is placed is still refused, by name
+    Glb instanced = box;
+    instanced.doc["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+    instanced.doc["extensionsRequired"] = {"EXT_mesh_gpu_instancing"};
+    const fs::path path = work_dir("instanced") / "instanced.glb";
+    const std::vector<uint8_t> bytes = instanced.bytes();
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+    CHECK_THROWS_WITH(tom::import_file(path.string()), Catch::Contains("requires extension EXT_mesh_gpu_instancing"));
+}
+
+TEST_CASE("what a glTF holds and the .tom does not keep is named, never dropped silently", "[fidelity][dropped]") {
+    const std::vector<std::pair<const char*, std::vector<std::string>>> cases = {
+        {"assimp/glTF2/simple_skin/simple_skin.gltf", {"skins (1)", "animations (1)", "attributes JOINTS_0, WEIGHTS_0"}},
+        {"assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf", {"animations (1)", "morph targets (in 1 primitive)"}},
+        {"assimp/glTF2/cameras/Cameras.gltf", {"cameras (2)"}},
+        {"assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf", {"extension KHR_materials_clearcoat"}},
+        {"assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", {"texture samplers (1)", "node tree (flattened into instances: 1 node without a mesh)"}},
+        {"assimp/glTF2/glTF-Asset-Generator/Mesh_PrimitiveMode/Mesh_PrimitiveMode_04.gltf", {}},
+    };
+    for (const auto& [source, expected] : cases) {
+        INFO(source);
+        const tom::ImportResult r = tom::import_file(test::sample(source));
+        for (const std::string& e : expected) {
+            INFO(e);
+            CHECK(has(r.dropped, e));
+        }
+        if (expected.empty()) CHECK(r.dropped.empty());
+    }
+    // a material extension in extensionsRequired is read (it changes no geometry) and named
+    const std::string clearcoat = test::sample("assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf");
+    std::ifstream in(clearcoat);
+    nlohmann::json doc = nlohmann::json::parse(in);
+    doc["extensionsRequired"] = {"KHR_materials_clearcoat"};
+    const fs::path dir = work_dir("required");
+    for (const auto& e : fs::directory_iterator(fs::path(clearcoat).parent_path()))
+        if (e.path().extension() != ".gltf") fs::copy_file(e.path(), dir / e.path().filename());
+    std::ofstream(dir / "required.gltf") << doc.dump();
+    const tom::ImportResult r = tom::import_file((dir / "required.gltf").string());
+    CHECK(!r.meshes.empty());
+    CHECK(has(r.dropped, "extension KHR_materials_clearcoat"));
+}
+
+TEST_CASE("an OBJ's texture coordinates reach glTF the right way up and come back unchanged", "[fidelity][texcoords]") {
+    const std::string spider = test::sample("assimp/OBJ/spider.obj");
+    // the file's vt values, as (u, v) pairs
+    auto vt_of = [](const fs::path& path) {
+        std::multiset<std::pair<float, float>> out;
+        std::ifstream in(path);
+        for (std::string line; std::getline(in, line);)
+            if (line.rfind("vt ", 0) == 0) {
+                std::istringstream ls(line.substr(3));
+                float u = 0, v = 0;
+                ls >> u >> v;
+                out.insert({u, v});
+            }
+        return out;
+    };
+    const Stored s = store(spider);
+    const tom::MeshView& m = s.file.mesh(0);
+    REQUIRE(m.texcoords);
+    // in glTF's convention: the .tom's v is 1 - the file's v, for the corners the file names
+    std::multiset<std::pair<float, float>> flipped;
+    for (uint32_t i = 0; i < m.vertex_count; ++i) flipped.insert({m.texcoords[2 * i], float(1.0 - double(m.texcoords[2 * i + 1]))});
+    const std::multiset<std::pair<float, float>> source = vt_of(spider);
+    size_t found = 0;
+    for (const auto& uv : flipped) {
+        const auto near = std::find_if(source.begin(), source.end(), [&](const std::pair<float, float>& t) {
+            return std::fabs(t.first - uv.first) <= 1e-6f && std::fabs(t.second - uv.second) <= 1e-6f;
+        });
+        found += near != source.end();
+    }
+    CHECK(found == flipped.size());
+    // and back: the exported OBJ's vt are the stored ones flipped back, within float rounding
+    const fs::path dir = work_dir("obj");
+    tom::ExportPart part;
+    part.mesh = &m;
+    part.vertex_count = m.vertex_count;
+    part.indices.resize(size_t(m.triangle_count) * 3);
+    tom::extract(m, m.vertex_count, part.indices.data(), part.indices.size());
+    tom::export_meshes((dir / "spider.obj").string(), {part}, s.file.scene());
+    const std::multiset<std::pair<float, float>> written = vt_of(dir / "spider.obj");
+    REQUIRE(written.size() == flipped.size());
+    auto a = written.begin();
+    for (auto b = flipped.begin(); b != flipped.end(); ++a, ++b) CHECK((std::fabs(a->first - b->first) <= 1e-6f && std::fabs(a->second - b->second) <= 1e-6f));
+}
+
+TEST_CASE("the exporters refuse a material index that names no stored material instead of looping to it", "[fidelity][hostile]") {
+    tom::Mesh tri;
+    tri.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    tri.indices = {0, 1, 2};
+    tom::clean_mesh(tri);
+    const tom::TomMesh built = tom::build(tri);
+    tom::MeshView view = built.view();
+    view.material = 1196310868;  // the fuzzing run's index, in a file that stored no material
+    const fs::path dir = work_dir("hostile");
+    tom::ExportPart part;
+    part.mesh = &view;
+    part.vertex_count = view.vertex_count;
+    part.indices = {0, 1, 2};
+    for (const char* name : {"out.obj", "out.ply"}) {
+        INFO(name);
+        if (std::string(name) == "out.ply") {
+            CHECK_NOTHROW(tom::export_meshes((dir / name).string(), {part}));  // PLY writes the index per face, names nothing
+            continue;
+        }
+        CHECK_THROWS_WITH(tom::export_meshes((dir / name).string(), {part}), Catch::Contains("refers to material 1196310868, but 0 are stored"));
+        CHECK(!fs::exists(dir / name));
+    }
+    CHECK_THROWS_WITH(tom::export_glb((dir / "out.glb").string(), {{&view, {view.vertex_count}}}), Catch::Contains("refers to material 1196310868, but 0 are stored"));
+    CHECK(!fs::exists(dir / "out.glb"));
+}
