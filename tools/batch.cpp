@@ -64,6 +64,7 @@ std::string Provenance::text() const {
     j["sources"] = nlohmann::json::array();
     for (const auto& [name, digest] : sources) j["sources"].push_back({{"file", name}, {"digest", digest}});
     j["options"] = options;
+    if (!dropped.empty()) j["dropped"] = dropped;
     return compact(j);
 }
 
@@ -75,6 +76,7 @@ Provenance Provenance::parse(const std::string& text) {
     p.input_digest = j.at("input").at("digest").get<std::string>();
     for (const auto& s : j.at("sources")) p.sources.emplace_back(s.at("file").get<std::string>(), s.at("digest").get<std::string>());
     p.options = j.at("options");
+    if (j.contains("dropped")) p.dropped = j.at("dropped").get<std::vector<std::string>>();
     return p;
 }
 
@@ -124,6 +126,7 @@ Freshness check_output(const std::string& input, const std::string& output, cons
                 }
             f.up_to_date = true;
             f.provenance = text;
+            f.dropped = p.dropped;
             for (uint32_t m = 0; m < file.mesh_count(); ++m) f.triangles += file.mesh(m).triangle_count;
         }
     } catch (const tom::Error& e) {
@@ -144,6 +147,7 @@ nlohmann::ordered_json ManifestRecord::json() const {
     j["output"] = output;
     j["status"] = status;
     if (!message.empty()) j["message"] = message;
+    j["dropped"] = dropped;
     if (!report.empty()) j["report"] = report;
     j["triangles"] = triangles;
     j["seconds"] = seconds;
@@ -159,6 +163,7 @@ ManifestRecord ManifestRecord::from_json(const nlohmann::json& j) {
     r.status = j.at("status").get<std::string>();
     r.message = j.value("message", "");
     r.report = j.value("report", "");
+    if (j.contains("dropped")) r.dropped = j.at("dropped").get<std::vector<std::string>>();
     r.triangles = j.at("triangles").get<uint64_t>();
     r.seconds = j.at("seconds").get<double>();
     return r;

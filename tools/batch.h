@@ -27,6 +27,7 @@ struct Provenance {
     std::string input_digest;
     std::vector<std::pair<std::string, std::string>> sources;  // (name, digest)
     nlohmann::ordered_json options;
+    std::vector<std::string> dropped;  ///< what the import did not carry into the file (ImportResult::dropped)
 
     std::string text() const;  ///< the PROV section's JSON, compact, keys in a fixed order
     /// \throw nlohmann::json::exception when `text` is not what text() writes
@@ -44,6 +45,7 @@ struct Freshness {
     std::string digest;        ///< the input's digest now
     uint64_t triangles = 0;    ///< the output's triangles, summed over its meshes (when up to date)
     std::string provenance;    ///< the output's PROV text (when up to date)
+    std::vector<std::string> dropped;  ///< what its conversion did not carry (when up to date)
 };
 Freshness check_output(const std::string& input, const std::string& output, const std::string& tool, const nlohmann::ordered_json& options);
 
@@ -55,6 +57,7 @@ struct ManifestRecord {
     std::string status;      ///< "converted", "up to date" or "failed"
     std::string message;     ///< failed: the error
     std::string report;      ///< the JSON report's path, when reports were asked for
+    std::vector<std::string> dropped;  ///< what the input holds that the output does not (ImportResult::dropped)
     uint64_t triangles = 0;
     double seconds = 0;
 

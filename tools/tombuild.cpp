@@ -88,6 +88,7 @@ struct Outcome {
     std::string summary_csv;  // rows of the batch summary, one per mesh (with --report-json)
     std::string digest;       // of the input as converted
     uint64_t triangles = 0;
+    std::vector<std::string> dropped;  // what the input holds that the output does not
 };
 
 // What a conversion needs besides the job: the settings, and what the provenance records.
@@ -139,6 +140,13 @@ struct StageLine {
     }
 };
 
+// The warning for what a conversion did not carry: one line naming the input and every feature.
+std::string dropped_warning(const std::string& input, const std::vector<std::string>& dropped) {
+    std::string line = "warning: " + input + ": not carried into the .tom: ";
+    for (size_t k = 0; k < dropped.size(); ++k) line += (k ? "; " : "") + dropped[k];
+    return line + "\n";
+}
+
 Outcome convert(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path) {
     Outcome out;
     const auto start = std::chrono::steady_clock::now();
@@ -155,7 +163,8 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
     try {
         stage.show("import");
         tom::ImportResult imported = tom::import_file(job.input);
-        const tools::Provenance provenance = tools::describe(job.input, imported.sources, tool_version, settings.output_options);
+        tools::Provenance provenance = tools::describe(job.input, imported.sources, tool_version, settings.output_options);
+        provenance.dropped = out.dropped = imported.dropped;
         out.digest = provenance.input_digest;
         if (imported.meshes.empty())
             throw tom::ImportError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
@@ -252,6 +261,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             doc.update(tools::build_params_json(params));
             doc["conventions"] = tools::conventions_json(rparams);
             doc["skipped"] = imported.skipped;
+            doc["dropped"] = imported.dropped;
             doc["meshes"] = json_meshes;
             // what made the report: its .tom's provenance and the report's own options (a rerun
             // keeps the report when both are unchanged)
@@ -346,6 +356,7 @@ Outcome convert_isolated(const tools::Job& job, const Options& opt, const Settin
         put_string(wire, r.summary_csv);
         put_string(wire, r.digest);
         put_string(wire, std::to_string(r.triangles));
+        for (const std::string& d : r.dropped) put_string(wire, d);
         for (size_t at = 0; at < wire.size();) {
             const ssize_t n = ::write(fds[1], wire.data() + at, wire.size() - at);
             if (n <= 0) break;
@@ -389,6 +400,7 @@ Outcome convert_isolated(const tools::Job& job, const Options& opt, const Settin
         get_string(wire, at, out.summary_csv) && get_string(wire, at, out.digest) && get_string(wire, at, triangles)) {
         out.ok = wire[0] == '1';
         out.triangles = std::strtoull(triangles.c_str(), nullptr, 10);
+        for (std::string d; get_string(wire, at, d);) out.dropped.push_back(d);
         return out;
     }
     remove_temporaries(job.output, child);
@@ -603,6 +615,7 @@ int main(int argc, char** argv) {
                     r.ok = true;
                     r.digest = f.digest;
                     r.triangles = f.triangles;
+                    r.dropped = f.dropped;
                     r.text = job.input + ": up to date (" + job.output + ")\n";
                 } else {
                     r = opt.isolate ? convert_isolated(job, opt, settings, report_path) : convert(job, opt, settings, report_path);
@@ -616,6 +629,7 @@ int main(int argc, char** argv) {
                 rec.digest = r.digest == "missing" ? "" : r.digest;
                 rec.status = !r.ok ? "failed" : f.up_to_date ? "up to date" : "converted";
                 rec.triangles = r.ok ? r.triangles : 0;
+                rec.dropped = r.ok ? r.dropped : std::vector<std::string>();
                 rec.seconds = seconds_since(start);
                 if (!r.ok) {
                     std::string message = r.text;
@@ -633,6 +647,7 @@ int main(int argc, char** argv) {
                     std::fputs(r.text.c_str(), stderr);
                 else if (!opt.quiet && (!f.up_to_date || opt.verbose > 0))
                     std::fputs(r.text.c_str(), stdout);
+                if (r.ok && !f.up_to_date && !r.dropped.empty()) std::fputs(dropped_warning(job.input, r.dropped).c_str(), stderr);
                 std::fflush(stdout);
                 if (show_progress) draw_progress(done, selected.size(), failed);
             }

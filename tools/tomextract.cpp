@@ -35,6 +35,9 @@ int main(int argc, char** argv) {
     std::string texture_dir;
     app.add_option("--texture-dir", texture_dir,
                    "For .glb and .obj: the folder the stored texture URIs are relative to (the source asset's); they are rewritten relative to the output");
+    bool embed_images = false;
+    app.add_flag("--embed-images", embed_images,
+                 "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
@@ -44,6 +47,10 @@ int main(int argc, char** argv) {
         return tools::exit_usage;
     }
     auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
+    if (embed_images && !is_glb()) {
+        std::fprintf(stderr, "error: --embed-images writes images into a .glb; '%s' is not one\n", output.c_str());
+        return tools::exit_usage;
+    }
     if (!lods.empty() && !is_glb()) {
         std::fprintf(stderr, "error: --lods writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
         return tools::exit_usage;
@@ -88,7 +95,7 @@ int main(int argc, char** argv) {
                 written += tom::active_triangle_count(m, g.vertex_counts.front());
                 glb.push_back(g);
             }
-            tom::export_glb(output, glb, scene, texture_dir);
+            tom::export_glb(output, glb, scene, texture_dir, embed_images);
             std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", path.c_str(), glb.size(),
                         glb.size() == 1 ? "" : "es", lods.empty() ? size_t(1) : lods.size(), lods.size() > 1 ? "s" : "",
                         static_cast<unsigned long long>(written), scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
