@@ -78,6 +78,9 @@ int main(int argc, char** argv) {
             if (m.texcoords1) attrs.push_back("texcoord1");
             if (m.tangents) attrs.push_back("tangent");
             mj["attributes"] = attrs;
+            std::vector<std::string> carried;  // section XATT: glTF attributes and morph deltas carried unread
+            for (uint32_t k = 0; k < m.extra_stream_count; ++k) carried.emplace_back(m.extra_streams[k].name);
+            mj["carried_streams"] = carried;
             mj["bounds_min"] = {m.bounds_min[0], m.bounds_min[1], m.bounds_min[2]};
             mj["bounds_max"] = {m.bounds_max[0], m.bounds_max[1], m.bounds_max[2]};
             uint64_t bytes = 0;
@@ -147,6 +150,7 @@ int main(int argc, char** argv) {
             const auto& mj = j["meshes"][i];
             std::string attrs;
             for (const auto& a : mj["attributes"]) attrs += (attrs.empty() ? "" : ",") + a.get<std::string>();
+            for (const auto& a : mj["carried_streams"]) attrs += "," + a.get<std::string>();
             const bool has_curve = !mj["error_curve"].is_null();
             const bool has_coarse = !mj["coarse_corners"].is_null();
             std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub %8s %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),

@@ -1,11 +1,13 @@
 #pragma once
-// The file-level scene sections MATL, INST and IMAG (docs/FORMAT.md, rules 17, 18 and 21).
+// The file-level scene sections MATL, INST and IMAG and a mesh's carried streams XATT
+// (docs/FORMAT.md, rules 17, 18, 21 and 22): sections of records, strings and data blocks.
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "tom/scene.h"
+#include "tom/view.h"
 
 namespace tom::detail {
 
@@ -14,6 +16,13 @@ std::vector<uint8_t> encode_instances(const std::vector<Instance>& instances);
 /// IMAG: the scene's images and, per texture record of MATL (materials in order, each one's
 /// textures in order), the image it shows. Empty when the scene has no image.
 std::vector<uint8_t> encode_images(const Scene& scene);
+
+/// XATT: one record per stream (name, type, components, normalized) and its `vertex_count`
+/// elements. `streams` views the builder's data (VertexStreamView over VertexStream::data).
+std::vector<uint8_t> encode_extra_streams(const std::vector<VertexStreamView>& streams, uint32_t vertex_count);
+/// Decodes XATT of a mesh of `vertex_count` vertices: views into `data`, no copy.
+std::vector<VertexStreamView> decode_extra_streams(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path, const std::string& mesh_field,
+                                                   uint32_t vertex_count);
 
 /// Validate and decode a section of `bytes` bytes at file offset `offset`.
 /// \throw FormatError naming `path`, the byte offset, the field and the rule.

@@ -252,6 +252,25 @@ void mesh_properties(Class& c, ViewOf view_of) {
              }, py::arg("fraction") = py::none(), py::arg("triangles") = py::none(), "The resolution for a fraction of the triangles, or for at least a triangle count.")
         .def("active_triangles", [view_of](py::object self, uint32_t n) { return tom::active_triangle_count(view_of(self), n); }, py::arg("vertices"),
              "Triangles alive at a resolution.")
+        .def_property_readonly("carried_streams", [view_of](py::object self) {
+                 const tom::MeshView& v = view_of(self);
+                 py::dict out;
+                 for (uint32_t k = 0; k < v.extra_stream_count; ++k) {
+                     const tom::VertexStreamView& x = v.extra_streams[k];
+                     const size_t rows = v.vertex_count, cols = x.components;
+                     py::object a;
+                     switch (x.component_type) {
+                     case 5120: a = readonly_array(reinterpret_cast<const int8_t*>(x.data), rows, cols, self); break;
+                     case 5121: a = readonly_array(reinterpret_cast<const uint8_t*>(x.data), rows, cols, self); break;
+                     case 5122: a = readonly_array(reinterpret_cast<const int16_t*>(x.data), rows, cols, self); break;
+                     case 5123: a = readonly_array(reinterpret_cast<const uint16_t*>(x.data), rows, cols, self); break;
+                     case 5125: a = readonly_array(reinterpret_cast<const uint32_t*>(x.data), rows, cols, self); break;
+                     default: a = readonly_array(reinterpret_cast<const float*>(x.data), rows, cols, self); break;
+                     }
+                     out[py::str(std::string(x.name))] = a;
+                 }
+                 return out;
+             }, "{name: (n, components) read-only array} of the glTF attributes carried unread (JOINTS_0, WEIGHTS_0, TEXCOORD_2, ...) and the morph targets' deltas ('TARGET0/POSITION'), in resolution order; empty for a built mesh.")
         .def_property_readonly("parts", [view_of](py::object self) {
                  const tom::MeshView& v = view_of(self);
                  py::list out;

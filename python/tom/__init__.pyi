@@ -24,6 +24,7 @@ class _MeshView:
     colors: Optional[npt.NDArray[np.float32]]
     triangles: Union[npt.NDArray[np.uint16], npt.NDArray[np.uint32]]
     substitute: Union[npt.NDArray[np.uint16], npt.NDArray[np.uint32]]
+    carried_streams: dict[str, npt.NDArray[Any]]
     def vertex_count_for(self, fraction: Optional[float] = ..., triangles: Optional[int] = ...) -> int: ...
     def active_triangles(self, vertices: int) -> int: ...
     parts: List[Tuple[int, int, int]]

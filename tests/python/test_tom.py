@@ -255,3 +255,16 @@ def test_embedded_images_are_stored_byte_for_byte_and_viewed_in_place(tmp_path):
     g = tom.open(str(tombuild(tmp_path, f"{DATA}/assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf", "--no-error-curve")))
     assert g.images == [] and g.materials[0]["textures"][0]["image"] is None
     assert g.materials[0]["textures"][0]["uri"] == "CesiumLogoFlat.png"
+
+
+def test_carried_streams_are_views_of_the_sources_values(tmp_path):
+    f = tom.open(str(tombuild(tmp_path, f"{DATA}/assimp/glTF2/simple_skin/simple_skin.gltf", "--no-error-curve")))
+    mesh = f.meshes[0]
+    streams = mesh.carried_streams
+    assert sorted(streams) == ["JOINTS_0", "WEIGHTS_0"]
+    joints, weights = streams["JOINTS_0"], streams["WEIGHTS_0"]
+    assert joints.dtype == np.uint16 and joints.shape == (mesh.vertex_count, 4)
+    assert weights.dtype == np.float32 and weights.shape == (mesh.vertex_count, 4)
+    assert np.allclose(weights.sum(axis=1), 1.0) and joints.max() <= 1  # the sample's two joints, weights summing to one
+    with pytest.raises(ValueError):
+        weights[0, 0] = 0.5

@@ -38,7 +38,7 @@ uint64_t get64(const std::vector<uint8_t>& b, size_t at) {
 }
 void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(&b[at], &v, 4); }
 
-constexpr int kLastRule = 21;  // the last numbered validation rule of docs/FORMAT.md
+constexpr int kLastRule = 22;  // the last numbered validation rule of docs/FORMAT.md
 
 struct Section {
     std::string type;
@@ -693,6 +693,64 @@ TEST_CASE("images (IMAG, since 1.6): stored byte for byte, viewed in place, and 
     put32(c, imag.entry + 4, 0);  // a file-level section claimed by mesh 0
     fix_checksums(c);
     CHECK(rule_of(c) == 9);
+}
+
+TEST_CASE("carried streams (XATT, since 1.6): each vertex's element in resolution order, and rule 22", "[format][corrupt]") {
+    tom::Mesh m = tom::make_sphere(6, 8);
+    tom::VertexStream joints{"JOINTS_0", 5123, 4, false, {}}, weights{"WEIGHTS_0", 5126, 4, false, {}}, ids{"_ID", 5121, 1, false, {}};
+    for (uint32_t v = 0; v < m.vertex_count(); ++v) {
+        const uint16_t j[4] = {uint16_t(v % 3), uint16_t(v % 5), 0, 0};
+        const float w[4] = {0.75f, 0.25f, 0, 0};
+        joints.data.insert(joints.data.end(), reinterpret_cast<const uint8_t*>(j), reinterpret_cast<const uint8_t*>(j) + 8);
+        weights.data.insert(weights.data.end(), reinterpret_cast<const uint8_t*>(w), reinterpret_cast<const uint8_t*>(w) + 16);
+        ids.data.push_back(uint8_t(v));
+    }
+    m.extra_streams = {joints, weights, ids};
+    tom::clean_mesh(m);
+    const tom::TomMesh t = tom::build(m);
+    const std::vector<uint8_t> good = tom::serialize({t});
+    const tom::File f = tom::File::from_bytes(good.data(), good.size(), "xatt.tom");
+    const tom::MeshView& v = f.mesh(0);
+    REQUIRE(v.extra_stream_count == 3);
+    CHECK(v.extra_streams[2].name == "_ID");
+    for (uint32_t i = 0; i < v.vertex_count; ++i) CHECK(v.extra_streams[2].data[i] == uint8_t(t.original_index[i]));  // the vertex's own id
+    // original_mesh gives the input's streams back exactly
+    CHECK(tom::original_mesh(t).extra_streams[1].data == m.extra_streams[1].data);
+
+    const Section& x = find(sections_of(good), "XATT");
+    std::vector<uint8_t> c = good;
+    put32(c, x.offset + 16 + 8, 5124);  // not a glTF component type
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    CHECK(message_of(c).find("stream 0 component_type: 5124 is not a glTF component type") != std::string::npos);
+    c = good;
+    put32(c, x.offset + 16 + 12, 5);  // five components
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    c = good;
+    put32(c, x.offset + 16 + 32, 8);  // 8 bytes for every vertex's joints
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    CHECK(message_of(c).find("8 where") != std::string::npos);
+    c = good;
+    put32(c, x.offset + 16 + 40 + 24, uint32_t(x.bytes) - 4);  // the weights run past the section
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    c = good;
+    const uint64_t weights_at = get64(c, x.offset + 16 + 40 + 24);
+    put32(c, x.offset + weights_at, 0x7FC00000u);  // a NaN weight
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    CHECK(message_of(c).find("is not finite") != std::string::npos);
+    c = good;
+    std::memcpy(&c[x.offset + 16 + 80], &c[x.offset + 16], 8);  // stream 2 named as stream 0
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    CHECK(message_of(c).find("stream 2 name: 'JOINTS_0' is also stream 0") != std::string::npos);
+    // a stream of the wrong size cannot be written
+    tom::TomMesh bad = t;
+    bad.extra_streams[0].data.pop_back();
+    CHECK_THROWS_WITH(tom::serialize({bad}), Catch::Contains("carried stream 'JOINTS_0' has"));
 }
 
 TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {

@@ -642,6 +642,18 @@ static void check_order(const TomMesh& out) {
                                    ", not an earlier vertex (a defect of the builder)");
 }
 
+// Carried streams in another vertex order: element i of `to` is element order[i] of `from`.
+static std::vector<VertexStream> gather_extra_streams(const std::vector<VertexStream>& from, const std::vector<uint32_t>& order) {
+    std::vector<VertexStream> to;
+    for (const VertexStream& x : from) {
+        VertexStream y{x.name, x.component_type, x.components, x.normalized, std::vector<uint8_t>(x.data.size())};
+        const size_t bytes = x.element_bytes();
+        for (size_t i = 0; i < order.size(); ++i) std::memcpy(&y.data[i * bytes], &x.data[size_t(order[i]) * bytes], bytes);
+        to.push_back(std::move(y));
+    }
+    return to;
+}
+
 // The build of `input`; with `owned` (== &input, moved in by the caller) its vertex streams are
 // freed once the local copy holds them, and the output comes from that copy: the same bytes.
 static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& params, BuildStats* stats_out) {
@@ -677,6 +689,7 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     order_vertices(b, out, new_index);
     check_order(out);
     gather_output_streams(input, local, vertex_new, out, team);
+    out.extra_streams = gather_extra_streams(input.extra_streams, out.original_index);
     order_triangles(b, input, input_bits, new_index, out, team);
     std::copy(local.bounds_min, local.bounds_min + 3, out.bounds_min);
     std::copy(local.bounds_max, local.bounds_max + 3, out.bounds_max);
@@ -705,7 +718,9 @@ Mesh original_mesh(const TomMesh& tom) {
     mesh.name = tom.name;
     mesh.material = tom.material;
     detail::Team team(1);
-    gather_vertex_streams(tom, mesh, inverse_order(tom.original_index, team), team);  // input vertex v is sorted vertex new_index[v]
+    const std::vector<uint32_t> new_index = inverse_order(tom.original_index, team);  // input vertex v is sorted vertex new_index[v]
+    gather_vertex_streams(tom, mesh, new_index, team);
+    mesh.extra_streams = gather_extra_streams(tom.extra_streams, new_index);
     mesh.indices.resize(size_t(m) * 3);
     for (uint32_t slot = 0; slot < m; ++slot) {
         const uint32_t t = tom.original_triangle[slot];

@@ -2,6 +2,7 @@
 
 #include "tom/builder/mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -15,6 +16,20 @@ void check_stream(const Mesh& mesh, const std::vector<float>& stream, size_t wid
     if (!stream.empty() && stream.size() != size_t(mesh.vertex_count()) * width)
         throw ImportError("mesh '" + mesh.name + "': " + what + " stream has " + std::to_string(stream.size() / width) +
                           " elements for " + std::to_string(mesh.vertex_count()) + " vertices");
+}
+
+// A carried stream: a known type, 1 to 4 components, one element per vertex, a name of its own.
+void check_extra_streams(const Mesh& mesh) {
+    for (size_t k = 0; k < mesh.extra_streams.size(); ++k) {
+        const VertexStream& x = mesh.extra_streams[k];
+        const std::string what = "mesh '" + mesh.name + "': carried stream '" + x.name + "'";
+        if (x.element_bytes() == 0 || x.components > 4)
+            throw ImportError(what + " has component type " + std::to_string(x.component_type) + " and " + std::to_string(x.components) + " components");
+        if (x.data.size() != size_t(mesh.vertex_count()) * x.element_bytes())
+            throw ImportError(what + " has " + std::to_string(x.data.size()) + " bytes for " + std::to_string(mesh.vertex_count()) + " vertices");
+        for (size_t j = 0; j < k; ++j)
+            if (mesh.extra_streams[j].name == x.name) throw ImportError(what + " appears twice");
+    }
 }
 
 template <class T>
@@ -63,6 +78,30 @@ uint32_t attribute_bits(const Mesh& mesh) noexcept {
     return bits;
 }
 
+namespace {
+
+// Appends `in`'s carried streams to `out`'s (n vertices): by name, the first input that has a
+// stream giving its type; zero bytes where `in` lacks it.
+void join_extra_streams(const std::vector<Mesh>& inputs, const Mesh& in, uint32_t n, Mesh& out) {
+    for (const Mesh& any : inputs)
+        for (const VertexStream& x : any.extra_streams) {
+            auto it = std::find_if(out.extra_streams.begin(), out.extra_streams.end(), [&](const VertexStream& o) { return o.name == x.name; });
+            if (it == out.extra_streams.end()) {
+                out.extra_streams.push_back({x.name, x.component_type, x.components, x.normalized, std::vector<uint8_t>(size_t(out.vertex_count() - n) * x.element_bytes(), 0)});
+                it = out.extra_streams.end() - 1;
+            }
+        }
+    for (VertexStream& o : out.extra_streams) {
+        const auto own = std::find_if(in.extra_streams.begin(), in.extra_streams.end(), [&](const VertexStream& x) { return x.name == o.name; });
+        if (own != in.extra_streams.end() && own->component_type == o.component_type && own->components == o.components && own->data.size() == size_t(n) * o.element_bytes())
+            o.data.insert(o.data.end(), own->data.begin(), own->data.end());
+        else
+            o.data.resize(o.data.size() + size_t(n) * o.element_bytes(), 0);
+    }
+}
+
+} // namespace
+
 Mesh join_parts(const std::vector<Mesh>& inputs, std::string name) {
     Mesh out;
     out.name = std::move(name);
@@ -90,6 +129,7 @@ Mesh join_parts(const std::vector<Mesh>& inputs, std::string name) {
             }
             ++k;
         });
+        join_extra_streams(inputs, in, n, out);
         for (const uint32_t i : in.indices) out.indices.push_back(base + i);
         if (in.parts.empty()) {
             out.parts.push_back({first_triangle, in.triangle_count(), in.material, own});
@@ -142,6 +182,7 @@ CleanStats clean_mesh(Mesh& mesh) {
     if (mesh.positions.size() / 3 > size_t(UINT32_MAX) - 1 || mesh.indices.size() / 3 > size_t(UINT32_MAX) - 1)
         throw ImportError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
     for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char* what) { check_stream(mesh, stream, width, what); });
+    check_extra_streams(mesh);
     const uint32_t n = mesh.vertex_count();
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!std::isfinite(mesh.positions[i]))
@@ -180,6 +221,7 @@ CleanStats clean_mesh(Mesh& mesh) {
     if (next != n) {
         compact_stream(mesh.positions, remap, 3, next);
         for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char*) { compact_stream(stream, remap, width, next); });
+        for (VertexStream& x : mesh.extra_streams) compact_stream(x.data, remap, x.element_bytes(), next);
         for (uint32_t& i : mesh.indices) i = remap[i];
     }
 

@@ -195,6 +195,17 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
         if (!m.metadata.empty()) sections.push_back({sec_metadata, mi, metadata_bytes(m.metadata)});
         if (!m.pair_bits.empty()) sections.push_back({sec_pairs, mi, m.pair_bits});
         if (!parts.empty()) sections.push_back({sec_parts, mi, std::move(parts)});
+        if (!m.extra_streams.empty()) {
+            std::vector<VertexStreamView> views;
+            for (const VertexStream& x : m.extra_streams) {
+                if (x.element_bytes() == 0 || x.data.size() != size_t(m.vertex_count()) * x.element_bytes())
+                    throw ArgumentError("serialize: mesh '" + m.name + "': carried stream '" + x.name + "' has " + std::to_string(x.data.size()) +
+                                        " bytes for " + std::to_string(m.vertex_count()) + " vertices of type " + std::to_string(x.component_type) + " x " +
+                                        std::to_string(x.components));
+                views.push_back({x.name, x.component_type, x.components, x.normalized, x.data.data()});
+            }
+            sections.push_back({sec_extra_streams, mi, detail::encode_extra_streams(views, m.vertex_count())});
+        }
     }
     const uint64_t table_offset = header_bytes;
     uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;

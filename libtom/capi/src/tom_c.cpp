@@ -355,6 +355,22 @@ tom_status tom_file_material(const tom_file* file, uint32_t index, tom_material*
     return TOM_OK;
 }
 
+uint32_t tom_mesh_carried_stream_count(const tom_mesh_view* mesh) {
+    const tom::MeshView* v = view_of(mesh);
+    return v ? v->extra_stream_count : 0;
+}
+
+tom_status tom_mesh_carried_stream(const tom_mesh_view* mesh, uint32_t index, tom_carried_stream* out) {
+    const tom::MeshView* v = view_of(mesh);
+    if (!v) return null_argument("tom_mesh_carried_stream", "mesh");
+    if (!out) return null_argument("tom_mesh_carried_stream", "out");
+    if (index >= v->extra_stream_count)
+        return fail(TOM_ERROR_ARGUMENT, "tom_mesh_carried_stream: stream " + std::to_string(index) + " of a mesh with " + std::to_string(v->extra_stream_count));
+    const tom::VertexStreamView& x = v->extra_streams[index];
+    *out = {x.name.data(), uint32_t(x.name.size()), x.component_type, x.components, x.normalized ? 1u : 0u, x.data};
+    return TOM_OK;
+}
+
 uint32_t tom_file_image_count(const tom_file* file) { return file ? uint32_t(file->file.scene().images.size()) : 0; }
 
 tom_status tom_file_image(const tom_file* file, uint32_t index, tom_image* out) {

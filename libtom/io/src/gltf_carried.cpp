@@ -1,6 +1,8 @@
 // What a glTF import keeps and what it names as dropped (see the header). The lists follow what
 // the importer, the .tom format and the glTF exporter carry: geometry with the streams POSITION,
-// NORMAL, TANGENT, TEXCOORD_0/1 and COLOR_0; metallic-roughness materials and their textures;
+// NORMAL, TANGENT, TEXCOORD_0/1 and COLOR_0, every other attribute and the morph targets'
+// deltas carried unread (sparse accessors aside, which the importer names itself);
+// metallic-roughness materials and their textures;
 // images (embedded ones stored, external ones by URI); the default scene's mesh nodes as
 // instances with their names and world transforms.
 
@@ -20,7 +22,7 @@ const std::set<std::string> carried_extensions = {
     "EXT_texture_webp",           "KHR_texture_basisu",      "EXT_texture_avif",
 };
 
-const std::set<std::string> carried_attributes = {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0"};
+const std::set<std::string> interpreted_attributes = {"POSITION", "NORMAL", "TANGENT", "TEXCOORD_0", "TEXCOORD_1", "COLOR_0"};
 
 size_t size_of(const nlohmann::json& doc, const char* key) {
     const auto it = doc.find(key);
@@ -43,22 +45,18 @@ size_t count_extras(const nlohmann::json& j) {
 
 std::string counted(const std::string& what, size_t n) { return what + " (" + std::to_string(n) + ")"; }
 
-// the primitives' attributes the format has no stream for, and how many primitives have targets
-void scan_primitives(const nlohmann::json& doc, std::set<std::string>& attributes, size_t& morphed) {
+// meshes whose default morph weights are not all zero (the .tom keeps the deltas, not the weights)
+size_t weighted_meshes(const nlohmann::json& doc) {
+    size_t n = 0;
     const auto meshes = doc.find("meshes");
-    if (meshes == doc.end() || !meshes->is_array()) return;
+    if (meshes == doc.end() || !meshes->is_array()) return 0;
     for (const auto& mesh : *meshes) {
-        const auto primitives = mesh.find("primitives");
-        if (primitives == mesh.end() || !primitives->is_array()) continue;
-        for (const auto& prim : *primitives) {
-            const auto attr = prim.find("attributes");
-            if (attr != prim.end() && attr->is_object())
-                for (const auto& [name, value] : attr->items())
-                    if (!carried_attributes.count(name)) attributes.insert(name);
-            const auto targets = prim.find("targets");
-            if (targets != prim.end() && targets->is_array() && !targets->empty()) ++morphed;
-        }
+        const auto weights = mesh.find("weights");
+        if (weights != mesh.end() && weights->is_array() &&
+            std::any_of(weights->begin(), weights->end(), [](const nlohmann::json& w) { return !w.is_number() || w.get<double>() != 0.0; }))
+            ++n;
     }
+    return n;
 }
 
 // nodes of the default scene's tree that carry no mesh: the tree is flattened into instances
@@ -89,6 +87,8 @@ void scan_materials(const nlohmann::json& doc, std::vector<std::string>& out) {
 
 } // namespace
 
+bool is_interpreted_attribute(const std::string& name) { return interpreted_attributes.count(name) != 0; }
+
 bool can_read_required(const std::string& extension) {
     if (carried_extensions.count(extension)) return true;
     static const std::set<std::string> no_geometry = {"KHR_materials_pbrSpecularGlossiness", "KHR_materials_unlit", "KHR_lights_punctual",
@@ -100,15 +100,7 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc) {
     std::vector<std::string> out;
     if (const size_t n = size_of(doc, "skins")) out.push_back(counted("skins", n));
     if (const size_t n = size_of(doc, "animations")) out.push_back(counted("animations", n));
-    std::set<std::string> attributes;
-    size_t morphed = 0;
-    scan_primitives(doc, attributes, morphed);
-    if (morphed) out.push_back("morph targets (in " + std::to_string(morphed) + " primitive" + (morphed == 1 ? ")" : "s)"));
-    if (!attributes.empty()) {
-        std::string list;
-        for (const std::string& a : attributes) list += (list.empty() ? "" : ", ") + a;
-        out.push_back((attributes.size() == 1 ? "attribute " : "attributes ") + list);
-    }
+    if (const size_t n = weighted_meshes(doc)) out.push_back("morph target weights (" + std::to_string(n) + (n == 1 ? " mesh)" : " meshes)"));
     if (const size_t n = size_of(doc, "cameras")) out.push_back(counted("cameras", n));
     if (const size_t n = size_of(doc, "scenes"); n > 1) out.push_back(counted("scenes other than the default", n - 1));
     if (const size_t n = nodes_without_mesh(doc))

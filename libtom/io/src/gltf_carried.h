@@ -15,9 +15,12 @@ namespace tom::detail {
 /// KHR_technique_webgl, an unknown one) cannot.
 bool can_read_required(const std::string& extension);
 
+/// Whether the importer reads attribute `name` into a stream of its own (POSITION, NORMAL,
+/// TANGENT, TEXCOORD_0, TEXCOORD_1, COLOR_0); every other attribute is carried unread.
+bool is_interpreted_attribute(const std::string& name);
+
 /// The features of `doc` that the .tom does not keep, one phrase each, in a fixed order:
-/// "skins (1)", "animations (2)", "morph targets (in 3 primitives)", "attributes JOINTS_0,
-/// WEIGHTS_0", "cameras (1)", "node tree (flattened into instances: 2 nodes without a mesh)",
+/// "skins (1)", "animations (2)", "morph target weights (1 mesh)", "cameras (1)", "node tree (flattened into instances: 2 nodes without a mesh)",
 /// "extension KHR_lights_punctual", "texture samplers (2)", "extras (4)", ... Empty when
 /// nothing is lost.
 std::vector<std::string> gltf_dropped(const nlohmann::json& doc);

@@ -62,6 +62,46 @@ std::vector<float> unit_vectors(const float* src, uint32_t count, size_t width) 
     return out;
 }
 
+// The carried streams of `m` (its first `count` vertices): attributes by their names, and
+// "TARGET<k>/<ATTRIBUTE>" as morph target k's attribute. Elements are padded to a multiple of 4
+// bytes (glTF's vertex alignment); a target's POSITION has its bounds, as glTF requires.
+void write_carried_streams(Writer& w, const MeshView& m, uint32_t count, json& attributes, json& targets) {
+    static const char* const types[] = {"SCALAR", "VEC2", "VEC3", "VEC4"};
+    for (uint32_t k = 0; k < m.extra_stream_count; ++k) {
+        const VertexStreamView& x = m.extra_streams[k];
+        const uint32_t elem = x.components * component_bytes(x.component_type), stride = (elem + 3) / 4 * 4;
+        std::vector<uint8_t> bytes(size_t(count) * stride, 0);
+        for (uint32_t v = 0; v < count; ++v) std::memcpy(&bytes[size_t(v) * stride], x.data + size_t(v) * elem, elem);
+        const int view = w.view(bytes.data(), bytes.size(), kArrayBuffer);
+        if (stride != elem) w.views[size_t(view)]["byteStride"] = stride;
+        json extra = json::object();
+        if (x.normalized) extra["normalized"] = true;
+        const std::string name(x.name);
+        const size_t slash = name.find('/');
+        const bool target = name.rfind("TARGET", 0) == 0 && slash != std::string::npos;
+        const std::string attribute = target ? name.substr(slash + 1) : name;
+        if (target && attribute == "POSITION" && x.component_type == uint32_t(kFloat) && x.components == 3 && count > 0) {
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            for (uint32_t v = 0; v < count; ++v)
+                for (int c = 0; c < 3; ++c) {
+                    float f;
+                    std::memcpy(&f, x.data + size_t(v) * elem + 4 * size_t(c), 4);
+                    lo[c] = std::min(lo[c], f), hi[c] = std::max(hi[c], f);
+                }
+            extra["min"] = {lo[0], lo[1], lo[2]};
+            extra["max"] = {hi[0], hi[1], hi[2]};
+        }
+        const int accessor = w.accessor(view, int(x.component_type), count, types[x.components - 1], extra);
+        if (!target) {
+            attributes[attribute] = accessor;
+            continue;
+        }
+        const size_t index = size_t(std::strtoul(name.c_str() + 6, nullptr, 10));
+        while (targets.size() <= index) targets.push_back(json::object());
+        targets[index][attribute] = accessor;
+    }
+}
+
 // The glTF texture of an image of type `mime`: image codecs past PNG and JPEG are shown through
 // their extension (which the output then uses and requires: it has no fallback image).
 const char* image_extension(const std::string& mime) {
@@ -214,6 +254,8 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
             const std::vector<float> tangents = unit_vectors(m.tangents, n_max, 4);
             attributes["TANGENT"] = w.accessor(w.view(tangents.data(), tangents.size() * 4, kArrayBuffer), kFloat, n_max, "VEC4");
         }
+        json targets = json::array();
+        write_carried_streams(w, m, n_max, attributes, targets);
         std::vector<uint32_t> indices(size_t(m.triangle_count) * 3);
         std::vector<PartDraw> draws(part_count(m));
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
@@ -243,6 +285,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
                         if (!(streams & bit)) own.erase(key);
                 }
                 json primitive = {{"attributes", own}, {"indices", w.accessor(view_index, component, d.index_count, "SCALAR")}, {"mode", 4}};
+                if (!targets.empty()) primitive["targets"] = targets;
                 if (d.material >= 0) {
                     primitive["material"] = d.material;
                     max_material = std::max(max_material, d.material);

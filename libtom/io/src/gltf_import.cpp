@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <optional>
 
 #include "gltf_carried.h"
 #include "gltf_meshopt.h"
@@ -159,6 +160,22 @@ public:
         return out;
     }
 
+    // An attribute the importer does not interpret, its elements copied as they are (no
+    // conversion); std::nullopt for a sparse accessor, which is not carried.
+    std::optional<VertexStream> read_carried(int index, const std::string& name, size_t expect_count) const {
+        if (index >= 0 && size_t(index) < model_.accessors.size() && model_.accessors[size_t(index)].sparse.isSparse) return std::nullopt;
+        size_t count, stride;
+        int components, ctype;
+        const uint8_t* p = locate(index, name.c_str(), count, stride, components, ctype);
+        if (count != expect_count)
+            fail(name + " accessor " + std::to_string(index) + " has " + std::to_string(count) + " elements but POSITION has " + std::to_string(expect_count));
+        VertexStream out{name, uint32_t(ctype), uint32_t(components), model_.accessors[size_t(index)].normalized, {}};
+        const size_t elem = out.element_bytes();
+        out.data.resize(count * elem);
+        for (size_t i = 0; i < count; ++i) std::memcpy(&out.data[i * elem], p + i * stride, elem);
+        return out;
+    }
+
     std::vector<uint32_t> read_indices(int index, size_t vertex_count) const {
         size_t count, stride;
         int components, ctype;
@@ -240,6 +257,20 @@ std::vector<uint32_t> primitive_triangles(const PrimitiveReader& reader, const t
     return triangles;
 }
 
+// The attributes the importer does not interpret (TEXCOORD_2.., COLOR_1.., JOINTS_n, WEIGHTS_n,
+// "_CUSTOM") and every morph target's deltas ("TARGET<k>/<ATTRIBUTE>"), carried unread; a sparse
+// accessor is named in `dropped` instead.
+void read_carried_streams(const PrimitiveReader& reader, const tinygltf::Primitive& prim, size_t n, Mesh& mesh, std::vector<std::string>& dropped) {
+    auto carry = [&](int index, const std::string& name) {
+        if (std::optional<VertexStream> x = reader.read_carried(index, name, n)) mesh.extra_streams.push_back(std::move(*x));
+        else dropped.push_back("sparse accessor of " + name + " (" + mesh.name + ")");
+    };
+    for (const auto& [name, index] : prim.attributes)
+        if (!is_interpreted_attribute(name)) carry(index, name);
+    for (size_t k = 0; k < prim.targets.size(); ++k)
+        for (const auto& [name, index] : prim.targets[k]) carry(index, "TARGET" + std::to_string(k) + "/" + name);
+}
+
 // Parts made of primitives that share vertices carry the streams of those vertices.
 void mark_own_attributes(std::vector<Mesh>& primitives) {
     for (Mesh& m : primitives)
@@ -295,6 +326,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         // vertex accessors share one copy of the vertices (one Mesh with several parts)
         std::vector<Mesh> primitives;
         const std::map<std::string, int>* previous_attributes = nullptr;
+        const std::vector<std::map<std::string, int>>* previous_targets = nullptr;
         for (size_t pi = 0; pi < gm.primitives.size(); ++pi) {
             const tinygltf::Primitive& prim = gm.primitives[pi];
             const std::string where = path + ": mesh " + std::to_string(mi) + " '" + mesh_name + "' primitive " + std::to_string(pi);
@@ -312,7 +344,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             const int pos_index = attr("POSITION");
             if (pos_index < 0) reader.fail("has no POSITION attribute");
             std::vector<uint32_t> seq;
-            const bool shares = previous_attributes && *previous_attributes == prim.attributes && !has_texture_transform(model, prim.material) &&
+            const bool shares = previous_attributes && *previous_attributes == prim.attributes && previous_targets && *previous_targets == prim.targets &&
+                                !has_texture_transform(model, prim.material) &&
                                 !has_texture_transform(model, primitives.back().parts.empty() ? primitives.back().material : primitives.back().parts[0].material);
             if (shares) {
                 // same vertices as the previous primitive: append its triangles as a part of that mesh
@@ -324,6 +357,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                 continue;
             }
             previous_attributes = &prim.attributes;
+            previous_targets = &prim.targets;
             Mesh mesh;
             mesh.name = stem + "/" + mesh_name;
             mesh.material = prim.material;
@@ -345,6 +379,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                     mesh.colors.swap(c);
                 }
             }
+            read_carried_streams(reader, prim, n, mesh, result.dropped);
             if (const std::string w = bake_texture_transform(model, prim.material, mesh); !w.empty())
                 result.warnings.push_back(mesh.name + ": " + w);
             mesh.indices = primitive_triangles(reader, prim, mode, n);

@@ -36,6 +36,7 @@ struct File::Impl {
     std::vector<SectionInfo> sections;
     Scene scene;
     std::string_view provenance;  // into data
+    std::vector<std::vector<VertexStreamView>> extra_streams;  // per mesh (section XATT): MeshView::extra_streams points here
 
     [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
         throw FormatError(path, offset, field, rule, detail);
@@ -100,6 +101,7 @@ struct MeshSections {
     const SectionInfo* pairs = nullptr;
     const SectionInfo* coarse = nullptr;
     const SectionInfo* parts = nullptr;
+    const SectionInfo* extra = nullptr;
 };
 
 } // namespace
@@ -175,7 +177,7 @@ void File::Impl::validate(const OpenOptions& options) {
         for (int k = 0; k < attribute_stream_count; ++k)
             if (type == attribute_streams[k].section) stream = k;
         if (type == sec_mesh || type == sec_positions || stream >= 0 || type == sec_substitute || type == sec_triangles ||
-            type == sec_metadata || type == sec_pairs || type == sec_coarse || type == sec_parts) {
+            type == sec_metadata || type == sec_pairs || type == sec_coarse || type == sec_parts || type == sec_extra_streams) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
             MeshSections& ms = per_mesh[s.mesh];
@@ -187,6 +189,7 @@ void File::Impl::validate(const OpenOptions& options) {
                  : type == sec_pairs     ? &ms.pairs
                  : type == sec_coarse    ? &ms.coarse
                  : type == sec_parts     ? &ms.parts
+                 : type == sec_extra_streams ? &ms.extra
                                          : &ms.metadata;
             if (*slot) fail(e, field, 9, "mesh " + std::to_string(s.mesh) + " has this section twice");
             *slot = &s;
@@ -194,6 +197,7 @@ void File::Impl::validate(const OpenOptions& options) {
     }
 
     meshes.resize(mesh_count);
+    extra_streams.resize(mesh_count);
     for (uint32_t mi = 0; mi < mesh_count; ++mi) {
         const MeshSections& ms = per_mesh[mi];
         const std::string mesh_field = "mesh " + std::to_string(mi);
@@ -301,6 +305,12 @@ void File::Impl::validate(const OpenOptions& options) {
             v.pair_bits = bits;
         }
         if (ms.parts) validate_parts(*ms.parts, attributes, v, mesh_field);
+        // rule 22: carried streams, one element per vertex each
+        if (ms.extra) {
+            extra_streams[mi] = detail::decode_extra_streams(data + ms.extra->offset, ms.extra->bytes, ms.extra->offset, path, mesh_field, v.vertex_count);
+            v.extra_streams = extra_streams[mi].empty() ? nullptr : extra_streams[mi].data();
+            v.extra_stream_count = uint32_t(extra_streams[mi].size());
+        }
     }
     // rules 17 and 18: the scene; a material index names a stored material or none (-1), also
     // when the file stores no materials, so that no reader or exporter follows an index the

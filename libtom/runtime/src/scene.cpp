@@ -43,7 +43,7 @@ namespace detail {
 namespace {
 
 constexpr uint32_t scene_header_bytes = 16, material_record_bytes = 64, texture_record_bytes = 24, instance_record_bytes = 80;
-constexpr uint32_t image_record_bytes = 32, no_image = 0xFFFFFFFFu;
+constexpr uint32_t image_record_bytes = 32, no_image = 0xFFFFFFFFu, stream_record_bytes = 40;
 
 // Strings follow the fixed records; a record holds (offset from the section start, bytes).
 class StringArea {
@@ -176,6 +176,25 @@ std::vector<uint8_t> encode_images(const Scene& scene) {
     return out;
 }
 
+std::vector<uint8_t> encode_extra_streams(const std::vector<VertexStreamView>& streams, uint32_t vertex_count) {
+    std::vector<uint8_t> out(scene_header_bytes + stream_record_bytes * streams.size(), 0);
+    store_u32(&out[0], uint32_t(streams.size()));
+    StringArea strings(out);
+    for (size_t k = 0; k < streams.size(); ++k) {
+        uint8_t* r = &out[scene_header_bytes + stream_record_bytes * k];
+        strings.put(r, std::string(streams[k].name));
+        store_u32(r + 8, streams[k].component_type);
+        store_u32(r + 12, streams[k].components);
+        store_u32(r + 16, streams[k].normalized ? 1u : 0u);
+    }
+    strings.finish();
+    for (size_t k = 0; k < streams.size(); ++k) {
+        const uint64_t bytes = uint64_t(vertex_count) * streams[k].components * component_bytes(streams[k].component_type);
+        strings.put_block(scene_header_bytes + stream_record_bytes * k + 24, streams[k].data, bytes);
+    }
+    return out;
+}
+
 std::vector<Material> decode_materials(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path) {
     const SectionReader in{data, bytes, offset, path, "MATL", 17};
     in.need(0, scene_header_bytes, "header");
@@ -240,6 +259,42 @@ std::vector<Instance> decode_instances(const uint8_t* data, uint64_t bytes, uint
     return out;
 }
 
+std::vector<VertexStreamView> decode_extra_streams(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path, const std::string& mesh_field,
+                                                   uint32_t vertex_count) {
+    const SectionReader in{data, bytes, offset, path, "XATT", 22};
+    in.need(0, scene_header_bytes, mesh_field + " header");
+    const uint64_t count = load_u32(data);
+    const uint64_t records_end = scene_header_bytes + stream_record_bytes * count;
+    in.need(scene_header_bytes, records_end - scene_header_bytes, mesh_field + " " + std::to_string(count) + " stream records");
+    std::vector<VertexStreamView> out(count);
+    for (uint64_t k = 0; k < count; ++k) {
+        const uint64_t r = scene_header_bytes + stream_record_bytes * k;
+        const std::string field = mesh_field + " stream " + std::to_string(k);
+        VertexStreamView& x = out[k];
+        const std::string name = in.string_at(r, records_end, field + " name");
+        if (name.empty()) in.fail(r, field + " name", "is empty");
+        x.name = std::string_view(reinterpret_cast<const char*>(data + load_u32(data + r)), name.size());
+        for (uint64_t j = 0; j < k; ++j)
+            if (out[j].name == x.name) in.fail(r, field + " name", "'" + name + "' is also stream " + std::to_string(j));
+        x.component_type = load_u32(data + r + 8);
+        if (component_bytes(x.component_type) == 0) in.fail(r + 8, field + " component_type", std::to_string(x.component_type) + " is not a glTF component type");
+        x.components = load_u32(data + r + 12);
+        if (x.components < 1 || x.components > 4) in.fail(r + 12, field + " components", std::to_string(x.components) + " is not 1 to 4");
+        const uint32_t flags = load_u32(data + r + 16);
+        if (flags & ~1u) in.fail(r + 16, field + " flags", "unknown flags");
+        x.normalized = flags & 1u;
+        const uint64_t at = load_u64(data + r + 24), n = load_u64(data + r + 32);
+        const uint64_t expected = uint64_t(vertex_count) * x.components * component_bytes(x.component_type);
+        if (n != expected) in.fail(r + 32, field + " bytes", std::to_string(n) + " where " + std::to_string(vertex_count) + " vertices need " + std::to_string(expected));
+        if (at < records_end || at > bytes || n > bytes - at) in.fail(r + 24, field + " data", std::to_string(n) + " bytes at " + std::to_string(at) + " are not in the section's data area");
+        x.data = data + at;
+        if (x.component_type == 5126)  // float values are finite (weights, deltas, coordinates)
+            for (uint64_t v = 0; v < n; v += 4)
+                if (!std::isfinite(load_f32(data + at + v))) in.fail(at + v, field + " value " + std::to_string(v / 4), "is not finite");
+    }
+    return out;
+}
+
 void decode_images(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path, Scene& scene) {
     const SectionReader in{data, bytes, offset, path, "IMAG", 21};
     in.need(0, scene_header_bytes, "header");
@@ -291,7 +346,7 @@ Image make_image(std::string name, std::string mime_type, std::vector<uint8_t> b
 }
 
 const char* sniff_image_type(const uint8_t* p, uint64_t n) noexcept {
-    auto starts = [&](const char* magic, uint64_t len, uint64_t at = 0) { return n >= at + len && std::memcmp(p + at, magic, len) == 0; };
+    auto starts = [&](const char* signature, uint64_t len, uint64_t at = 0) { return n >= at + len && std::memcmp(p + at, signature, len) == 0; };
     if (starts("\x89PNG\r\n\x1a\n", 8)) return "image/png";
     if (starts("\xFF\xD8\xFF", 3)) return "image/jpeg";
     if (starts("RIFF", 4) && starts("WEBP", 4, 8)) return "image/webp";

@@ -215,6 +215,21 @@ typedef struct tom_image {
     uint64_t bytes;
 } tom_image;
 
+/* A glTF attribute carried unread (JOINTS_0, WEIGHTS_0, TEXCOORD_2, "_ID", ...) or a morph
+ * target's deltas ("TARGET0/POSITION"): one element of `components` values of glTF component
+ * type `component_type` per vertex, in resolution order, tightly packed (format 1.6, XATT). */
+typedef struct tom_carried_stream {
+    const char* name;        /* not terminated: name_bytes bytes */
+    uint32_t name_bytes;
+    uint32_t component_type; /* 5120 BYTE .. 5126 FLOAT, as glTF */
+    uint32_t components;     /* 1 to 4 */
+    uint32_t normalized;     /* 1: integers standing for [0, 1] or [-1, 1] */
+    const void* data;        /* vertex_count elements, in the file's mapping */
+} tom_carried_stream;
+
+uint32_t tom_mesh_carried_stream_count(const tom_mesh_view* mesh);
+tom_status tom_mesh_carried_stream(const tom_mesh_view* mesh, uint32_t index, tom_carried_stream* out);
+
 uint32_t tom_file_image_count(const tom_file* file);
 tom_status tom_file_image(const tom_file* file, uint32_t index, tom_image* out);
 /* Which stored image texture `texture` of material `material` shows: *image is its index for

@@ -19,6 +19,28 @@ struct Part {
     uint32_t attributes = 0;   ///< the streams the part's source had (MESH attribute bits 0-4); the others hold neutral values
 };
 
+/// A vertex stream carried beside the ones above, never read by the toolkit (section XATT, since
+/// 1.6): a glTF attribute such as TEXCOORD_2, COLOR_1, JOINTS_0, WEIGHTS_0 or a custom "_NAME",
+/// or a morph target's deltas, named "TARGET<k>/<ATTRIBUTE>" ("TARGET0/POSITION"). One element
+/// per vertex in resolution order, each the source's value exactly.
+struct VertexStreamView {
+    std::string_view name;
+    uint32_t component_type = 5126;  ///< glTF's: 5120 BYTE, 5121 UNSIGNED_BYTE, 5122 SHORT, 5123 UNSIGNED_SHORT, 5125 UNSIGNED_INT, 5126 FLOAT
+    uint32_t components = 1;         ///< 1 to 4
+    bool normalized = false;         ///< integers that stand for [0, 1] or [-1, 1] (glTF's `normalized`)
+    const uint8_t* data = nullptr;   ///< vertex_count elements of components values, tightly packed, little-endian
+};
+
+/// The bytes of one value of a glTF component type, 0 for an unknown type.
+inline uint32_t component_bytes(uint32_t component_type) noexcept {
+    switch (component_type) {
+    case 5120: case 5121: return 1;
+    case 5122: case 5123: return 2;
+    case 5125: case 5126: return 4;
+    default: return 0;
+    }
+}
+
 /// Pointers into sorted streams; nothing is owned. Optional streams are null.
 /// Invariants (checked by the reader for files, by construction for builds):
 ///   min_vertex_count <= vertex_count; for i >= min_vertex_count substitute[i] < i,
@@ -55,6 +77,10 @@ struct MeshView {
     /// triangle array is one prefix-sorted range, drawn with `material`.
     const Part* parts = nullptr;
     uint32_t part_count = 0;
+    /// The carried streams (section XATT) of a mesh read from a file; null with a count of 0
+    /// when it has none, and always for TomMesh::view() (see TomMesh::extra_streams).
+    const VertexStreamView* extra_streams = nullptr;
+    uint32_t extra_stream_count = 0;
 
     uint32_t substitute_at(uint32_t i) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];

@@ -89,6 +89,7 @@ struct TomMesh {
     /// (FORMAT.md, section PART); empty for a mesh of one part.
     std::vector<Part> parts;
     std::vector<MetadataEntry> metadata;
+    std::vector<VertexStream> extra_streams;  ///< the input's carried streams, sorted as the vertices (not in view())
     float bounds_min[3] = {0, 0, 0};
     float bounds_max[3] = {0, 0, 0};
 

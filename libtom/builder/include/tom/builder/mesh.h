@@ -9,6 +9,19 @@
 
 namespace tom {
 
+/// A vertex stream the builder carries without reading it (see tom::VertexStreamView): its
+/// elements move with their vertices and are never interpolated, so every level holds the
+/// source's values exactly.
+struct VertexStream {
+    std::string name;                ///< glTF attribute ("JOINTS_0", "TEXCOORD_2", "_ID") or "TARGET<k>/<ATTRIBUTE>"
+    uint32_t component_type = 5126;  ///< glTF component type (tom::component_bytes)
+    uint32_t components = 1;         ///< 1 to 4
+    bool normalized = false;
+    std::vector<uint8_t> data;       ///< vertex_count elements, tightly packed
+
+    uint32_t element_bytes() const noexcept { return components * component_bytes(component_type); }
+};
+
 /// An indexed triangle mesh, one std::vector per attribute (struct of arrays).
 /// Optional streams are either empty or hold exactly one element per vertex.
 struct Mesh {
@@ -27,6 +40,9 @@ struct Mesh {
     /// share vertices (an OBJ's groups) or each has its own coincident copy (glTF primitives),
     /// which the builder ties like a seam.
     std::vector<Part> parts;
+    /// Streams carried through the build unread (joints, weights, morph deltas, further texture
+    /// coordinates or colours), each one element per vertex, names distinct.
+    std::vector<VertexStream> extra_streams;
 
     uint32_t vertex_count() const noexcept { return uint32_t(positions.size() / 3); }
     uint32_t triangle_count() const noexcept { return uint32_t(indices.size() / 3); }
@@ -55,7 +71,8 @@ struct CleanStats {
 
 /// Checks a mesh and brings it to the form the builder expects.
 /// \throw ImportError naming `mesh.name` when an index is >= vertex_count, a
-///        position is not finite, a stream has the wrong size, or the mesh has
+///        position is not finite, a stream has the wrong size (a carried stream also when its
+///        type is unknown, its components not 1 to 4 or its name repeated), or the mesh has
 ///        more than 2^32-2 vertices.
 /// \post every triangle has three distinct indices; every vertex is referenced;
 ///       normals are present (area-weighted from the triangles when absent); the parts still
@@ -67,7 +84,8 @@ CleanStats clean_mesh(Mesh& mesh);
 /// input with parts keeps them). The streams are the union of the inputs'; where an input lacks
 /// one, its vertices get neutral values (normals zero, so clean_mesh computes them; texture
 /// coordinates 0; colours opaque white; tangents +x with w = +1) and its part's `attributes` say
-/// which streams are its own. The result has parts unless there is a single input without them.
+/// which streams are its own. Carried streams are joined by name; an input without one gets
+/// zero bytes there. The result has parts unless there is a single input without them.
 Mesh join_parts(const std::vector<Mesh>& inputs, std::string name);
 
 /// Area-weighted vertex normals from the triangles (zero-area neighbourhoods get +z).
