@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
             uint64_t written = 0;
             tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
             if (mesh_index) {
+                scene.gltf = tom::SourceGltf{};  // the source's node tree names every mesh: one mesh gets its instances' nodes
                 std::vector<tom::Instance> kept;
                 for (tom::Instance inst : scene.instances)
                     if (inst.mesh == *mesh_index) inst.mesh = 0, kept.push_back(inst);

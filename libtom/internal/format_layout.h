@@ -47,7 +47,8 @@ constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), se
                    sec_triangles = fourcc("TRIS"), sec_metadata = fourcc("META"), sec_pairs = fourcc("PAIR"),
                    sec_texcoords1 = fourcc("TEX1"), sec_tangents = fourcc("TANG"), sec_materials = fourcc("MATL"),
                    sec_instances = fourcc("INST"), sec_coarse = fourcc("COAR"), sec_parts = fourcc("PART"),
-                   sec_provenance = fourcc("PROV"), sec_images = fourcc("IMAG"), sec_extra_streams = fourcc("XATT");
+                   sec_provenance = fourcc("PROV"), sec_images = fourcc("IMAG"), sec_extra_streams = fourcc("XATT"),
+                   sec_source_gltf = fourcc("GLTF");
 /// The `mesh` field of file-level sections (MATL, INST, PROV).
 constexpr uint32_t file_level = SectionInfo::file_level;
 

@@ -17,6 +17,12 @@ std::vector<uint8_t> encode_instances(const std::vector<Instance>& instances);
 /// textures in order), the image it shows. Empty when the scene has no image.
 std::vector<uint8_t> encode_images(const Scene& scene);
 
+/// GLTF: u64 json_bytes, u64 data_bytes, the JSON, zero padding to a multiple of 16, the data.
+std::vector<uint8_t> encode_source_gltf(const SourceGltf& gltf);
+/// Decodes GLTF: the JSON copied, the data a view into `data`. Its content is not checked here
+/// (the runtime never reads it): the exporter that parses it does.
+SourceGltf decode_source_gltf(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path);
+
 /// XATT: one record per stream (name, type, components, normalized) and its `vertex_count`
 /// elements. `streams` views the builder's data (VertexStreamView over VertexStream::data).
 std::vector<uint8_t> encode_extra_streams(const std::vector<VertexStreamView>& streams, uint32_t vertex_count);

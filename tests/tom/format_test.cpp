@@ -38,7 +38,7 @@ uint64_t get64(const std::vector<uint8_t>& b, size_t at) {
 }
 void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) { std::memcpy(&b[at], &v, 4); }
 
-constexpr int kLastRule = 22;  // the last numbered validation rule of docs/FORMAT.md
+constexpr int kLastRule = 23;  // the last numbered validation rule of docs/FORMAT.md
 
 struct Section {
     std::string type;
@@ -751,6 +751,39 @@ TEST_CASE("carried streams (XATT, since 1.6): each vertex's element in resolutio
     tom::TomMesh bad = t;
     bad.extra_streams[0].data.pop_back();
     CHECK_THROWS_WITH(tom::serialize({bad}), Catch::Contains("carried stream 'JOINTS_0' has"));
+}
+
+TEST_CASE("a glTF source's scene (GLTF, since 1.6): kept as given, its data in place, and rule 23", "[format][corrupt][scene]") {
+    tom::Scene scene;
+    const std::string json = R"({"nodes":[{"mesh":0,"skin":0}],"skins":[{"joints":[0],"inverseBindMatrices":0}],"accessors":[],"bufferViews":[]})";
+    scene.gltf.json = json;
+    const std::vector<uint8_t> blob(64, 0x3F);
+    scene.gltf.data = blob.data();
+    scene.gltf.bytes = blob.size();
+    const std::vector<uint8_t> good = tom::serialize({small_mesh()}, scene);
+    const tom::File f = tom::File::borrow(good.data(), good.size(), "gltf.tom");
+    CHECK(f.scene().gltf.json == json);
+    REQUIRE(f.scene().gltf.bytes == blob.size());
+    CHECK(std::memcmp(f.scene().gltf.data, blob.data(), blob.size()) == 0);
+    CHECK((f.scene().gltf.data >= good.data() && f.scene().gltf.data + blob.size() <= good.data() + good.size()));
+    const Section& g = find(sections_of(good), "GLTF");
+    std::vector<uint8_t> c = good;
+    put32(c, g.offset + 8, 65);  // one byte of data more than the section holds
+    fix_checksums(c);
+    CHECK(rule_of(c) == 23);
+    CHECK(message_of(c).find("GLTF data_bytes") != std::string::npos);
+    c = good;
+    put32(c, g.offset, 0);  // no JSON
+    fix_checksums(c);
+    CHECK(rule_of(c) == 23);
+    c = good;
+    put32(c, g.offset, 0xFFFFFFF0u);  // JSON past the section
+    fix_checksums(c);
+    CHECK(rule_of(c) == 23);
+    c = good;
+    put32(c, g.entry + 4, 0);  // a file-level section claimed by mesh 0
+    fix_checksums(c);
+    CHECK(rule_of(c) == 9);
 }
 
 TEST_CASE("random corruption never crashes and never yields an out-of-range index", "[format][fuzz]") {

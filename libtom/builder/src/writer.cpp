@@ -155,6 +155,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
     if (!scene.materials.empty()) sections.push_back({sec_materials, file_level, detail::encode_materials(scene.materials)});
     if (!scene.instances.empty()) sections.push_back({sec_instances, file_level, detail::encode_instances(scene.instances)});
     if (!scene.images.empty()) sections.push_back({sec_images, file_level, detail::encode_images(scene)});
+    if (!scene.gltf.empty()) sections.push_back({sec_source_gltf, file_level, detail::encode_source_gltf(scene.gltf)});
     if (!options.provenance.empty())
         sections.push_back({sec_provenance, file_level, std::vector<uint8_t>(options.provenance.begin(), options.provenance.end())});
     for (uint32_t mi = 0; mi < meshes.size(); ++mi) {

@@ -9,6 +9,7 @@
 #include "gltf_carried.h"
 
 #include <algorithm>
+#include <iterator>
 #include <set>
 
 namespace tom::detail {
@@ -29,14 +30,17 @@ size_t size_of(const nlohmann::json& doc, const char* key) {
     return it != doc.end() && it->is_array() ? it->size() : 0;
 }
 
-// objects anywhere in the document with a non-empty "extras"
-size_t count_extras(const nlohmann::json& j) {
+// the top-level keys kept whole with the scene (tom::SourceGltf): their extras go along
+const std::set<std::string> scene_keys = {"nodes", "scenes", "skins", "animations", "cameras", "samplers"};
+
+// objects anywhere in the document with a non-empty "extras" (past the top level's `skip` keys)
+size_t count_extras(const nlohmann::json& j, const std::set<std::string>& skip = {}) {
     size_t n = 0;
     if (j.is_object()) {
         const auto it = j.find("extras");
         if (it != j.end() && !it->is_null() && !(it->is_object() && it->empty())) ++n;
         for (const auto& [key, value] : j.items())
-            if (key != "extras") n += count_extras(value);
+            if (key != "extras" && !skip.count(key)) n += count_extras(value);
     } else if (j.is_array()) {
         for (const auto& value : j) n += count_extras(value);
     }
@@ -96,24 +100,30 @@ bool can_read_required(const std::string& extension) {
     return no_geometry.count(extension) || extension.rfind("KHR_materials_", 0) == 0;
 }
 
-std::vector<std::string> gltf_dropped(const nlohmann::json& doc) {
+std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept, std::vector<std::string> also) {
     std::vector<std::string> out;
-    if (const size_t n = size_of(doc, "skins")) out.push_back(counted("skins", n));
-    if (const size_t n = size_of(doc, "animations")) out.push_back(counted("animations", n));
+    if (!scene_kept) {
+        if (const size_t n = size_of(doc, "skins")) out.push_back(counted("skins", n));
+        if (const size_t n = size_of(doc, "animations")) out.push_back(counted("animations", n));
+    }
     if (const size_t n = weighted_meshes(doc)) out.push_back("morph target weights (" + std::to_string(n) + (n == 1 ? " mesh)" : " meshes)"));
-    if (const size_t n = size_of(doc, "cameras")) out.push_back(counted("cameras", n));
-    if (const size_t n = size_of(doc, "scenes"); n > 1) out.push_back(counted("scenes other than the default", n - 1));
-    if (const size_t n = nodes_without_mesh(doc))
-        out.push_back("node tree (flattened into instances: " + std::to_string(n) + " node" + (n == 1 ? "" : "s") + " without a mesh)");
+    if (!scene_kept) {
+        if (const size_t n = size_of(doc, "cameras")) out.push_back(counted("cameras", n));
+        if (const size_t n = size_of(doc, "scenes"); n > 1) out.push_back(counted("scenes other than the default", n - 1));
+        if (const size_t n = nodes_without_mesh(doc))
+            out.push_back("node tree (flattened into instances: " + std::to_string(n) + " node" + (n == 1 ? "" : "s") + " without a mesh)");
+    }
     const auto used = doc.find("extensionsUsed");
     if (used != doc.end() && used->is_array())
         for (const auto& e : *used)
-            if (e.is_string() && !carried_extensions.count(e.get<std::string>())) out.push_back("extension " + e.get<std::string>());
+            if (e.is_string() && !carried_extensions.count(e.get<std::string>()) && !(scene_kept && e.get<std::string>() == "KHR_lights_punctual"))
+                out.push_back("extension " + e.get<std::string>());
     scan_materials(doc, out);
-    if (const size_t n = size_of(doc, "samplers")) out.push_back(counted("texture samplers", n));
-    if (const size_t n = count_extras(doc)) out.push_back(counted("extras", n));
+    if (const size_t n = size_of(doc, "samplers"); n && !scene_kept) out.push_back(counted("texture samplers", n));
+    if (const size_t n = count_extras(doc, scene_kept ? scene_keys : std::set<std::string>{})) out.push_back(counted("extras", n));
     const auto asset = doc.find("asset");
-    if (asset != doc.end() && asset->is_object() && asset->contains("copyright")) out.push_back("asset copyright");
+    if (!scene_kept && asset != doc.end() && asset->is_object() && asset->contains("copyright")) out.push_back("asset copyright");
+    out.insert(out.end(), std::make_move_iterator(also.begin()), std::make_move_iterator(also.end()));
     return out;
 }
 

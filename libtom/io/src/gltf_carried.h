@@ -20,9 +20,11 @@ bool can_read_required(const std::string& extension);
 bool is_interpreted_attribute(const std::string& name);
 
 /// The features of `doc` that the .tom does not keep, one phrase each, in a fixed order:
-/// "skins (1)", "animations (2)", "morph target weights (1 mesh)", "cameras (1)", "node tree (flattened into instances: 2 nodes without a mesh)",
-/// "extension KHR_lights_punctual", "texture samplers (2)", "extras (4)", ... Empty when
-/// nothing is lost.
-std::vector<std::string> gltf_dropped(const nlohmann::json& doc);
+/// "skins (1)", "animations (2)", "morph target weights (1 mesh)", "cameras (1)", "node tree
+/// (flattened into instances: 2 nodes without a mesh)", "extension KHR_materials_clearcoat",
+/// "texture samplers (2)", "extras (4)", ..., then `also` (what the importer itself could not
+/// carry). With `scene_kept` (the node tree, scenes, skins, animations, cameras, lights and
+/// texture samplers are kept as tom::SourceGltf) those are not named. Empty when nothing is lost.
+std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept, std::vector<std::string> also);
 
 } // namespace tom::detail

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <stdexcept>
 #include <cstdio>
 
 #include <nlohmann/json.hpp>
@@ -131,15 +132,27 @@ struct MaterialWriter {
     const std::string& texture_dir;
     bool embed_external;
     const std::string& path;
+    const json* source = nullptr;             // the stored glTF scene: its samplers and each texture reference's
     json images = json::array(), textures = json::array();
-    std::map<std::string, int> texture_of{};  // one glTF texture per image ("#k" for stored image k, else its URI)
+    std::map<std::string, int> texture_of{};  // one glTF texture per image ("#k" for stored image k, else its URI) and sampler
     std::set<std::string> extensions{};       // used and required
+    size_t reference = 0;                     // the texture reference being written, counted over all materials
+
+    // the sampler of the current texture reference (the source's), or -1
+    int sampler_of_reference() const {
+        if (!source || !source->contains("textureSamplers")) return -1;
+        const json& list = (*source)["textureSamplers"];
+        if (reference >= list.size() || !list[reference].is_number_unsigned()) return -1;
+        const size_t s = list[reference].get<size_t>();
+        return source->contains("samplers") && s < (*source)["samplers"].size() ? int(s) : -1;
+    }
 
     // a glTF image (and its texture) for reference `t`; -1 when it has neither bytes nor a URI
     int texture_for(const TextureRef& t) {
         namespace fs = std::filesystem;
         std::string key = t.image >= 0 ? "#" + std::to_string(t.image) : t.uri;
         if (key.empty()) return -1;
+        const int sampler = sampler_of_reference();
         fs::path file;
         if (t.image < 0) {
             std::string uri = t.uri;
@@ -150,7 +163,7 @@ struct MaterialWriter {
             if (local && !texture_dir.empty() && !embed_external)
                 key = fs::relative(file, fs::absolute(fs::path(path)).parent_path()).generic_string();
         }
-        const auto [it, fresh] = texture_of.emplace(key, int(textures.size()));
+        const auto [it, fresh] = texture_of.emplace(key + "|" + std::to_string(sampler), int(textures.size()));
         if (!fresh) return it->second;
         json image;
         std::string mime = t.mime_type;
@@ -173,6 +186,7 @@ struct MaterialWriter {
             texture = {{"extensions", {{ext, {{"source", images.size() - 1}}}}}};
             extensions.insert(ext);
         }
+        if (sampler >= 0) texture["sampler"] = sampler;
         textures.push_back(texture);
         return it->second;
     }
@@ -186,6 +200,7 @@ struct MaterialWriter {
         if (m.double_sided) mat["doubleSided"] = true;
         for (const TextureRef& t : m.textures) {
             const int index = texture_for(t);
+            ++reference;
             if (index < 0) continue;
             const json info = {{"index", index}, {"texCoord", t.texcoord}};
             switch (t.role) {
@@ -201,20 +216,153 @@ struct MaterialWriter {
     }
 };
 
-void write_materials(json& doc, Writer& w, const Scene& scene, int max_material, const std::string& texture_dir, bool embed_external,
-                     const std::string& path, std::set<std::string>& extensions) {
+void write_materials(json& doc, Writer& w, const Scene& scene, const json* source, int max_material, const std::string& texture_dir,
+                     bool embed_external, const std::string& path, std::set<std::string>& extensions) {
     if (max_material >= 0 && size_t(max_material) >= scene.materials.size())
         throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(max_material) + ", but " +
                       std::to_string(scene.materials.size()) + " are stored");
     if (scene.materials.empty()) return;
-    MaterialWriter mw{w, scene, texture_dir, embed_external, path};
+    MaterialWriter mw{w, scene, texture_dir, embed_external, path, source};
     doc["materials"] = json::array();
     for (const Material& m : scene.materials) doc["materials"].push_back(mw.material(m));
     if (!mw.images.empty()) {
         doc["images"] = mw.images;
         doc["textures"] = mw.textures;
+        if (source && source->contains("samplers") && source->contains("textureSamplers")) doc["samplers"] = (*source)["samplers"];
     }
     extensions.insert(mw.extensions.begin(), mw.extensions.end());
+}
+
+// One node per instance (each mesh once, untransformed, without instances); with several
+// levels, its coarser levels follow it as nodes of their own listed by its MSFT_lod extension.
+void write_instance_nodes(json& doc, const Scene& scene, const std::vector<std::vector<int>>& level_mesh, const std::string& path, std::set<std::string>& used) {
+    doc["nodes"] = json::array();
+    json roots = json::array();
+    const Instance untransformed;  // its transform is the identity
+    for (const Instance& inst : draw_list(scene, uint32_t(level_mesh.size()))) {
+        const std::vector<int>& lm = level_mesh[inst.mesh];
+        if (lm[0] < 0) continue;
+        auto node_of = [&](int mesh, const std::string& name) {
+            json node = {{"mesh", mesh}};
+            if (!name.empty()) node["name"] = name;
+            if (!std::equal(inst.transform, inst.transform + 16, untransformed.transform)) node["matrix"] = inst.transform;
+            return node;
+        };
+        const size_t index = doc["nodes"].size();
+        roots.push_back(index);
+        doc["nodes"].push_back(node_of(lm[0], inst.name));
+        json ids = json::array();
+        for (size_t level = 1; level < lm.size(); ++level) {
+            if (lm[level] < 0) continue;
+            ids.push_back(doc["nodes"].size());
+            doc["nodes"].push_back(node_of(lm[level], inst.name.empty() ? std::string() : inst.name + " lod " + std::to_string(level)));
+        }
+        if (!ids.empty()) {
+            doc["nodes"][index]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
+            used.insert("MSFT_lod");
+        }
+    }
+    if (roots.empty()) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
+    doc["scenes"] = {{{"nodes", roots}}};
+    doc["scene"] = 0;
+}
+
+// An index the stored scene gives, checked against the count of what it indexes.
+size_t stored_index(const json& value, size_t count, const char* what) {
+    const size_t i = value.get<size_t>();
+    if (i >= count) throw std::out_of_range(std::string(what) + " " + std::to_string(i) + " of " + std::to_string(count));
+    return i;
+}
+
+// The source's own node tree (SourceGltf) in place of one node per instance: the nodes keep their
+// hierarchy, transforms, names, skins, cameras, lights, extensions and extras, and the scenes,
+// skins, animations and cameras come along, their accessors appended with their data. A node's
+// mesh becomes its finest level; its coarser levels are nodes of their own (with its skin)
+// listed by its MSFT_lod extension. \throw IoError when the stored scene is not what the
+// importer writes (a hostile file): every index followed here is checked.
+void write_source_scene(json& doc, Writer& w, const json& src, const SourceGltf& gltf, const std::vector<std::vector<int>>& level_mesh,
+                        const std::string& path, std::set<std::string>& used) {
+    try {
+        // the data of the stored accessors, their views and the accessors, renumbered
+        while (w.bin.size() % 4) w.bin.push_back(0);
+        const size_t data_base = w.bin.size(), view_base = w.views.size(), accessor_base = w.accessors.size();
+        if (gltf.bytes) w.bin.insert(w.bin.end(), gltf.data, gltf.data + gltf.bytes);
+        const json& views = src.at("bufferViews");
+        for (json view : views) {
+            const size_t offset = view.value("byteOffset", size_t(0)), length = view.at("byteLength").get<size_t>();
+            if (offset > gltf.bytes || length > gltf.bytes - offset) throw std::out_of_range("a buffer view past the stored data");
+            view["buffer"] = 0;
+            view["byteOffset"] = data_base + offset;
+            w.views.push_back(view);
+        }
+        const json& accessors = src.at("accessors");
+        for (json accessor : accessors) {
+            accessor["bufferView"] = view_base + stored_index(accessor.at("bufferView"), views.size(), "buffer view");
+            w.accessors.push_back(accessor);
+        }
+        auto accessor_ref = [&](json& value) { value = accessor_base + stored_index(value, accessors.size(), "accessor"); };
+        if (src.contains("skins")) {
+            doc["skins"] = src["skins"];
+            for (json& skin : doc["skins"])
+                if (skin.contains("inverseBindMatrices")) accessor_ref(skin["inverseBindMatrices"]);
+        }
+        if (src.contains("animations")) {
+            doc["animations"] = src["animations"];
+            for (json& animation : doc["animations"])
+                for (json& sampler : animation.at("samplers"))
+                    for (const char* key : {"input", "output"}) accessor_ref(sampler.at(key));
+        }
+        for (const char* key : {"cameras", "scenes", "scene", "extensions"})
+            if (src.contains(key)) doc[key] = src[key];
+        if (src.contains("asset") && src["asset"].contains("copyright")) doc["asset"]["copyright"] = src["asset"]["copyright"];
+        if (src.contains("extensions") && src["extensions"].contains("KHR_lights_punctual")) used.insert("KHR_lights_punctual");
+        // the nodes, each mesh node at its finest level, coarser ones appended after them all
+        json nodes = src.at("nodes"), lods = json::array();
+        const size_t stored_nodes = nodes.size();
+        bool any = false;
+        for (size_t i = 0; i < stored_nodes; ++i) {
+            json& node = nodes[i];
+            if (!node.contains("mesh")) continue;
+            const std::vector<int>& lm = level_mesh[stored_index(node["mesh"], level_mesh.size(), "mesh")];
+            if (lm[0] < 0) {
+                node.erase("mesh");
+                continue;
+            }
+            any = true;
+            node["mesh"] = lm[0];
+            json ids = json::array();
+            for (size_t level = 1; level < lm.size(); ++level) {
+                if (lm[level] < 0) continue;
+                json lod = {{"mesh", lm[level]}};
+                if (node.contains("name")) lod["name"] = node["name"].get<std::string>() + " lod " + std::to_string(level);
+                if (node.contains("skin")) lod["skin"] = node["skin"];
+                ids.push_back(stored_nodes + lods.size());
+                lods.push_back(lod);
+            }
+            if (!ids.empty()) {
+                node["extensions"]["MSFT_lod"] = {{"ids", ids}};
+                used.insert("MSFT_lod");
+            }
+        }
+        if (!any) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
+        nodes.insert(nodes.end(), lods.begin(), lods.end());
+        doc["nodes"] = nodes;
+        if (!doc.contains("scenes")) {  // a source without scenes: its root nodes make one
+            std::vector<uint8_t> child(stored_nodes, 0);
+            for (const json& node : src["nodes"])
+                if (node.contains("children"))
+                    for (const json& c : node["children"]) child[stored_index(c, stored_nodes, "node")] = 1;
+            json roots = json::array();
+            for (size_t i = 0; i < stored_nodes; ++i)
+                if (!child[i]) roots.push_back(i);
+            doc["scenes"] = {{{"nodes", roots}}};
+            doc["scene"] = 0;
+        }
+    } catch (const json::exception& e) {
+        throw IoError("cannot write '" + path + "': the file's stored glTF scene is malformed (" + e.what() + ")");
+    } catch (const std::out_of_range& e) {
+        throw IoError("cannot write '" + path + "': the file's stored glTF scene is malformed (" + e.what() + ")");
+    }
 }
 
 } // namespace
@@ -300,42 +448,22 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
     json doc;
     doc["asset"] = {{"version", "2.0"}, {"generator", "libtom (tomextract)"}};
     doc["meshes"] = gltf_meshes;
-    // one node per instance (each mesh once, untransformed, without a scene); with several levels,
-    // its coarser levels follow it as nodes of their own listed by its MSFT_lod extension
-    doc["nodes"] = json::array();
-    json roots = json::array();
-    const Instance untransformed;  // its transform is the identity
-    bool has_lods = false;
-    for (const Instance& inst : draw_list(scene, uint32_t(meshes.size()))) {
-        const std::vector<int>& lm = level_mesh[inst.mesh];
-        if (lm[0] < 0) continue;
-        auto node_of = [&](int mesh, const std::string& name) {
-            json node = {{"mesh", mesh}};
-            if (!name.empty()) node["name"] = name;
-            if (!std::equal(inst.transform, inst.transform + 16, untransformed.transform)) node["matrix"] = inst.transform;
-            return node;
-        };
-        const size_t index = doc["nodes"].size();
-        roots.push_back(index);
-        doc["nodes"].push_back(node_of(lm[0], inst.name));
-        json ids = json::array();
-        for (size_t level = 1; level < levels; ++level) {
-            if (lm[level] < 0) continue;
-            ids.push_back(doc["nodes"].size());
-            doc["nodes"].push_back(node_of(lm[level], inst.name.empty() ? std::string() : inst.name + " lod " + std::to_string(level)));
+    std::set<std::string> used;
+    json source;  // the stored glTF scene, parsed once
+    if (!scene.gltf.empty()) {
+        try {
+            source = json::parse(scene.gltf.json);
+        } catch (const json::exception& e) {
+            throw IoError("cannot write '" + path + "': the file's stored glTF scene is not JSON (" + e.what() + ")");
         }
-        if (!ids.empty()) {
-            doc["nodes"][index]["extensions"] = {{"MSFT_lod", {{"ids", ids}}}};
-            has_lods = true;
-        }
+        if (!source.is_object()) throw IoError("cannot write '" + path + "': the file's stored glTF scene is not a JSON object");
+        write_source_scene(doc, w, source, scene.gltf, level_mesh, path, used);
+    } else {
+        write_instance_nodes(doc, scene, level_mesh, path, used);
     }
-    if (roots.empty()) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
-    doc["scenes"] = {{{"nodes", roots}}};
-    doc["scene"] = 0;
     std::set<std::string> required;  // image codecs without a fallback
-    write_materials(doc, w, scene, max_material, texture_dir, embed_images, path, required);
-    std::set<std::string> used = required;
-    if (has_lods) used.insert("MSFT_lod");
+    write_materials(doc, w, scene, source.is_object() ? &source : nullptr, max_material, texture_dir, embed_images, path, required);
+    used.insert(required.begin(), required.end());
     if (!used.empty()) doc["extensionsUsed"] = used;
     if (!required.empty()) doc["extensionsRequired"] = required;
     while (w.bin.size() % 4) w.bin.push_back(0);

@@ -17,6 +17,7 @@
 #include "gltf_meshopt.h"
 #include "gltf_references.h"
 #include "gltf_schema.h"
+#include "gltf_source.h"
 #include "import_backends.h"
 #include "tom/errors.h"
 
@@ -313,7 +314,6 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         if (!b.uri.empty() && !tinygltf::IsDataURI(b.uri)) result.sources.push_back(b.uri);
     for (const std::string& ext : model.extensionsRequired)
         if (!can_read_required(ext)) throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
-    result.dropped = gltf_dropped(doc);
     if (meshopt) decode_meshopt(model, doc, path);
     const bool quantized = std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_mesh_quantization") != model.extensionsUsed.end();
 
@@ -392,7 +392,10 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
         result.meshes.push_back(join_parts(primitives, stem + "/" + mesh_name));
     }
-    result.scene = gltf_scene(model, mesh_parts, embedded, path);
+    std::vector<int> texture_samplers;
+    result.scene = gltf_scene(model, mesh_parts, embedded, path, texture_samplers);
+    result.scene.gltf = source_gltf(model, doc, mesh_parts, texture_samplers);
+    result.dropped = gltf_dropped(doc, !result.scene.gltf.empty(), std::move(result.dropped));
     if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
     return result;
 }

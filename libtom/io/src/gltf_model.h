@@ -26,10 +26,12 @@ using EmbeddedImages = std::map<int, std::vector<uint8_t>>;
 /// triangle primitives of glTF mesh m; each node with a mesh gives one instance per part, with
 /// the node's world transform. A texture whose image is in `embedded` shows that image, stored
 /// in the scene (Scene::images, once per source image); others keep the image's URI.
+/// `texture_samplers` receives, per texture reference of the materials in order, the sampler of
+/// the glTF texture it came from (-1 for none).
 /// \throw ImportError naming `path` and the node for a cycle or a node tree that would give
 /// more than 1,000,000 instances.
 Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
-                 const std::string& path);
+                 const std::string& path, std::vector<int>& texture_samplers);
 
 /// Bakes the KHR_texture_transform of material `material` (its base colour texture's, else the
 /// first of its textures that has one) into the TEXCOORD set it applies to: .tom keeps texture

@@ -35,6 +35,7 @@ struct MaterialReader {
     const EmbeddedImages& embedded;
     Scene& scene;
     std::map<int, int32_t> stored{};  // source image -> Scene::images index
+    std::vector<int> samplers{};      // per texture reference made, in order: its texture's sampler (-1: none)
 
     int32_t store_image(int source) {
         const auto bytes = embedded.find(source);
@@ -63,6 +64,7 @@ struct MaterialReader {
             if (ref.image < 0 && image.uri.rfind("data:", 0) != 0) ref.uri = image.uri;
         }
         out.textures.push_back(std::move(ref));
+        samplers.push_back(model.textures[size_t(texture)].sampler);
     }
 
     Material material(const tinygltf::Material& m);
@@ -222,10 +224,11 @@ std::string bake_texture_transform(const tinygltf::Model& model, int material, M
 }
 
 Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
-                 const std::string& path) {
+                 const std::string& path, std::vector<int>& texture_samplers) {
     Scene scene;
     MaterialReader reader{model, embedded, scene};
     for (const tinygltf::Material& m : model.materials) scene.materials.push_back(reader.material(m));
+    texture_samplers = std::move(reader.samplers);
     const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
     if (size_t(which) < model.scenes.size()) {
         Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};

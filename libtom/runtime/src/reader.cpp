@@ -143,6 +143,7 @@ void File::Impl::validate(const OpenOptions& options) {
     const SectionInfo* instances_section = nullptr;
     const SectionInfo* provenance_section = nullptr;
     const SectionInfo* images_section = nullptr;
+    const SectionInfo* gltf_section = nullptr;
     sections.resize(section_count);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
@@ -162,11 +163,12 @@ void File::Impl::validate(const OpenOptions& options) {
         if (options.verify_checksums && crc32(data + s.offset, s.bytes) != s.checksum)
             fail(s.offset, field, 8, "checksum mismatch: the section is corrupt");
         // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
-        if (type == sec_materials || type == sec_instances || type == sec_provenance || type == sec_images) {
+        if (type == sec_materials || type == sec_instances || type == sec_provenance || type == sec_images || type == sec_source_gltf) {
             if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
             const SectionInfo*& file_slot = type == sec_materials ? materials_section
                                           : type == sec_instances ? instances_section
                                           : type == sec_images    ? images_section
+                                          : type == sec_source_gltf ? gltf_section
                                                                   : provenance_section;
             if (file_slot) fail(e, field, 9, "the file has this section twice");
             file_slot = &s;
@@ -319,6 +321,8 @@ void File::Impl::validate(const OpenOptions& options) {
         scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
     // rule 21: the images embedded in the source, and which texture shows which
     if (images_section) detail::decode_images(data + images_section->offset, images_section->bytes, images_section->offset, path, scene);
+    // rule 23: a glTF source's scene beyond meshes, kept for the exporter
+    if (gltf_section) scene.gltf = detail::decode_source_gltf(data + gltf_section->offset, gltf_section->bytes, gltf_section->offset, path);
     for (uint32_t mi = 0; mi < mesh_count; ++mi) {
         const MeshView& v = meshes[mi];
         const std::string field = "mesh " + std::to_string(mi);

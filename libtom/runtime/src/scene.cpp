@@ -259,6 +259,32 @@ std::vector<Instance> decode_instances(const uint8_t* data, uint64_t bytes, uint
     return out;
 }
 
+std::vector<uint8_t> encode_source_gltf(const SourceGltf& gltf) {
+    const uint64_t json_end = (16 + uint64_t(gltf.json.size()) + 15) / 16 * 16;
+    std::vector<uint8_t> out(size_t(json_end + gltf.bytes), 0);
+    store_u64(&out[0], gltf.json.size());
+    store_u64(&out[8], gltf.bytes);
+    std::memcpy(&out[16], gltf.json.data(), gltf.json.size());
+    if (gltf.bytes) std::memcpy(&out[size_t(json_end)], gltf.data, size_t(gltf.bytes));
+    return out;
+}
+
+SourceGltf decode_source_gltf(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path) {
+    const SectionReader in{data, bytes, offset, path, "GLTF", 23};
+    in.need(0, 16, "header");
+    const uint64_t json = load_u64(data), binary = load_u64(data + 8);
+    if (json == 0) in.fail(0, "json_bytes", "is 0");
+    in.need(16, json, "JSON");
+    const uint64_t json_end = (16 + json + 15) / 16 * 16;
+    if (json_end > bytes || binary != bytes - json_end)
+        in.fail(8, "data_bytes", std::to_string(binary) + " bytes of data after " + std::to_string(json) + " of JSON do not fill the section's " + std::to_string(bytes));
+    SourceGltf out;
+    out.json.assign(reinterpret_cast<const char*>(data + 16), size_t(json));
+    out.data = data + json_end;
+    out.bytes = binary;
+    return out;
+}
+
 std::vector<VertexStreamView> decode_extra_streams(const uint8_t* data, uint64_t bytes, uint64_t offset, const std::string& path, const std::string& mesh_field,
                                                    uint32_t vertex_count) {
     const SectionReader in{data, bytes, offset, path, "XATT", 22};

@@ -55,10 +55,24 @@ struct Instance {
     float transform[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};  ///< object to world, column-major
 };
 
+/// What a glTF source holds beyond meshes and materials, kept as it is for the glTF exporter
+/// (section GLTF, since 1.6): its node tree, scenes, skins, animations, cameras and root
+/// extensions (lights) as a glTF JSON fragment whose nodes' `mesh` index this file's meshes and
+/// whose accessors read `data` as buffer 0. Never interpreted by the runtime (Instance is the
+/// runtime's view of the nodes); empty for other sources.
+struct SourceGltf {
+    std::string json;               ///< a JSON object: "nodes", "scenes", "scene", "skins", "animations", "cameras", "accessors", "bufferViews", ...
+    const uint8_t* data = nullptr;  ///< `bytes` bytes: into the File's mapping, or held by `owner`
+    uint64_t bytes = 0;
+    std::shared_ptr<const void> owner;
+    bool empty() const noexcept { return json.empty(); }
+};
+
 struct Scene {
     std::vector<Material> materials;  ///< a mesh's `material` indexes this list
     std::vector<Instance> instances;  ///< empty: draw every mesh once, untransformed
     std::vector<Image> images;        ///< the images embedded in the source; a TextureRef's `image` indexes this list
+    SourceGltf gltf;                  ///< a glTF source's nodes, skins, animations, ... (see SourceGltf)
 };
 
 /// An image of `bytes` bytes held by the Image itself (copied once), e.g. for tom::serialize.
