@@ -2,10 +2,12 @@
 // group per part) or PLY, or at one or more resolutions as binary glTF with the file's materials
 // and instances (a primitive per part).
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 
+#include "tom/error_curve.h"
 #include "tom/errors.h"
 #include "tom/io/export.h"
 #include "tom/extract.h"
@@ -30,6 +32,23 @@ int main(int argc, char** argv) {
                   ->delimiter(',')
                   ->check(CLI::Range(0.0, 100.0));
     l->excludes(f)->excludes(t)->excludes(v);
+    std::string max_error_text, metric = "max";
+    std::vector<std::string> lods_error_text;
+    std::optional<double> max_error_px, distance, fov_deg;
+    std::optional<uint32_t> height;
+    auto* by_max_error = app.add_option("--max-error", max_error_text,
+                             "Each mesh at its coarsest level whose measured error (the stored error curve) is at most E: a fraction of the "
+                             "mesh's diagonal, or a percentage (0.5%)");
+    auto* le = app.add_option("--lods-error", lods_error_text, "Levels by error, finest first, into one .glb with MSFT_lod (e.g. 0.1%,0.5%,2%)")->delimiter(',');
+    auto* px = app.add_option("--max-error-px", max_error_px, "The error bound in pixels on screen, with --distance, --fov and --height")->check(CLI::PositiveNumber);
+    app.add_option("--distance", distance, "With --max-error-px: the distance from the eye, in the mesh's units")->check(CLI::PositiveNumber);
+    app.add_option("--fov", fov_deg, "With --max-error-px: the vertical field of view in degrees")->check(CLI::Range(0.01, 179.0));
+    app.add_option("--height", height, "With --max-error-px: the viewport's height in pixels")->check(CLI::Range(1u, 1000000u));
+    app.add_option("--error-metric", metric, "What --max-error bounds: max (the Hausdorff distance, default) or mean (Metro's mean)")
+        ->check(CLI::IsMember({"max", "mean"}));
+    for (auto* o : {by_max_error, le, px}) o->excludes(f)->excludes(t)->excludes(v)->excludes(l);
+    by_max_error->excludes(le)->excludes(px);
+    le->excludes(px);
     app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
     app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
     std::string texture_dir;
@@ -40,15 +59,47 @@ int main(int argc, char** argv) {
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
+               "          tomextract out/bunny00.tom --max-error 0.5% -o bunny-half-percent.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
-    if (!fraction && !triangles && !vertices && lods.empty()) {
-        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices or --lods\n");
+    // the error bounds, as fractions of each mesh's diagonal (pixels: converted per mesh below)
+    std::vector<double> error_bounds;
+    try {
+        if (!max_error_text.empty()) error_bounds.push_back(tools::parse_fraction(max_error_text, "--max-error"));
+        for (const std::string& text : lods_error_text) error_bounds.push_back(tools::parse_fraction(text, "--lods-error"));
+    } catch (const std::invalid_argument& bad) {
+        std::fprintf(stderr, "error: %s\n", bad.what());
         return tools::exit_usage;
     }
+    if (max_error_px && (!distance || !fov_deg || !height)) {
+        std::fprintf(stderr, "error: --max-error-px needs --distance, --fov and --height\n");
+        return tools::exit_usage;
+    }
+    const bool by_error = !error_bounds.empty() || max_error_px.has_value();
+    if (!fraction && !triangles && !vertices && lods.empty() && !by_error) {
+        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px or --lods-error\n");
+        return tools::exit_usage;
+    }
+    // mesh m's resolution for bound k of error_bounds (or the pixel bound), from its stored curve
+    auto level_for_error = [&](const tom::MeshView& m, size_t k) {
+        const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m);
+        if (!curve) throw tom::ArgumentError(path + ": mesh '" + std::string(m.name) + "' has no stored error curve (it was built with --no-error-curve)");
+        double bound = 0;
+        if (max_error_px) {
+            const double pixel = 2.0 * *distance * std::tan(*fov_deg * 3.14159265358979323846 / 360.0) / double(*height);  // object units a pixel spans
+            bound = curve->diagonal > 0 ? *max_error_px * pixel / double(curve->diagonal) : 0.0;
+        } else {
+            bound = error_bounds[k];
+        }
+        return tom::vertex_count_for_error(m, *curve, bound, metric == "max");
+    };
     auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
     if (embed_images && !is_glb()) {
         std::fprintf(stderr, "error: --embed-images writes images into a .glb; '%s' is not one\n", output.c_str());
+        return tools::exit_usage;
+    }
+    if (!lods_error_text.empty() && !is_glb()) {
+        std::fprintf(stderr, "error: --lods-error writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
         return tools::exit_usage;
     }
     if (!lods.empty() && !is_glb()) {
@@ -86,6 +137,8 @@ int main(int argc, char** argv) {
                 g.mesh = &m;
                 if (!lods.empty()) {
                     for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0));
+                } else if (by_error) {
+                    for (size_t k = 0; k < std::max<size_t>(1, error_bounds.size()); ++k) g.vertex_counts.push_back(level_for_error(m, k));
                 } else if (fraction) {
                     g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction));
                 } else if (triangles) {
@@ -97,8 +150,9 @@ int main(int argc, char** argv) {
                 glb.push_back(g);
             }
             tom::export_glb(output, glb, scene, texture_dir, embed_images);
+            const size_t level_count = glb.empty() ? 0 : glb.front().vertex_counts.size();
             std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", path.c_str(), glb.size(),
-                        glb.size() == 1 ? "" : "es", lods.empty() ? size_t(1) : lods.size(), lods.size() > 1 ? "s" : "",
+                        glb.size() == 1 ? "" : "es", level_count, level_count == 1 ? "" : "s",
                         static_cast<unsigned long long>(written), scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
                         tom::draw_list(scene, uint32_t(glb.size())).size(), tom::draw_list(scene, uint32_t(glb.size())).size() == 1 ? "" : "s",
                         output.c_str());
@@ -110,7 +164,9 @@ int main(int argc, char** argv) {
             if (mesh_index && *mesh_index != i) continue;
             const tom::MeshView& m = file.mesh(i);
             uint32_t n;
-            if (fraction)
+            if (by_error)
+                n = level_for_error(m, 0);
+            else if (fraction)
                 n = tom::vertex_count_for_fraction(m, *fraction);
             else if (triangles)
                 n = tom::vertex_count_for_fraction(m, total_tris ? double(*triangles) / double(total_tris) : 1.0);

@@ -1,6 +1,8 @@
 #include "tool_common.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
 #include <filesystem>
 #include <map>
 
@@ -122,6 +124,17 @@ std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const std::st
     std::vector<Job> jobs;
     for (const Found& f : unique) jobs.push_back({f.file.string(), out_name(f, uses[out_name(f, false)] > 1)});
     return jobs;
+}
+
+double parse_fraction(const std::string& text, const std::string& option) {
+    const bool percent = !text.empty() && text.back() == '%';
+    const std::string number = percent ? text.substr(0, text.size() - 1) : text;
+    char* end = nullptr;
+    const double value = number.empty() ? -1.0 : std::strtod(number.c_str(), &end);
+    const double fraction = percent ? value / 100.0 : value;
+    if (number.empty() || *end != '\0' || !(fraction >= 0.0 && fraction <= 1.0))
+        throw std::invalid_argument(option + " '" + text + "' is not a fraction in [0, 1] or a percentage (such as 0.5%)");
+    return fraction;
 }
 
 std::string human_bytes(uint64_t bytes) {

@@ -50,6 +50,10 @@ std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const std::st
 std::string human_bytes(uint64_t bytes);
 bool is_terminal(int fd);
 
+/// A fraction written as a number ("0.005") or a percentage ("0.5%"), in [0, 1].
+/// \throw std::invalid_argument naming `option` and the text.
+double parse_fraction(const std::string& text, const std::string& option);
+
 /// Bytes of a mesh in face-vertex form with positions and normals (floats) and 32-bit indices:
 /// the reference of the paper's Table 4.
 inline uint64_t face_vertex_bytes(uint64_t vertices, uint64_t triangles) { return vertices * 24 + triangles * 12; }

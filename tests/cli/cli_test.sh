@@ -256,6 +256,26 @@ level = [l for l in r['meshes'][0]['levels'] if l['fraction'] == 0.1][0]
 assert d['simplified_triangles'] == level['triangles'], (d['simplified_triangles'], level['triangles'])
 assert abs(d['hausdorff'] - level['error']['hausdorff']) < 1e-9 and abs(d['mean'] - level['error']['mean']) < 1e-9, (d, level['error'])
 "
+# levels chosen by error: what tomerr measures at the level is within the bound asked for
+for bound in 0.2 1 3; do
+  check "tomextract --max-error $bound% of fandisk" expect_exit 0 "$tools/tomextract" "$work/r/fandisk.tom" --max-error "$bound%" -o "$work/fe$bound.obj"
+  check "whose Hausdorff distance, measured by tomerr, is at most $bound%" /usr/bin/python3 -c "
+import json, subprocess
+d = json.loads(subprocess.run(['$tools/tomerr', '$data/meshes/fandisk.off', '$work/fe$bound.obj', '--json'], check=True, capture_output=True, text=True).stdout)
+assert d['hausdorff'] <= $bound and d['simplified_triangles'] < d['original_triangles'], d
+"
+done
+check "--lods-error writes one level per bound, finer first" expect_exit 0 "$tools/tomextract" "$work/r/fandisk.tom" --lods-error 0.2%,1%,3% -o "$work/fe-lods.glb"
+check "with strictly fewer triangles each" /usr/bin/python3 -c "
+import json, struct
+b = open('$work/fe-lods.glb', 'rb').read()
+n = struct.unpack('<I', b[12:16])[0]; d = json.loads(b[20:20 + n])
+counts = [d['accessors'][m['primitives'][0]['indices']]['count'] // 3 for m in d['meshes']]
+assert len(counts) == 3 and counts[0] > counts[1] > counts[2], counts
+"
+check "--max-error-px takes the view" expect_exit 0 "$tools/tomextract" "$work/r/fandisk.tom" --max-error-px 2 --distance 3 --fov 60 --height 1080 -o "$work/fe-px.obj"
+check "--max-error-px without the view is a usage error" expect_exit 2 "$tools/tomextract" "$work/r/fandisk.tom" --max-error-px 2 -o "$work/fe-px.obj"
+check "--max-error of a file without error curves names the reason" bash -c "! '$tools/tomextract' '$work/nc/fandisk.tom' --max-error 1% -o '$work/nc.obj' 2>'$work/nc.err' && grep -q 'has no stored error curve' '$work/nc.err'"
 check "tomerr text output" expect_exit 0 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/f10.obj"
 check "names both directions and Hausdorff" grep -q "Hausdorff distance" "$work/stdout"
 check "tomerr with a missing file exits 1" expect_exit 1 "$tools/tomerr" "$data/meshes/fandisk.off" "$work/missing.obj"

@@ -1006,3 +1006,21 @@ TEST_CASE("the attribute term keeps shading and texture layout at little geometr
     CHECK(uv_with < 0.95 * uv_without);  // measured 0.69
     CHECK(geo_with < 1.1 * geo_without);
 }
+
+TEST_CASE("vertex_count_for_error takes the coarsest level from which every measured point is within the bound", "[metrics][curve]") {
+    tom::MeshView mesh;
+    mesh.vertex_count = 50;
+    mesh.min_vertex_count = 5;
+    tom::ErrorCurve curve;
+    curve.diagonal = 1.0f;
+    // measured errors need not fall monotonically: 30 vertices is worse than 20
+    curve.points = {{10, 16, 0.01f, 0.05f}, {20, 36, 0.002f, 0.01f}, {30, 56, 0.004f, 0.02f}, {40, 76, 0.0002f, 0.001f}};
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.015) == 40);  // 30's 2% stops the walk down
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.03) == 20);
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.051) == 10);
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.0001) == 50);  // none within: full detail, error 0
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.005, false) == 20);  // the mean curve
+    CHECK(tom::vertex_count_for_error(mesh, curve, 0.003, false) == 40);
+    mesh.min_vertex_count = 25;  // points below the coarsest resolution are not levels of this mesh
+    CHECK(tom::vertex_count_for_error(mesh, curve, 1.0) == 30);
+}

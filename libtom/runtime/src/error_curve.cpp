@@ -93,6 +93,17 @@ double estimate_error(const ErrorCurve& c, double triangles, bool use_max) noexc
     return k / triangles;
 }
 
+uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max) noexcept {
+    uint32_t n = mesh.vertex_count;
+    // from the finest point down, while every point so far is within the bound
+    for (auto p = curve.points.rbegin(); p != curve.points.rend(); ++p) {
+        if (p->vertices > mesh.vertex_count || p->vertices < mesh.min_vertex_count) continue;
+        if (double(use_max ? p->max : p->mean) > max_error) break;
+        n = p->vertices;
+    }
+    return n;
+}
+
 KFit fit_k_over_n(const std::vector<double>& triangles, const std::vector<double>& errors) {
     KFit f;
     std::vector<double> x, y;

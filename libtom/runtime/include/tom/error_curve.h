@@ -41,6 +41,13 @@ std::optional<ErrorCurve> read_error_curve(const MeshView& mesh);
 /// between the stored points, k / N beyond them. `use_max` selects the max curve.
 double estimate_error(const ErrorCurve& curve, double triangles, bool use_max = false) noexcept;
 
+/// The coarsest resolution of `mesh` whose error is known to be at most `max_error` (a fraction
+/// of the diagonal; the Hausdorff distance with `use_max`, else the mean): the fewest vertices of
+/// a stored point from which on every stored point, measured, is within the bound; the full
+/// resolution (error 0) when none is. Measured points only, never the interpolation, so what
+/// tomerr measures at that level is within the bound (up to its sampling).
+uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max = true) noexcept;
+
 /// Least-squares fit of D = k / N through (N, D) pairs, in log space: k is the geometric mean of
 /// D * N. Also the free slope b of log D = a + b log N (b = -1 is Pasman's law) and the RMS of
 /// the log10 residuals of the k / N model. Pairs with D <= 0 or N == 0 are ignored.
