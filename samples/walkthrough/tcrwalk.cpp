@@ -22,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "images.h"
 #include "renderer.h"
 #include "scene.h"
 #include "tcr/model.h"
@@ -55,13 +56,6 @@ double frame_to_frame(const std::vector<double>& times) {
     return mean > 0 ? 1.048 * steps[steps.size() / 2] / mean : 0.0;
 }
 
-// A part's base-colour image: stored in its .tom (`stored`), or a file (`key`, its path); `key`
-// names it once loaded, and is empty when the part has none.
-struct PartImage {
-    std::string key;
-    const tom::Image* stored = nullptr;
-};
-
 // The scene with its meshes mapped and each instance's transform.
 struct World {
     walk::Scene scene;
@@ -71,39 +65,18 @@ struct World {
     uint64_t full_triangles = 0;
     // per mesh, per part: its material's base-colour image (stored in the .tom, or a file found
     // beside it), or none; a mesh with texture coordinates and at least one such image is textured
-    std::vector<std::vector<PartImage>> part_images;
+    std::vector<std::vector<walk::PartImage>> part_images;
     std::vector<uint8_t> textured;
     // the renderer's handles of those images (-1: none), once it has them (load_images)
     std::vector<std::vector<int32_t>> image_handles;
 };
 
-// The base-colour image of each part of mesh `m`: the image stored in the .tom, or a file
-// looked up beside it as the source wrote it (relative to the model, as OBJ and glTF do; '\\' read
-// as '/'). A missing file is reported and its part drawn without it.
+// The base-colour image of each part of mesh `m`; a mesh with texture coordinates and at least
+// one such image is textured.
 void find_images(World& w, size_t m, const fs::path& tom_path) {
-    const tom::MeshView& mesh = *w.meshes[m];
-    const tom::Scene& scene = w.files[m].scene();
-    std::vector<PartImage> images(tom::part_count(mesh));
-    for (uint32_t p = 0; p < images.size(); ++p) {
-        const int32_t material = tom::part_at(mesh, p).material;
-        if (material < 0 || size_t(material) >= scene.materials.size()) continue;
-        for (const tom::TextureRef& t : scene.materials[size_t(material)].textures) {
-            if (t.role != tom::TextureRole::base_color || t.texcoord != 0) continue;
-            if (t.image >= 0) {
-                images[p].stored = &scene.images[size_t(t.image)];
-                images[p].key = tom_path.string() + "#" + std::to_string(t.image);
-                continue;
-            }
-            if (t.uri.empty()) continue;
-            std::string uri = t.uri;
-            std::replace(uri.begin(), uri.end(), '\\', '/');
-            const fs::path path = (tom_path.parent_path() / uri).lexically_normal();
-            if (fs::exists(path)) images[p].key = path.string();
-            else std::fprintf(stderr, "warning: %s: part %u's image '%s' is not at %s; drawn without it\n", tom_path.string().c_str(), p, t.uri.c_str(), path.string().c_str());
-        }
-    }
-    const bool any = std::any_of(images.begin(), images.end(), [](const PartImage& i) { return !i.key.empty(); });
-    w.textured.push_back(mesh.texcoords && any);
+    std::vector<walk::PartImage> images = walk::find_part_images(w.files[m], 0, tom_path);
+    const bool any = std::any_of(images.begin(), images.end(), [](const walk::PartImage& i) { return !i.key.empty(); });
+    w.textured.push_back(w.meshes[m]->texcoords && any);
     w.part_images.push_back(std::move(images));
 }
 
@@ -145,18 +118,10 @@ World load_world(const std::string& scene_path) {
 void load_images(World& w, walk::Renderer* renderer) {
     std::map<std::string, int32_t> loaded;
     w.image_handles.clear();
-    for (const std::vector<PartImage>& parts : w.part_images) {
+    for (const std::vector<walk::PartImage>& parts : w.part_images) {
         std::vector<int32_t> handles(parts.size(), -1);
-        for (size_t p = 0; p < parts.size(); ++p) {
-            const PartImage& image = parts[p];
-            if (image.key.empty() || !renderer) continue;
-            auto it = loaded.find(image.key);
-            if (it == loaded.end())
-                it = loaded.emplace(image.key, int32_t(image.stored ? renderer->add_image(image.stored->data, size_t(image.stored->bytes), image.key)
-                                                                    : renderer->add_image(image.key)))
-                         .first;
-            handles[p] = it->second;
-        }
+        if (renderer)
+            for (size_t p = 0; p < parts.size(); ++p) handles[p] = walk::load_image(parts[p], *renderer, loaded);
         w.image_handles.push_back(std::move(handles));
     }
 }

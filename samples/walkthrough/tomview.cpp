@@ -7,7 +7,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
+#include "images.h"
 #include "renderer.h"
 #include "tcr/view.h"
 #include "tom/errors.h"
@@ -42,9 +44,15 @@ int main(int argc, char** argv) {
         std::vector<std::vector<tom::PartDraw>> parts(file.mesh_count());
         std::vector<uint32_t> indices;
         uint64_t full = 0, drawn = 0;
+        // each part's base-colour image (stored in the file, or a file beside it), drawn
+        // texture-mapped where the mesh has texture coordinates
+        std::vector<std::vector<int32_t>> part_images(file.mesh_count());
+        std::map<std::string, int32_t> loaded;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const tom::MeshView& m = file.mesh(i);
             handles.push_back(renderer.add_mesh(m));
+            for (const walk::PartImage& image : walk::find_part_images(file, i, path))
+                part_images[i].push_back(lod_colors || !m.texcoords ? -1 : walk::load_image(image, renderer, loaded));
             first[i] = uint32_t(indices.size());
             indices.resize(indices.size() + size_t(m.triangle_count) * 3);
             parts[i].resize(tom::part_count(m));
@@ -66,8 +74,10 @@ int main(int argc, char** argv) {
                     lo[k] = std::min(lo[k], w), hi[k] = std::max(hi[k], w);
                 }
             }
-            for (const tom::PartDraw& part : parts[inst.mesh]) {
+            for (uint32_t p = 0; p < parts[inst.mesh].size(); ++p) {
+                const tom::PartDraw& part = parts[inst.mesh][p];
                 walk::Renderer::Draw d{handles[inst.mesh], inst.transform, first[inst.mesh] + part.first_index, part.index_count, {0.7f, 0.7f, 0.7f}};
+                if (part_images[inst.mesh][p] >= 0) d.shading = walk::Renderer::Shading::textured, d.image = uint32_t(part_images[inst.mesh][p]);
                 if (lod_colors) {
                     const float t = m.triangle_count ? float(counts[inst.mesh] / 3) / float(m.triangle_count) : 1.0f;  // red coarse .. blue fine
                     d.color[0] = 1.0f - t, d.color[1] = 0.3f, d.color[2] = t;

@@ -145,6 +145,19 @@ blue = (a[..., 2] > a[..., 0] + 0.2).sum()   # the engine's blue and teal parts
 assert blue > 100, blue
 assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() > 500
 "
+# a GLB whose texture's PNG is stored in the .tom: drawn texture-mapped, the right way up (the
+# logo's blue sky above its green hills on the box's faces; untextured, the white material is grey)
+"$tools/tombuild" "$data/assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb" -o "$work/box" -q --no-error-curve
+check "tomview draws the box with its stored image" "$view" "$work/box/BoxTextured.tom" -o "$work/box.png" --width 400 --height 300
+check "the picture shows the logo upright" /usr/bin/python3 -c "
+import matplotlib.image as im, numpy as np
+a = im.imread('$work/box.png')[..., :3]
+blue = (a[..., 2] > a[..., 0] + 0.15) & (a[..., 2] > a[..., 1] + 0.05)
+green = (a[..., 1] > a[..., 2] + 0.1) & (a[..., 1] > a[..., 0] + 0.05)
+assert blue.sum() > 1000 and green.sum() > 1000, (blue.sum(), green.sum())
+rows = np.arange(a.shape[0])[:, None]
+assert (rows * blue).sum() / blue.sum() < (rows * green).sum() / green.sum(), 'the hills are above the sky'
+"
 check "tomview on a file that is not a .tom exits 1" bash -c "'$view' '$data/meshes/fandisk.off' -o '$work/x.png'; test \$? -eq 1"
 check "the noise test draws one frame again and again and reports its spread" /usr/bin/python3 -c "
 import json, subprocess
