@@ -260,6 +260,29 @@ static const tom::VertexStreamView& stored_stream(const tom::MeshView& m, const 
     return m.extra_streams[0];
 }
 
+TEST_CASE("material extensions without textures and materials' extras pass through, one with a texture is named", "[fidelity][dropped]") {
+    const std::string box = test::sample("assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf");
+    std::ifstream in(box);
+    nlohmann::json doc = nlohmann::json::parse(in);
+    const nlohmann::json kept = {{"KHR_materials_emissive_strength", {{"emissiveStrength", 4.0}}}, {"KHR_materials_ior", {{"ior", 1.4}}}, {"KHR_materials_unlit", nlohmann::json::object()}};
+    doc["materials"][0]["extensions"] = kept;
+    doc["materials"][0]["extensions"]["KHR_materials_clearcoat"] = {{"clearcoatFactor", 1.0}, {"clearcoatTexture", {{"index", 0}}}};
+    doc["materials"][0]["extras"] = {{"author", "someone"}};
+    doc["extensionsUsed"] = {"KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_unlit", "KHR_materials_clearcoat"};
+    const fs::path dir = work_dir("material-extensions");
+    for (const auto& e : fs::directory_iterator(fs::path(box).parent_path()))
+        if (e.path().extension() != ".gltf") fs::copy_file(e.path(), dir / e.path().filename());
+    std::ofstream(dir / "box.gltf") << doc.dump();
+    const Stored s = store((dir / "box.gltf").string());
+    CHECK(s.imported.dropped == std::vector<std::string>{"extension KHR_materials_clearcoat"});
+    tom::export_glb((dir / "out.glb").string(), full_detail(s.file), s.file.scene(), dir.string());
+    const Glb out(file_bytes(dir / "out.glb"));
+    CHECK(out.doc["materials"][0]["extensions"] == kept);
+    CHECK(out.doc["materials"][0]["extras"] == doc["materials"][0]["extras"]);
+    CHECK(out.doc["extensionsUsed"] == nlohmann::json({"KHR_materials_emissive_strength", "KHR_materials_ior", "KHR_materials_unlit"}));
+    CHECK(!out.doc.contains("extensionsRequired"));
+}
+
 TEST_CASE("joints, weights and morph deltas are carried exactly: every level's vertices hold the source's values", "[fidelity][carried]") {
     const std::vector<std::pair<const char*, std::vector<std::string>>> cases = {
         {"assimp/glTF2/simple_skin/simple_skin.gltf", {"JOINTS_0", "WEIGHTS_0"}},

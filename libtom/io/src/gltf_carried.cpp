@@ -33,12 +33,13 @@ size_t size_of(const nlohmann::json& doc, const char* key) {
 // the top-level keys kept whole with the scene (tom::SourceGltf): their extras go along
 const std::set<std::string> scene_keys = {"nodes", "scenes", "skins", "animations", "cameras", "samplers"};
 
-// objects anywhere in the document with a non-empty "extras" (past the top level's `skip` keys)
-size_t count_extras(const nlohmann::json& j, const std::set<std::string>& skip = {}) {
+// objects anywhere in the document with a non-empty "extras" (past the top level's `skip` keys;
+// without `own`, not counting the object's own)
+size_t count_extras(const nlohmann::json& j, const std::set<std::string>& skip = {}, bool own = true) {
     size_t n = 0;
     if (j.is_object()) {
         const auto it = j.find("extras");
-        if (it != j.end() && !it->is_null() && !(it->is_object() && it->empty())) ++n;
+        if (own && it != j.end() && !it->is_null() && !(it->is_object() && it->empty())) ++n;
         for (const auto& [key, value] : j.items())
             if (key != "extras" && !skip.count(key)) n += count_extras(value);
     } else if (j.is_array()) {
@@ -91,6 +92,24 @@ void scan_materials(const nlohmann::json& doc, std::vector<std::string>& out) {
 
 } // namespace
 
+// whether `j` holds a texture reference anywhere (an object with an "index")
+bool refers_to_texture(const nlohmann::json& j) {
+    if (j.is_object()) {
+        if (j.contains("index")) return true;
+        for (const auto& [key, value] : j.items())
+            if (refers_to_texture(value)) return true;
+    } else if (j.is_array()) {
+        for (const auto& value : j)
+            if (refers_to_texture(value)) return true;
+    }
+    return false;
+}
+
+bool carries_material_extension(const std::string& name, const nlohmann::json& value) {
+    // the specular-glossiness model is converted into the metallic-roughness one, not kept
+    return name != "KHR_materials_pbrSpecularGlossiness" && name != "KHR_texture_transform" && !refers_to_texture(value);
+}
+
 bool is_interpreted_attribute(const std::string& name) { return interpreted_attributes.count(name) != 0; }
 
 bool can_read_required(const std::string& extension) {
@@ -113,14 +132,30 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept
         if (const size_t n = nodes_without_mesh(doc))
             out.push_back("node tree (flattened into instances: " + std::to_string(n) + " node" + (n == 1 ? "" : "s") + " without a mesh)");
     }
+    // with the scene kept, so are the lights and every material extension that refers to no texture
+    std::set<std::string> kept;
+    if (scene_kept) {
+        kept.insert("KHR_lights_punctual");
+        std::set<std::string> lost;
+        const auto materials = doc.find("materials");
+        if (materials != doc.end() && materials->is_array())
+            for (const auto& m : *materials)
+                if (m.is_object() && m.contains("extensions") && m["extensions"].is_object())
+                    for (const auto& [name, value] : m["extensions"].items()) (carries_material_extension(name, value) ? kept : lost).insert(name);
+        for (const std::string& name : lost) kept.erase(name);
+    }
     const auto used = doc.find("extensionsUsed");
     if (used != doc.end() && used->is_array())
         for (const auto& e : *used)
-            if (e.is_string() && !carried_extensions.count(e.get<std::string>()) && !(scene_kept && e.get<std::string>() == "KHR_lights_punctual"))
+            if (e.is_string() && !carried_extensions.count(e.get<std::string>()) && !kept.count(e.get<std::string>()))
                 out.push_back("extension " + e.get<std::string>());
     scan_materials(doc, out);
     if (const size_t n = size_of(doc, "samplers"); n && !scene_kept) out.push_back(counted("texture samplers", n));
-    if (const size_t n = count_extras(doc, scene_kept ? scene_keys : std::set<std::string>{})) out.push_back(counted("extras", n));
+    // with the scene kept, so are its objects' extras and the materials' own
+    size_t extras = count_extras(doc, scene_kept ? scene_keys : std::set<std::string>{});
+    if (scene_kept && doc.contains("materials") && doc["materials"].is_array())
+        for (const auto& m : doc["materials"]) extras -= count_extras(m) - count_extras(m, {}, false);
+    if (extras) out.push_back(counted("extras", extras));
     const auto asset = doc.find("asset");
     if (!scene_kept && asset != doc.end() && asset->is_object() && asset->contains("copyright")) out.push_back("asset copyright");
     out.insert(out.end(), std::make_move_iterator(also.begin()), std::make_move_iterator(also.end()));

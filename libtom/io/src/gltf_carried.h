@@ -15,6 +15,12 @@ namespace tom::detail {
 /// KHR_technique_webgl, an unknown one) cannot.
 bool can_read_required(const std::string& extension);
 
+/// Whether a material's extension `name` with value `value` is kept as it is (with the scene,
+/// tom::SourceGltf's "materialExtensions"): one that refers to no texture (KHR_materials_unlit,
+/// emissive_strength, ior, the factors of specular, transmission, volume, sheen, clearcoat, ...);
+/// a texture's index would name a texture of the source, which the exporter renumbers.
+bool carries_material_extension(const std::string& name, const nlohmann::json& value);
+
 /// Whether the importer reads attribute `name` into a stream of its own (POSITION, NORMAL,
 /// TANGENT, TEXCOORD_0, TEXCOORD_1, COLOR_0); every other attribute is carried unread.
 bool is_interpreted_attribute(const std::string& name);

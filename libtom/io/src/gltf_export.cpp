@@ -136,6 +136,7 @@ struct MaterialWriter {
     json images = json::array(), textures = json::array();
     std::map<std::string, int> texture_of{};  // one glTF texture per image ("#k" for stored image k, else its URI) and sampler
     std::set<std::string> extensions{};       // used and required
+    std::set<std::string> used{};             // used only
     size_t reference = 0;                     // the texture reference being written, counted over all materials
 
     // the sampler of the current texture reference (the source's), or -1
@@ -191,6 +192,20 @@ struct MaterialWriter {
         return it->second;
     }
 
+    // material k's extensions and extras as the source had them (those the stored scene keeps);
+    // the extensions' names are used, not required
+    void add_source_extensions(size_t k, json& mat) {
+        if (!source || !source->contains("materialExtensions")) return;
+        const json& list = (*source)["materialExtensions"];
+        if (k >= list.size() || !list[k].is_object()) return;
+        if (list[k].contains("extras")) mat["extras"] = list[k]["extras"];
+        if (!list[k].contains("extensions") || !list[k]["extensions"].is_object()) return;
+        for (const auto& [name, value] : list[k]["extensions"].items()) {
+            mat["extensions"][name] = value;
+            used.insert(name);
+        }
+    }
+
     json material(const Material& m) {
         json pbr = {{"baseColorFactor", m.base_color}, {"metallicFactor", m.metallic}, {"roughnessFactor", m.roughness}};
         json mat = {{"name", m.name}, {"pbrMetallicRoughness", json::object()}};
@@ -217,20 +232,24 @@ struct MaterialWriter {
 };
 
 void write_materials(json& doc, Writer& w, const Scene& scene, const json* source, int max_material, const std::string& texture_dir,
-                     bool embed_external, const std::string& path, std::set<std::string>& extensions) {
+                     bool embed_external, const std::string& path, std::set<std::string>& required, std::set<std::string>& used) {
     if (max_material >= 0 && size_t(max_material) >= scene.materials.size())
         throw IoError("cannot write '" + path + "': a mesh refers to material " + std::to_string(max_material) + ", but " +
                       std::to_string(scene.materials.size()) + " are stored");
     if (scene.materials.empty()) return;
     MaterialWriter mw{w, scene, texture_dir, embed_external, path, source};
     doc["materials"] = json::array();
-    for (const Material& m : scene.materials) doc["materials"].push_back(mw.material(m));
+    for (size_t k = 0; k < scene.materials.size(); ++k) {
+        doc["materials"].push_back(mw.material(scene.materials[k]));
+        mw.add_source_extensions(k, doc["materials"].back());
+    }
     if (!mw.images.empty()) {
         doc["images"] = mw.images;
         doc["textures"] = mw.textures;
         if (source && source->contains("samplers") && source->contains("textureSamplers")) doc["samplers"] = (*source)["samplers"];
     }
-    extensions.insert(mw.extensions.begin(), mw.extensions.end());
+    required.insert(mw.extensions.begin(), mw.extensions.end());
+    used.insert(mw.used.begin(), mw.used.end());
 }
 
 // One node per instance (each mesh once, untransformed, without instances); with several
@@ -462,7 +481,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
         write_instance_nodes(doc, scene, level_mesh, path, used);
     }
     std::set<std::string> required;  // image codecs without a fallback
-    write_materials(doc, w, scene, source.is_object() ? &source : nullptr, max_material, texture_dir, embed_images, path, required);
+    write_materials(doc, w, scene, source.is_object() ? &source : nullptr, max_material, texture_dir, embed_images, path, required, used);
     used.insert(required.begin(), required.end());
     if (!used.empty()) doc["extensionsUsed"] = used;
     if (!required.empty()) doc["extensionsRequired"] = required;

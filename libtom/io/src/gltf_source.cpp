@@ -1,11 +1,13 @@
 // A glTF's scene beyond its meshes and materials, kept as it is (tom::SourceGltf, section GLTF):
 // the node tree with its transforms, names, extensions and extras, the scenes, skins,
-// animations, cameras, the lights of KHR_lights_punctual, the texture samplers and the asset's
-// copyright. Nodes' `mesh` are renumbered to the
+// animations, cameras, the lights of KHR_lights_punctual, the texture samplers, the materials'
+// extensions that refer to no texture and their extras, and the asset's copyright. Nodes' `mesh` are renumbered to the
 // imported meshes; the accessors that skins and animations read are copied, tightly packed, into
 // one binary blob (buffer 0) with a buffer view each.
 
 #include "gltf_source.h"
+
+#include "gltf_carried.h"
 
 #include <algorithm>
 #include <cstring>
@@ -89,6 +91,21 @@ SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std:
         if (doc.contains(key)) out[key] = doc[key];
     if (!out.contains("nodes") || !out["nodes"].is_array()) return {};
     if (doc.contains("asset") && doc["asset"].is_object() && doc["asset"].contains("copyright")) out["asset"] = {{"copyright", doc["asset"]["copyright"]}};
+    // per material, the extensions that refer to no texture, and its extras
+    if (doc.contains("materials") && doc["materials"].is_array()) {
+        json kept = json::array();
+        bool any = false;
+        for (const json& m : doc["materials"]) {
+            json one = json::object();
+            if (m.is_object() && m.contains("extensions") && m["extensions"].is_object())
+                for (const auto& [name, value] : m["extensions"].items())
+                    if (carries_material_extension(name, value)) one["extensions"][name] = value;
+            if (m.is_object() && m.contains("extras")) one["extras"] = m["extras"];
+            any = any || !one.empty();
+            kept.push_back(one);
+        }
+        if (any) out["materialExtensions"] = kept;
+    }
     // the lights (KHR_lights_punctual's root list; the nodes keep their references)
     if (doc.contains("extensions") && doc["extensions"].is_object() && doc["extensions"].contains("KHR_lights_punctual"))
         out["extensions"] = {{"KHR_lights_punctual", doc["extensions"]["KHR_lights_punctual"]}};
