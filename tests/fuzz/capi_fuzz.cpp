@@ -17,6 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     std::vector<uint32_t> wide;
     std::vector<uint16_t> narrow;
+    volatile uint8_t sink = 0;  // the first and last byte of everything handed out in place
     for (uint32_t i = 0; i < tom_file_mesh_count(file); ++i) {
         tom_mesh_view m;
         if (tom_file_mesh(file, i, &m) != TOM_OK) __builtin_trap();
@@ -44,6 +45,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         }
         tom_morphed_vertex v;
         if (m.vertex_count > m.min_vertex_count && tom_geomorph(&m, m.min_vertex_count, 0.5f, &v) != TOM_OK) __builtin_trap();
+        for (uint32_t k = 0; k < tom_mesh_carried_stream_count(&m); ++k) {
+            tom_carried_stream x;
+            if (tom_mesh_carried_stream(&m, k, &x) != TOM_OK || x.components < 1 || x.components > 4 || x.name_bytes == 0) __builtin_trap();
+            const uint8_t* bytes = static_cast<const uint8_t*>(x.data);
+            if (m.vertex_count > 0) sink = sink ^ bytes[0] ^ bytes[size_t(m.vertex_count) * x.components * (x.component_type == 5126 || x.component_type == 5125 ? 4 : x.component_type >= 5122 ? 2 : 1) - 1];
+        }
+    }
+    for (uint32_t i = 0; i < tom_file_image_count(file); ++i) {
+        tom_image image;
+        if (tom_file_image(file, i, &image) != TOM_OK || image.mime_type[0] == '\0') __builtin_trap();
+        if (image.bytes > 0) sink = sink ^ image.data[0] ^ image.data[image.bytes - 1];
     }
     for (uint32_t i = 0; i < tom_file_material_count(file); ++i) {
         tom_material mat;

@@ -658,7 +658,8 @@ TEST_CASE("images (IMAG, since 1.6): stored byte for byte, viewed in place, and 
     bad.materials[1].textures[1].image = 2;
     CHECK_THROWS_WITH(tom::serialize({a}, bad), Catch::Contains("shows image 2 of 2"));
 
-    const Section& imag = find(sections_of(good), "IMAG");
+    const std::vector<Section> secs = sections_of(good);
+    const Section& imag = find(secs, "IMAG");
     const size_t records = imag.offset + 16 + 4 * 2;  // two texture records
     std::vector<uint8_t> c = good;
     put32(c, imag.offset + 4, 3);  // three textures announced, MATL stores two
@@ -717,7 +718,8 @@ TEST_CASE("carried streams (XATT, since 1.6): each vertex's element in resolutio
     // original_mesh gives the input's streams back exactly
     CHECK(tom::original_mesh(t).extra_streams[1].data == m.extra_streams[1].data);
 
-    const Section& x = find(sections_of(good), "XATT");
+    const std::vector<Section> secs = sections_of(good);
+    const Section& x = find(secs, "XATT");
     std::vector<uint8_t> c = good;
     put32(c, x.offset + 16 + 8, 5124);  // not a glTF component type
     fix_checksums(c);
@@ -766,7 +768,8 @@ TEST_CASE("a glTF source's scene (GLTF, since 1.6): kept as given, its data in p
     REQUIRE(f.scene().gltf.bytes == blob.size());
     CHECK(std::memcmp(f.scene().gltf.data, blob.data(), blob.size()) == 0);
     CHECK((f.scene().gltf.data >= good.data() && f.scene().gltf.data + blob.size() <= good.data() + good.size()));
-    const Section& g = find(sections_of(good), "GLTF");
+    const std::vector<Section> secs = sections_of(good);
+    const Section& g = find(secs, "GLTF");
     std::vector<uint8_t> c = good;
     put32(c, g.offset + 8, 65);  // one byte of data more than the section holds
     fix_checksums(c);
