@@ -153,6 +153,44 @@ TEST_CASE("images embedded in a GLB or a data: URI are stored byte for byte and 
     }
 }
 
+TEST_CASE("a JPEG in a GLB and a punctual light come back as they were", "[fidelity][images]") {
+    // the box with the spider's JPEG in its binary chunk in place of its PNG, and a point light on
+    // a node of its own beside the box's
+    Glb variant(file_bytes(test::sample("assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb")));
+    const std::vector<uint8_t> jpeg = file_bytes(test::sample("assimp/OBJ/SpiderTex.jpg"));
+    REQUIRE(jpeg.size() > 1000);
+    while (variant.bin.size() % 4) variant.bin.push_back(0);
+    variant.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", variant.bin.size()}, {"byteLength", jpeg.size()}});
+    variant.bin.insert(variant.bin.end(), jpeg.begin(), jpeg.end());
+    while (variant.bin.size() % 4) variant.bin.push_back(0);  // GLB chunks end on 4 bytes
+    variant.doc["buffers"][0]["byteLength"] = variant.bin.size();
+    variant.doc["images"][0] = {{"bufferView", variant.doc["bufferViews"].size() - 1}, {"mimeType", "image/jpeg"}};
+    const nlohmann::json light = {{"type", "point"}, {"color", {1.0, 0.5, 0.25}}, {"intensity", 20.0}, {"name", "lamp"}};
+    variant.doc["extensions"]["KHR_lights_punctual"]["lights"] = {light};
+    variant.doc["nodes"].push_back({{"name", "lamp node"}, {"translation", {1.0, 2.0, 3.0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    variant.doc["scenes"][0]["nodes"].push_back(variant.doc["nodes"].size() - 1);
+    variant.doc["extensionsUsed"] = {"KHR_lights_punctual"};
+    const fs::path dir = work_dir("jpeg-light");
+    const std::vector<uint8_t> bytes = variant.bytes();
+    std::ofstream(dir / "box.glb", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+
+    const Stored s = store((dir / "box.glb").string());
+    CHECK(s.imported.dropped.empty());
+    REQUIRE(s.file.scene().images.size() == 1);
+    CHECK(s.file.scene().images[0].mime_type == "image/jpeg");
+    CHECK(std::vector<uint8_t>(s.file.scene().images[0].data, s.file.scene().images[0].data + s.file.scene().images[0].bytes) == jpeg);
+    tom::export_glb((dir / "out.glb").string(), full_detail(s.file), s.file.scene());
+    const Glb out(file_bytes(dir / "out.glb"));
+    CHECK(out.doc["images"][0]["mimeType"] == "image/jpeg");
+    CHECK(out.image(out.base_color_image(0)) == jpeg);
+    CHECK(out.doc["extensions"]["KHR_lights_punctual"]["lights"] == nlohmann::json::array({light}));
+    CHECK(out.doc["extensionsUsed"] == nlohmann::json::array({"KHR_lights_punctual"}));
+    const nlohmann::json& lamp = out.doc["nodes"][variant.doc["nodes"].size() - 1];
+    CHECK(lamp["name"] == "lamp node");
+    CHECK(lamp["extensions"]["KHR_lights_punctual"]["light"] == 0);
+    CHECK(lamp["translation"] == nlohmann::json::array({1.0, 2.0, 3.0}));
+}
+
 TEST_CASE("an image that is a file stays a URI, or is embedded on request", "[fidelity][images]") {
     const std::string source = test::sample("assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf");
     const Stored s = store(source);
