@@ -8,11 +8,11 @@
 #include <map>
 #include <set>
 #include <stdexcept>
-#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
 #include "glb.h"
+#include "import_backends.h"
 #include "tom/errors.h"
 #include "tom/io/export.h"
 #include "tom/extract.h"
@@ -112,14 +112,13 @@ const char* image_extension(const std::string& mime) {
     return nullptr;
 }
 
+// The bytes of an image file to embed (the importers' reader), the error naming the output too.
 std::vector<uint8_t> read_image_file(const std::filesystem::path& file, const std::string& path) {
-    std::FILE* f = std::fopen(file.string().c_str(), "rb");
-    if (!f) throw IoError("cannot write '" + path + "': cannot read image '" + file.string() + "' to embed it");
-    std::vector<uint8_t> bytes;
-    uint8_t chunk[65536];
-    for (size_t n; (n = std::fread(chunk, 1, sizeof chunk, f)) > 0;) bytes.insert(bytes.end(), chunk, chunk + n);
-    std::fclose(f);
-    return bytes;
+    try {
+        return detail::read_whole_file(file.string());
+    } catch (const IoError& e) {
+        throw IoError("cannot write '" + path + "': cannot read image '" + file.string() + "' to embed it (" + e.what() + ")");
+    }
 }
 
 // The scene's materials with their factors and textures. Images stored in the file are embedded
