@@ -33,6 +33,12 @@ void BuildOptions::add_to(CLI::App& app, const std::string& group) {
                    "(default " + std::to_string(tom::BuildParams{}.attribute_weight).substr(0, 4) + ")")
         ->check(CLI::NonNegativeNumber)
         ->group(group);
+    app.add_option("--animation-weight", numbers.animation_weight,
+                   "Weight of the skinning and morph-target terms: a skinned mesh's joint centroid and each target's position "
+                   "deltas count like attributes, so levels stay close in every pose and target; 0 = rest pose only (default " +
+                       std::to_string(tom::BuildParams{}.animation_weight).substr(0, 4) + ")")
+        ->check(CLI::NonNegativeNumber)
+        ->group(group);
     app.add_option("--max-rotation", numbers.max_rotation_degrees,
                    "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
         ->check(CLI::Range(1.0f, 90.0f))
@@ -61,6 +67,7 @@ nlohmann::ordered_json build_params_json(const tom::BuildParams& params) {
             {"pair_threshold", params.pair_threshold},
             {"pass_fraction", params.pass_fraction},
             {"attribute_weight", params.attribute_weight},
+            {"animation_weight", params.animation_weight},
             {"max_rotation_degrees", params.max_rotation_degrees},
             {"lock_borders", params.lock_borders}};
 }

@@ -31,7 +31,7 @@ struct BuildOptions {
 };
 
 /// The builder settings as JSON (reports and benchmark output): predicate, strategy,
-/// pair_threshold, pass_fraction, attribute_weight, max_rotation_degrees.
+/// pair_threshold, pass_fraction, attribute_weight, animation_weight, max_rotation_degrees.
 nlohmann::ordered_json build_params_json(const tom::BuildParams& params);
 
 /// One input file and the output path it maps to.

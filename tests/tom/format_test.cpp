@@ -745,6 +745,11 @@ TEST_CASE("carried streams (XATT, since 1.6): each vertex's element in resolutio
     CHECK(rule_of(c) == 22);
     CHECK(message_of(c).find("is not finite") != std::string::npos);
     c = good;
+    put32(c, x.offset + weights_at + 4, 0xBE800000u);  // a weight of -0.25
+    fix_checksums(c);
+    CHECK(rule_of(c) == 22);
+    CHECK(message_of(c).find("stream 1 value 1: is a negative skin weight") != std::string::npos);
+    c = good;
     std::memcpy(&c[x.offset + 16 + 80], &c[x.offset + 16], 8);  // stream 2 named as stream 0
     fix_checksums(c);
     CHECK(rule_of(c) == 22);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <type_traits>
 
 #include "vec3.h"
@@ -37,18 +38,96 @@ Frame frame(D3 p0, D3 p1, D3 p2) {
     return f;
 }
 
+const VertexStream* find_stream(const Mesh& mesh, const std::string& name) {
+    for (const VertexStream& x : mesh.extra_streams)
+        if (x.name == name) return &x;
+    return nullptr;
+}
+
+double value(const VertexStream& x, size_t vertex, uint32_t component) {
+    return component_value(x.component_type, x.normalized, &x.data[vertex * x.element_bytes() + component * component_bytes(x.component_type)]);
+}
+
+// A skinned mesh's influence streams: JOINTS_k with WEIGHTS_k, k = 0, 1, ... while both exist
+// with as many components
+std::vector<std::pair<const VertexStream*, const VertexStream*>> influence_streams(const Mesh& mesh) {
+    std::vector<std::pair<const VertexStream*, const VertexStream*>> out;
+    for (int k = 0;; ++k) {
+        const VertexStream* joints = find_stream(mesh, "JOINTS_" + std::to_string(k));
+        const VertexStream* weights = find_stream(mesh, "WEIGHTS_" + std::to_string(k));
+        if (!joints || !weights || joints->components != weights->components) return out;
+        out.emplace_back(joints, weights);
+    }
+}
+
+// The morph targets' POSITION deltas, the kMaxTargets with the largest summed length, in target order
+std::vector<const VertexStream*> weighed_targets(const Mesh& mesh, size_t vertex_count) {
+    std::vector<std::pair<double, const VertexStream*>> targets;
+    for (int k = 0;; ++k) {
+        const VertexStream* x = find_stream(mesh, "TARGET" + std::to_string(k) + "/POSITION");
+        if (!x) break;
+        if (x->components != 3) continue;
+        double size = 0;
+        for (size_t v = 0; v < vertex_count; ++v) {
+            const double d[3] = {value(*x, v, 0), value(*x, v, 1), value(*x, v, 2)};
+            size += std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        }
+        targets.emplace_back(size, x);
+    }
+    std::stable_sort(targets.begin(), targets.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (targets.size() > size_t(AnimationChannels::kMaxTargets)) targets.resize(size_t(AnimationChannels::kMaxTargets));
+    std::vector<const VertexStream*> out;
+    for (const auto& t : targets) out.push_back(t.second);
+    std::sort(out.begin(), out.end());  // in the streams' order (all point into mesh.extra_streams)
+    return out;
+}
+
 } // namespace
 
-void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team& team) {
+AnimationChannels AnimationChannels::of(const Mesh& mesh, float weight, const std::vector<uint32_t>& order) {
+    AnimationChannels out;
+    if (!(weight > 0)) return out;
+    const auto influences = influence_streams(mesh);
+    const size_t joints = mesh.joint_positions.size() / 3;
+    const bool skinned = !influences.empty() && joints > 0;
+    const std::vector<const VertexStream*> targets = weighed_targets(mesh, order.size());
+    out.count = (skinned ? 3 : 0) + 3 * int(targets.size());
+    if (out.count == 0) return out;
+    // a typical joint rotation: |I - R| = 2 sin(angle / 2) is 0.7 for about 40 degrees (see the header)
+    constexpr double skin_angle = 0.7;
+    out.values.resize(order.size() * size_t(out.count));
+    for (size_t i = 0; i < order.size(); ++i) {
+        const uint32_t v = order[i];
+        float* dst = &out.values[i * size_t(out.count)];
+        if (skinned) {
+            double c[3] = {0, 0, 0}, sum = 0;
+            for (const auto& [joint_stream, weight_stream] : influences)
+                for (uint32_t k = 0; k < joint_stream->components; ++k) {
+                    const double w = value(*weight_stream, v, k), j = value(*joint_stream, v, k);
+                    if (!(w > 0) || !(j >= 0) || j >= double(joints)) continue;
+                    for (int a = 0; a < 3; ++a) c[a] += w * mesh.joint_positions[3 * size_t(j) + size_t(a)];
+                    sum += w;
+                }
+            for (int a = 0; a < 3; ++a) *dst++ = float(sum > 0 ? weight * skin_angle * c[a] / sum : 0.0);
+        }
+        for (const VertexStream* x : targets)
+            for (uint32_t a = 0; a < 3; ++a) *dst++ = float(weight * value(*x, v, a));
+    }
+    return out;
+}
+
+void AttributeError::init(const Mesh& mesh, float weight, const AnimationChannels& animation, bool accumulate, Team& team) {
     channels_ = 0;
     values_.clear();
     normals_ = nullptr;
     quadric_.clear();
     const uint32_t n = mesh.vertex_count(), m = mesh.triangle_count();
-    if (!(weight > 0) || n == 0 || m == 0) return;
-    const bool normals = mesh.normals.size() == size_t(n) * 3, uv = mesh.texcoords.size() == size_t(n) * 2,
-               colors = mesh.colors.size() == size_t(n) * 4;
-    channels_ = (normals ? 3 : 0) + (uv ? 2 : 0) + (colors ? 4 : 0);
+    if (n == 0 || m == 0) return;
+    const bool attributes = weight > 0;
+    const bool normals = attributes && mesh.normals.size() == size_t(n) * 3, uv = attributes && mesh.texcoords.size() == size_t(n) * 2,
+               colors = attributes && mesh.colors.size() == size_t(n) * 4;
+    const int animated = animation.values.size() == size_t(n) * size_t(animation.count) ? animation.count : 0;
+    channels_ = (normals ? 3 : 0) + (uv ? 2 : 0) + (colors ? 4 : 0) + animated;
     if (channels_ == 0) return;
     // scales: mean edge length; surface area over UV area
     // each triangle's terms on the team, a tile at a time, then summed in triangle order (the
@@ -109,6 +188,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool accumulate, Team&
             for (int j = 0; j < 2; ++j) out[k++] = float(weight * uv_weight * uv_scale * mesh.texcoords[2 * size_t(v) + size_t(j)]);
         if (colors)
             for (int j = 0; j < 4; ++j) out[k++] = float(weight * color_scale * h * mesh.colors[4 * size_t(v) + size_t(j)]);
+        for (int j = 0; j < animated; ++j) out[k++] = animation.values[size_t(v) * size_t(animated) + size_t(j)];
     }
     if (!accumulate) return;
     stride_ = 11 + 4 * size_t(channels_);

@@ -19,6 +19,31 @@
 
 namespace tom::detail {
 
+/// The animation channels of a mesh (BuildParams::animation_weight), already scaled, `count` per
+/// vertex in the order the builder's vertices are numbered in.
+///
+/// Skinning: posed, a vertex goes to sum_j w_j M_j p. For joints turning by a common rotation
+/// R about their bind-pose centres c_j, M_j p = R (p - c_j) + c_j, and with weights summing to
+/// 1 the posed point is R p + (I - R) c, where c = sum_j w_j c_j is the vertex's joint centroid.
+/// Substituting v by u therefore moves the posed surface by (I - R) (c_field(p_u) - c_u) beyond
+/// its rest-pose error: a linear field's error like the attributes', times |I - R| (about the
+/// angle). The centroid, scaled by a typical |I - R|, is three channels; vertices driven alike
+/// have equal centroids and substitute among themselves for free.
+/// Morph targets: at weight 1 a target moves each vertex by its delta d, so a substitution
+/// departs from the morphed surface by d_field(p_u) - d_u: each target's POSITION deltas are
+/// three channels at scale 1. The kMaxTargets targets with the largest deltas are weighed; the
+/// others are carried but not weighed.
+struct AnimationChannels {
+    static constexpr int kMaxTargets = 8;
+    int count = 0;
+    std::vector<float> values;  // count per vertex
+
+    /// The channels of `mesh` (its JOINTS_n/WEIGHTS_n streams with joint_positions, its
+    /// TARGET<k>/POSITION streams) in the order `order` gives (vertex i is mesh's order[i]).
+    /// None when weight <= 0 or the mesh is neither skinned nor morphed.
+    static AnimationChannels of(const Mesh& mesh, float weight, const std::vector<uint32_t>& order);
+};
+
 class AttributeError {
 public:
     /// Prepares the scaled attributes and, when `accumulate`, the per-vertex quadrics of the
@@ -29,7 +54,8 @@ public:
     /// `team` shares the accumulation (bit-identical sums whatever its size). With normals alone
     /// the costs read `mesh.normals` (6 bytes a triangle less than a scaled copy), which must
     /// then stay as they are until release().
-    void init(const Mesh& mesh, float weight, bool accumulate, Team& team);
+    /// The `animation` channels follow the attributes'.
+    void init(const Mesh& mesh, float weight, const AnimationChannels& animation, bool accumulate, Team& team);
     bool active() const noexcept { return channels_ > 0; }
     int channels() const noexcept { return channels_; }
 
@@ -97,7 +123,8 @@ private:
     double normal_factor_ = 0;        // caller keeps while it evaluates, scaled by this factor
     TeamVector<double> quadric_;  // stride_ per vertex: w, A (6), b (3), c, then per channel G (3), D
     size_t stride_ = 0;
-    static constexpr int kMaxChannels = 9;  // normals (3), TEXCOORD_0 (2), COLOR_0 (4)
+    // normals (3), TEXCOORD_0 (2), COLOR_0 (4), joint centroid (3), morph targets (3 each)
+    static constexpr int kMaxChannels = 12 + 3 * AnimationChannels::kMaxTargets;
     static constexpr size_t kMaxStride = 11 + 4 * size_t(kMaxChannels);
 };
 

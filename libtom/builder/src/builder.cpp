@@ -662,6 +662,7 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     const uint32_t input_bits = attribute_bits(input);
     LocalMesh local;
     local.mesh = reorder_for_locality(input, local.vertex_old, local.bounds_min, local.bounds_max, team);
+    detail::AnimationChannels animation = detail::AnimationChannels::of(input, params.animation_weight, local.vertex_old);
     if (owned) release_input_streams(*owned, local);
     Builder b;
     set_up(b, local, params);
@@ -670,7 +671,8 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     // keep coincident copies locked
     classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders, team);
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
-    b.attributes.init(local.mesh, params.attribute_weight, b.predicate == Predicate::quadric, team);
+    b.attributes.init(local.mesh, params.attribute_weight, animation, b.predicate == Predicate::quadric, team);
+    animation = {};
     find_pairs(b, params.pair_threshold, stats);
     release_input_copy(local);
 

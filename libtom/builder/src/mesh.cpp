@@ -32,6 +32,29 @@ void check_extra_streams(const Mesh& mesh) {
     }
 }
 
+// A skinned mesh's data: joint positions finite, weights finite and non-negative, and with joint
+// positions every JOINTS_k value one of those joints (glTF's rule for a skin's joint list).
+void check_skin(const Mesh& mesh) {
+    const std::string what = "mesh '" + mesh.name + "': ";
+    if (mesh.joint_positions.size() % 3 != 0)
+        throw ImportError(what + "joint position stream length " + std::to_string(mesh.joint_positions.size()) + " is not a multiple of 3");
+    for (size_t i = 0; i < mesh.joint_positions.size(); ++i)
+        if (!std::isfinite(mesh.joint_positions[i])) throw ImportError(what + "joint " + std::to_string(i / 3) + " has a non-finite position");
+    const size_t joints = mesh.joint_positions.size() / 3;
+    for (const VertexStream& x : mesh.extra_streams) {
+        const bool weights = x.name.rfind("WEIGHTS_", 0) == 0, indices = x.name.rfind("JOINTS_", 0) == 0 && joints > 0;
+        if (!weights && !indices) continue;
+        const uint32_t size = component_bytes(x.component_type);
+        for (size_t i = 0; i < x.data.size() / size; ++i) {
+            const double value = component_value(x.component_type, x.normalized, &x.data[i * size]);
+            const std::string at = what + x.name + " of vertex " + std::to_string(i / x.components) + " is ";
+            if (weights && !(value >= 0 && std::isfinite(value))) throw ImportError(at + std::to_string(value) + ": a weight must be finite and non-negative");
+            if (indices && !(value < double(joints)))
+                throw ImportError(at + std::to_string(uint64_t(value)) + ", past the skin's " + std::to_string(joints) + " joints");
+        }
+    }
+}
+
 template <class T>
 void compact_stream(std::vector<T>& stream, const std::vector<uint32_t>& remap, size_t width, uint32_t new_count) {
     if (stream.empty()) return;
@@ -183,6 +206,7 @@ CleanStats clean_mesh(Mesh& mesh) {
         throw ImportError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
     for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char* what) { check_stream(mesh, stream, width, what); });
     check_extra_streams(mesh);
+    check_skin(mesh);
     const uint32_t n = mesh.vertex_count();
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!std::isfinite(mesh.positions[i]))

@@ -46,6 +46,7 @@ int component_count(int type) {
     case TINYGLTF_TYPE_VEC2: return 2;
     case TINYGLTF_TYPE_VEC3: return 3;
     case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT4: return 16;  // inverse bind matrices
     default: return 0;
     }
 }
@@ -170,10 +171,44 @@ public:
         const uint8_t* p = locate(index, name.c_str(), count, stride, components, ctype);
         if (count != expect_count)
             fail(name + " accessor " + std::to_string(index) + " has " + std::to_string(count) + " elements but POSITION has " + std::to_string(expect_count));
+        if (components > 4) fail(name + " accessor " + std::to_string(index) + " is not a SCALAR or VEC2-4");
         VertexStream out{name, uint32_t(ctype), uint32_t(components), model_.accessors[size_t(index)].normalized, {}};
         const size_t elem = out.element_bytes();
         out.data.resize(count * elem);
         for (size_t i = 0; i < count; ++i) std::memcpy(&out.data[i * elem], p + i * stride, elem);
+        return out;
+    }
+
+    // The bind-pose position of each joint of skin `s` in the skinned mesh's space: the point
+    // its inverse bind matrix takes to the joint's origin. Empty without inverse bind matrices
+    // (every joint then binds at the origin, and the skinning term has nothing to tell apart).
+    std::vector<float> joint_positions(int s) const {
+        const tinygltf::Skin& skin = model_.skins[size_t(s)];
+        if (skin.inverseBindMatrices < 0) return {};
+        const std::string name = "skin " + std::to_string(s) + " inverseBindMatrices";
+        size_t count, stride;
+        int components, ctype;
+        const uint8_t* p = locate(skin.inverseBindMatrices, name.c_str(), count, stride, components, ctype);
+        if (components != 16 || ctype != TINYGLTF_COMPONENT_TYPE_FLOAT) fail(name + " is not MAT4 FLOAT");
+        if (count < skin.joints.size())
+            fail(name + " has " + std::to_string(count) + " matrices for " + std::to_string(skin.joints.size()) + " joints");
+        std::vector<float> out(3 * skin.joints.size());
+        for (size_t j = 0; j < skin.joints.size(); ++j) {
+            float m[16];  // column-major: the 3x3 A in m[0..2], m[4..6], m[8..10]; t in m[12..14]
+            std::memcpy(m, p + j * stride, sizeof m);
+            // the joint's origin maps from x with A x + t = 0: x = -A^-1 t, by Cramer's rule
+            auto det3 = [](const double c0[3], const double c1[3], const double c2[3]) {
+                return c0[0] * (c1[1] * c2[2] - c1[2] * c2[1]) - c1[0] * (c0[1] * c2[2] - c0[2] * c2[1]) + c2[0] * (c0[1] * c1[2] - c0[2] * c1[1]);
+            };
+            const double a0[3] = {m[0], m[1], m[2]}, a1[3] = {m[4], m[5], m[6]}, a2[3] = {m[8], m[9], m[10]}, b[3] = {-m[12], -m[13], -m[14]};
+            const double d = det3(a0, a1, a2);
+            if (!(std::fabs(d) > 1e-30) || !std::isfinite(d)) fail(name + ": matrix " + std::to_string(j) + " is singular or not finite");
+            const double x[3] = {det3(b, a1, a2) / d, det3(a0, b, a2) / d, det3(a0, a1, b) / d};
+            for (int k = 0; k < 3; ++k) {
+                if (!std::isfinite(x[k])) fail(name + ": matrix " + std::to_string(j) + " is not finite");
+                out[3 * j + size_t(k)] = float(x[k]);
+            }
+        }
         return out;
     }
 
@@ -276,6 +311,20 @@ void read_carried_streams(const PrimitiveReader& reader, const tinygltf::Primiti
 void mark_own_attributes(std::vector<Mesh>& primitives) {
     for (Mesh& m : primitives)
         for (Part& part : m.parts) part.attributes = attribute_bits(m);
+}
+
+// Each skinned mesh's joints in its bind pose, from the skin of the first node that draws it
+// with one (Mesh::joint_positions; clean_mesh checks its JOINTS_n against them).
+void read_joint_positions(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const std::string& path, bool quantized,
+                          std::vector<Mesh>& meshes) {
+    for (size_t ni = 0; ni < model.nodes.size(); ++ni) {
+        const tinygltf::Node& node = model.nodes[ni];
+        if (node.mesh < 0 || size_t(node.mesh) >= mesh_parts.size() || node.skin < 0) continue;
+        const std::string where = path + ": node " + std::to_string(ni);
+        if (size_t(node.skin) >= model.skins.size()) throw ImportError(where + " refers to skin " + std::to_string(node.skin) + ", which does not exist");
+        for (const uint32_t mi : mesh_parts[size_t(node.mesh)])
+            if (meshes[mi].joint_positions.empty()) meshes[mi].joint_positions = PrimitiveReader(model, where, quantized).joint_positions(node.skin);
+    }
 }
 
 } // namespace
@@ -392,6 +441,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         mesh_parts[mi].push_back(uint32_t(result.meshes.size()));
         result.meshes.push_back(join_parts(primitives, stem + "/" + mesh_name));
     }
+    read_joint_positions(model, mesh_parts, path, quantized, result.meshes);
     std::vector<int> texture_samplers;
     result.scene = gltf_scene(model, mesh_parts, embedded, path, texture_samplers);
     result.scene.gltf = source_gltf(model, doc, mesh_parts, texture_samplers);

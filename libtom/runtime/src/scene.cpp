@@ -314,9 +314,13 @@ std::vector<VertexStreamView> decode_extra_streams(const uint8_t* data, uint64_t
         if (n != expected) in.fail(r + 32, field + " bytes", std::to_string(n) + " where " + std::to_string(vertex_count) + " vertices need " + std::to_string(expected));
         if (at < records_end || at > bytes || n > bytes - at) in.fail(r + 24, field + " data", std::to_string(n) + " bytes at " + std::to_string(at) + " are not in the section's data area");
         x.data = data + at;
-        if (x.component_type == 5126)  // float values are finite (weights, deltas, coordinates)
-            for (uint64_t v = 0; v < n; v += 4)
-                if (!std::isfinite(load_f32(data + at + v))) in.fail(at + v, field + " value " + std::to_string(v / 4), "is not finite");
+        const bool weights = x.name.rfind("WEIGHTS_", 0) == 0;
+        if (x.component_type == 5126)  // float values are finite (weights, deltas, coordinates), skin weights non-negative
+            for (uint64_t v = 0; v < n; v += 4) {
+                const float f = load_f32(data + at + v);
+                if (!std::isfinite(f)) in.fail(at + v, field + " value " + std::to_string(v / 4), "is not finite");
+                if (weights && f < 0) in.fail(at + v, field + " value " + std::to_string(v / 4), "is a negative skin weight");
+            }
     }
     return out;
 }

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <string_view>
 
 namespace tom {
@@ -38,6 +39,25 @@ inline uint32_t component_bytes(uint32_t component_type) noexcept {
     case 5122: case 5123: return 2;
     case 5125: case 5126: return 4;
     default: return 0;
+    }
+}
+
+/// One value of a glTF component type at `at` (little-endian), as a number: integers as they
+/// are, or with `normalized` mapped to [0, 1] (unsigned) or [-1, 1] (signed) as glTF maps them;
+/// 0 for an unknown type. For reading carried streams (joints, weights, morph deltas).
+inline double component_value(uint32_t component_type, bool normalized, const uint8_t* at) noexcept {
+    auto load = [at](auto v) {
+        std::memcpy(&v, at, sizeof v);
+        return v;
+    };
+    switch (component_type) {
+    case 5120: { const double c = load(int8_t()); return normalized ? (c / 127.0 < -1.0 ? -1.0 : c / 127.0) : c; }
+    case 5121: { const double c = load(uint8_t()); return normalized ? c / 255.0 : c; }
+    case 5122: { const double c = load(int16_t()); return normalized ? (c / 32767.0 < -1.0 ? -1.0 : c / 32767.0) : c; }
+    case 5123: { const double c = load(uint16_t()); return normalized ? c / 65535.0 : c; }
+    case 5125: return double(load(uint32_t()));
+    case 5126: return double(load(float()));
+    default: return 0.0;
     }
 }
 

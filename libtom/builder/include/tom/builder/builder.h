@@ -36,6 +36,11 @@ struct BuildParams {
     /// Weight of the attribute term in both predicates (normals, TEXCOORD_0, COLOR_0 against the
     /// attribute fields of the surface a vertex leaves; see libtom/builder/src/attribute_error.h). 0 = geometry only.
     float attribute_weight = 1.0f;
+    /// Weight of the animation terms in both predicates: a skinned mesh's joint centroid (its
+    /// joints' bind-pose positions averaged by its weights, Mesh::joint_positions) and each morph
+    /// target's position deltas count like attributes, so that a vertex is not substituted onto
+    /// one that moves otherwise in a pose or a target (see attribute_error.h). 0 = off.
+    float animation_weight = 1.0f;
     /// Binary oracle: no substitution may turn a surviving triangle's normal by more than this
     /// (degrees, 1..90; 90 forbids flips only, the TOM paper's rule). 60 keeps spikes out of the
     /// coarse levels, whose Hausdorff error would otherwise be about twice as large.

@@ -43,6 +43,10 @@ struct Mesh {
     /// Streams carried through the build unread (joints, weights, morph deltas, further texture
     /// coordinates or colours), each one element per vertex, names distinct.
     std::vector<VertexStream> extra_streams;
+    /// A skinned mesh's joints in its bind pose: xyz per joint that its JOINTS_n streams index
+    /// (the origin of each inverse bind matrix's joint space, in the mesh's space), or empty.
+    /// Read by the builder's skinning term only (BuildParams::animation_weight); not stored.
+    std::vector<float> joint_positions;
 
     uint32_t vertex_count() const noexcept { return uint32_t(positions.size() / 3); }
     uint32_t triangle_count() const noexcept { return uint32_t(indices.size() / 3); }
