@@ -7,12 +7,47 @@
 #include <filesystem>
 #include <optional>
 
+#include "tcr/scene_budget.h"
 #include "tom/error_curve.h"
 #include "tom/errors.h"
 #include "tom/io/export.h"
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tool_common.h"
+
+namespace {
+
+// The meshes of `file` (or mesh `only`) as a scene budget shares among them: each weighted by
+// its instances' world-space sizes (the cube root of each transform's determinant, times the
+// mesh's diagonal) and costing its instance count in triangles drawn.
+std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<uint32_t> only, const std::string& path) {
+    const std::vector<tom::Instance> draws = tom::draw_list(file.scene(), file.mesh_count());
+    std::vector<tcr::BudgetMesh> out;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+        if (only && *only != i) continue;
+        tcr::BudgetMesh b;
+        b.mesh = &file.mesh(i);
+        std::optional<tom::ErrorCurve> curve = tom::read_error_curve(*b.mesh);
+        if (!curve) throw tom::ArgumentError(path + ": mesh '" + std::string(b.mesh->name) + "' has no stored error curve (it was built with --no-error-curve)");
+        b.curve = std::move(*curve);
+        double instances = 0, size = 0;
+        for (const tom::Instance& inst : draws) {
+            if (inst.mesh != i) continue;
+            const float* t = inst.transform;
+            const double det = double(t[0]) * (double(t[5]) * t[10] - double(t[6]) * t[9]) - double(t[4]) * (double(t[1]) * t[10] - double(t[2]) * t[9]) +
+                               double(t[8]) * (double(t[1]) * t[6] - double(t[2]) * t[5]);
+            instances += 1;
+            size += std::cbrt(std::fabs(det));
+        }
+        if (instances == 0 || !(size > 0)) instances = 1, size = 1;  // drawn by no instance: once, as stored
+        b.instances = instances;
+        b.weight = size * std::max(1e-30, double(b.curve.diagonal));
+        out.push_back(std::move(b));
+    }
+    return out;
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
     std::string path, output;
@@ -46,7 +81,15 @@ int main(int argc, char** argv) {
     app.add_option("--height", height, "With --max-error-px: the viewport's height in pixels")->check(CLI::Range(1u, 1000000u));
     app.add_option("--error-metric", metric, "What --max-error bounds: max (the Hausdorff distance, default) or mean (Metro's mean)")
         ->check(CLI::IsMember({"max", "mean"}));
-    for (auto* o : {by_max_error, le, px}) o->excludes(f)->excludes(t)->excludes(v)->excludes(l);
+    std::vector<double> scene_budgets;
+    auto* sb = app.add_option("--scene-budget", scene_budgets,
+                              "The whole scene in N triangles drawn (each mesh's count times its instances), shared among its meshes so that "
+                              "their summed error (weighted by instances and size) is least; several, finest first, write a .glb chain "
+                              "(e.g. 200000,50000,10000)")
+                   ->delimiter(',')
+                   ->check(CLI::PositiveNumber);
+    for (auto* o : {by_max_error, le, px, sb}) o->excludes(f)->excludes(t)->excludes(v)->excludes(l);
+    sb->excludes(by_max_error)->excludes(le)->excludes(px);
     by_max_error->excludes(le)->excludes(px);
     le->excludes(px);
     app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
@@ -60,7 +103,8 @@ int main(int argc, char** argv) {
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --max-error 0.5% -o bunny-half-percent.obj\n"
-               "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb");
+               "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb\n"
+               "          tomextract out/scene.tom --scene-budget 20000 -o scene-20k.glb");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
     // the error bounds, as fractions of each mesh's diagonal (pixels: converted per mesh below)
     std::vector<double> error_bounds;
@@ -76,8 +120,8 @@ int main(int argc, char** argv) {
         return tools::exit_usage;
     }
     const bool by_error = !error_bounds.empty() || max_error_px.has_value();
-    if (!fraction && !triangles && !vertices && lods.empty() && !by_error) {
-        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px or --lods-error\n");
+    if (!fraction && !triangles && !vertices && lods.empty() && !by_error && scene_budgets.empty()) {
+        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px, --lods-error or --scene-budget\n");
         return tools::exit_usage;
     }
     // mesh m's resolution for bound k of error_bounds (or the pixel bound), from its stored curve
@@ -102,6 +146,10 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: --lods-error writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
         return tools::exit_usage;
     }
+    if (scene_budgets.size() > 1 && !is_glb()) {
+        std::fprintf(stderr, "error: several --scene-budget values write a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
+        return tools::exit_usage;
+    }
     if (!lods.empty() && !is_glb()) {
         std::fprintf(stderr, "error: --lods writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
         return tools::exit_usage;
@@ -119,6 +167,19 @@ int main(int argc, char** argv) {
         uint64_t total_tris = 0;
         for (uint32_t i = 0; i < file.mesh_count(); ++i)
             if (!mesh_index || *mesh_index == i) total_tris += file.mesh(i).triangle_count;
+        // --scene-budget: each budget's share, a resolution per mesh (file order, --mesh's alone)
+        std::vector<std::vector<uint32_t>> budget_levels;
+        for (const double budget : scene_budgets) {
+            const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, mesh_index, path), budget);
+            if (share.feasible)
+                std::printf("%s: scene budget %.0f triangles: %.0f drawn, summed error %.6g (weighted), certified within %.2f%% of the optimum\n",
+                            path.c_str(), budget, share.drawn, share.error, 100.0 * share.gap);
+            else
+                std::fprintf(stderr, "warning: %s: the meshes' coarsest levels draw %.0f triangles, more than the budget of %.0f; each is at its coarsest\n",
+                             path.c_str(), share.drawn, budget);
+            budget_levels.push_back(share.vertex_counts);
+        }
+        auto budget_level = [&](uint32_t i, size_t k) { return budget_levels[k][mesh_index ? 0 : i]; };
         if (is_glb()) {
             std::vector<tom::GlbMesh> glb;
             uint64_t written = 0;
@@ -139,6 +200,8 @@ int main(int argc, char** argv) {
                     for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0));
                 } else if (by_error) {
                     for (size_t k = 0; k < std::max<size_t>(1, error_bounds.size()); ++k) g.vertex_counts.push_back(level_for_error(m, k));
+                } else if (!budget_levels.empty()) {
+                    for (size_t k = 0; k < budget_levels.size(); ++k) g.vertex_counts.push_back(budget_level(i, k));
                 } else if (fraction) {
                     g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction));
                 } else if (triangles) {
@@ -166,6 +229,8 @@ int main(int argc, char** argv) {
             uint32_t n;
             if (by_error)
                 n = level_for_error(m, 0);
+            else if (!budget_levels.empty())
+                n = budget_level(i, 0);
             else if (fraction)
                 n = tom::vertex_count_for_fraction(m, *fraction);
             else if (triangles)

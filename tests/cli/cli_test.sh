@@ -128,6 +128,16 @@ assert len(multi) == 4, multi.keys()
 for k, levels in multi.items():
     assert len(levels) == 3 and all(l == levels[0] for l in levels), (k, levels)
 "
+check "--scene-budget shares a scene's triangles, one level per budget" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --scene-budget 40000,30000 -o "$work/engine-budget.glb"
+check "drawing at most each budget, certified near the optimum" /usr/bin/python3 -c "
+import re
+lines = [l for l in open('$work/stdout') if 'scene budget' in l]
+assert len(lines) == 2, lines
+for l in lines:
+    budget, drawn, gap = (float(x) for x in re.search(r'scene budget (\\d+) triangles: (\\d+) drawn, .* certified within ([0-9.]+)%', l).groups())
+    assert drawn <= budget and drawn > 0.95 * budget and gap < 1, l
+"
+check "--scene-budget below the coarsest levels warns and writes them" bash -c "'$tools/tomextract' '$work/engine/2CylinderEngine.tom' --scene-budget 100 -o '$work/engine-floor.obj' 2>'$work/floor.err' && grep -q 'more than the budget of 100; each is at its coarsest' '$work/floor.err'"
 check "OBJ out: a usemtl group per part and the .mtl beside it" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --fraction 0.25 -o "$work/engine25.obj"
 check "with every material the groups use" bash -c "test \$(grep -c '^usemtl ' '$work/engine25.obj') -eq 34 && grep -q '^mtllib engine25.mtl' '$work/engine25.obj' && test \$(grep -c '^newmtl ' '$work/engine25.mtl') -eq 34"
 check "the OBJ converts back with its parts" expect_exit 0 "$tools/tombuild" "$work/engine25.obj" -o "$work/obj-back" -q

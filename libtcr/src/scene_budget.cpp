@@ -1,0 +1,186 @@
+// One triangle budget shared among a scene's meshes by the exact selector (see scene_budget.h).
+
+#include "tcr/scene_budget.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "tom/extract.h"
+
+namespace tcr {
+
+namespace {
+
+// One piece of a mesh's error model: e(n) = a n^-m on [lo, hi].
+struct Segment {
+    double m = 1, a = 0, lo = 1, hi = 1;
+};
+
+// The curve's measured points with triangles and a positive error, in increasing triangle
+// count, made non-increasing in error (a finer level measured worse than a coarser one, by the
+// sampling's noise, reads as the coarser one's error: every segment's exponent stays > 0).
+std::vector<std::pair<double, double>> monotone_points(const tom::ErrorCurve& curve, bool use_max) {
+    std::vector<std::pair<double, double>> out;  // (triangles, error)
+    for (const tom::ErrorCurvePoint& q : curve.points) {
+        const double t = q.triangles, e = use_max ? q.max : q.mean;
+        if (!(t > 0) || !(e > 0) || (!out.empty() && t <= out.back().first)) continue;
+        out.emplace_back(t, out.empty() ? e : std::min(e, out.back().second * (1 - 1e-9)));
+    }
+    return out;
+}
+
+// The mesh's error model on [lo, hi], as tom::estimate_error reads the curve: k / N below the
+// first point, a power law between each two, k / N past the last; empty segments left out.
+std::vector<Segment> segments(const tom::ErrorCurve& curve, bool use_max, double lo, double hi) {
+    const std::vector<std::pair<double, double>> q = monotone_points(curve, use_max);
+    std::vector<Segment> all;
+    if (q.empty()) {
+        all.push_back({1.0, use_max ? curve.k_max : curve.k_mean, 1, INFINITY});
+    } else {
+        all.push_back({1.0, q.front().second * q.front().first, 1, q.front().first});
+        for (size_t j = 1; j < q.size(); ++j) {
+            const double m = std::log(q[j - 1].second / q[j].second) / std::log(q[j].first / q[j - 1].first);
+            all.push_back({m, q[j - 1].second * std::pow(q[j - 1].first, m), q[j - 1].first, q[j].first});
+        }
+        all.push_back({1.0, q.back().second * q.back().first, q.back().first, INFINITY});
+    }
+    std::vector<Segment> out;
+    for (Segment s : all) {
+        s.lo = std::max(s.lo, lo);
+        s.hi = std::min(s.hi, hi);
+        if (s.lo <= s.hi && (out.empty() || s.hi > out.back().hi)) out.push_back(s);
+    }
+    return out;
+}
+
+double error_at(const std::vector<Segment>& model, double n) {
+    for (const Segment& s : model)
+        if (n <= s.hi) return s.a * std::pow(std::max(n, s.lo), -s.m);
+    return model.back().a * std::pow(model.back().hi, -model.back().m);
+}
+
+// The triangle range of a mesh: its coarsest level's triangles (at least 1) to all of them.
+std::pair<double, double> triangle_range(const tom::MeshView& m) {
+    const double lo = std::max<uint32_t>(1, tom::active_triangle_count(m, m.min_vertex_count));
+    return {lo, std::max<double>(lo, m.triangle_count)};
+}
+
+void check(const std::vector<BudgetMesh>& meshes) {
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        const BudgetMesh& b = meshes[i];
+        if (!b.mesh || b.mesh->triangle_count == 0 || !(b.weight > 0) || !(b.instances >= 1))
+            throw std::invalid_argument("tcr::share_budget: mesh " + std::to_string(i) + " needs a view with triangles, weight > 0 and instances >= 1");
+    }
+}
+
+// The largest resolution of `m` with at most `triangles` triangles (its coarsest at least).
+uint32_t resolution_within(const tom::MeshView& m, double triangles) {
+    const uint32_t t = uint32_t(std::min<double>(m.triangle_count, std::floor(triangles + 1e-9)));
+    uint32_t n = tom::vertex_count_for_triangles(m, t);
+    while (n > m.min_vertex_count && tom::active_triangle_count(m, n) > t) --n;
+    return n;
+}
+
+// The share's state while it is polished: per mesh its resolution, triangles and model.
+struct Polish {
+    const std::vector<BudgetMesh>& meshes;
+    std::vector<std::vector<Segment>> models;
+    std::vector<double> lo;
+    std::vector<uint32_t> n, t;
+
+    double error(size_t i, uint32_t triangles) const { return meshes[i].weight * error_at(models[i], std::max<double>(triangles, lo[i])); }
+    // mesh i's next finer resolution with more triangles, or 0 at its finest
+    uint32_t next(size_t i) const {
+        const tom::MeshView& m = *meshes[i].mesh;
+        for (uint32_t k = n[i] + 1; k <= m.vertex_count; ++k)
+            if (tom::active_triangle_count(m, k) > t[i]) return k;
+        return 0;
+    }
+    // Spends what rounding down and the menu's clamps left: the step to a finer resolution with
+    // the most error saved per triangle drawn that still fits, until none does.
+    void spend(double left) {
+        for (;;) {
+            size_t best = meshes.size();
+            uint32_t best_n = 0, best_t = 0;
+            double best_ratio = 0;
+            for (size_t i = 0; i < meshes.size(); ++i) {
+                const uint32_t k = next(i);
+                if (k == 0) continue;
+                const uint32_t tk = tom::active_triangle_count(*meshes[i].mesh, k);
+                const double cost = meshes[i].instances * (tk - t[i]);
+                const double ratio = (error(i, t[i]) - error(i, tk)) / cost;
+                if (cost <= left && ratio > best_ratio) best = i, best_n = k, best_t = tk, best_ratio = ratio;
+            }
+            if (best == meshes.size()) return;
+            left -= meshes[best].instances * (best_t - t[best]);
+            n[best] = best_n, t[best] = best_t;
+        }
+    }
+};
+
+} // namespace
+
+Problem budget_problem(const std::vector<BudgetMesh>& meshes, double budget, bool use_max) {
+    check(meshes);
+    Problem p;
+    p.m = 1.0;
+    p.budget_ms = budget;
+    p.resize(meshes.size());
+    p.way_begin.assign(1, 0);
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        const BudgetMesh& b = meshes[i];
+        const auto [lo, hi] = triangle_range(*b.mesh);
+        const std::vector<Segment> model = segments(b.curve, use_max, lo, hi);
+        // way 0: the coarsest level alone (the exponent p.m = 1 is then immaterial)
+        const double at_lo = b.weight * error_at(model, lo);
+        p.importance[i] = at_lo;
+        p.error[i] = at_lo * lo;
+        p.per_tri_ms[i] = b.instances;
+        p.setup_ms[i] = 0;
+        p.lo[i] = p.hi[i] = lo;
+        p.previous[i] = 0;
+        for (const Segment& s : model) p.ways.push_back({s.m, b.weight * s.a, b.instances, 0.0, s.lo, s.hi});
+        p.way_begin.push_back(uint32_t(p.ways.size()));
+    }
+    p.check_menu();
+    return p;
+}
+
+BudgetShare share_budget(const std::vector<BudgetMesh>& meshes, double budget, bool use_max) {
+    const Problem p = budget_problem(meshes, budget, use_max);
+    SelectParams params;
+    params.policy = OverBudgetPolicy::keep_minimum;  // a mesh is never left out of the scene
+    params.tolerance = 1e-9;
+    Plan plan;
+    select(SelectorKind::exact, p, params, plan);
+    // each mesh at the resolution below its planned triangles, then what that left spent
+    Polish polish{meshes, {}, {}, {}, {}};
+    double drawn = 0;
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        const BudgetMesh& b = meshes[i];
+        const auto [lo, hi] = triangle_range(*b.mesh);
+        polish.models.push_back(segments(b.curve, use_max, lo, hi));
+        polish.lo.push_back(lo);
+        polish.n.push_back(resolution_within(*b.mesh, plan.triangles[i]));
+        polish.t.push_back(tom::active_triangle_count(*b.mesh, polish.n.back()));
+        drawn += b.instances * polish.t.back();
+    }
+    if (plan.feasible) polish.spend(budget - drawn);
+    BudgetShare share;
+    share.feasible = plan.feasible;
+    share.vertex_counts = polish.n;
+    share.triangles = polish.t;
+    double importance = 0;
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        share.drawn += meshes[i].instances * polish.t[i];
+        share.error += polish.error(i, polish.t[i]);
+        importance += p.importance[i];
+    }
+    share.lower_bound = std::isfinite(plan.upper_bound) ? std::max(0.0, importance - plan.upper_bound) : 0.0;
+    share.gap = share.error > 0 ? std::max(0.0, (share.error - share.lower_bound) / share.error) : 0.0;
+    return share;
+}
+
+} // namespace tcr
