@@ -2,8 +2,9 @@
 # Measures the toolkit against its references in one run and writes docs/PERFORMANCE.md:
 # tombench (build against meshopt_simplify, extraction against memcpy) on the sample meshes and a
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
-# conversion and report times of tombuild, and one extraction through the C++, C and Python
-# APIs (scripts/bench-bindings.py). Stamped with the commit, the date and the CPU.
+# conversion and report times of tombuild, one extraction through the C++, C and Python APIs
+# (scripts/bench-bindings.py), and tomextract -c's bytes against the current gltfpack's.
+# Stamped with the commit, the date and the CPU.
 # Usage: scripts/bench.sh [--quick] [--walk] [--scale | --large-report] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
 #   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test;
@@ -47,6 +48,23 @@ objects="100 1000 10000 100000"; [ $quick = 1 ] && objects="100 1000 10000"
 echo "bench: bindings" >&2
 "$tools/tombuild" "$root/data/meshes/bunny00.off" -o "$work/bindings" -q
 /usr/bin/python3 "$root/scripts/bench-bindings.py" "$work/bindings/bunny00.tom" --json > "$work/bindings.jsonl"
+
+echo "bench: compressed glTF" >&2
+pack="$root/.tools/node_modules/gltfpack-current/cli.js"
+[ -f "$pack" ] || "$root/scripts/install-deps.sh" >/dev/null
+size() { stat -c %s "$1"; }
+for m in bunny00 fandisk elephant 2CylinderEngine; do
+  src="$root/data/meshes/$m.off"; [ "$m" = 2CylinderEngine ] && src="$root/data/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"
+  p="$work/packed/$m"
+  "$tools/tombuild" "$src" -o "$work/packed" -q --no-error-curve
+  # the same mesh for both tools: the .tom's finest level as plain glTF
+  "$tools/tomextract" "$p.tom" --lods 100 -o "$p.glb" >/dev/null
+  "$tools/tomextract" "$p.tom" --lods 100 -c -o "$p-c.glb" >/dev/null
+  "$tools/tomextract" "$p.tom" --lods 100,50,25,10 -c -o "$p-chain.glb" >/dev/null
+  for o in c cc; do node "$pack" -i "$p.glb" -o "$p-gltfpack-$o.glb" -$o >/dev/null; done
+  triangles=$("$tools/tominfo" "$p.tom" --json | /usr/bin/python3 -c 'import json,sys; print(sum(m["triangles"] for m in json.load(sys.stdin)["meshes"]))')
+  echo "{\"mesh\": \"$m\", \"triangles\": $triangles, \"plain\": $(size "$p.glb"), \"tom_c\": $(size "$p-c.glb"), \"chain_c\": $(size "$p-chain.glb"), \"gltfpack_c\": $(size "$p-gltfpack-c.glb"), \"gltfpack_cc\": $(size "$p-gltfpack-cc.glb")}" >> "$work/packed.jsonl"
+done
 
 echo "bench: tombuild" >&2
 for m in bunny00 fandisk; do
@@ -137,6 +155,18 @@ L.append('|---:|---:|---:|---:|---:|---:|---:|---:|')
 for d in [json.loads(l) for l in open(os.path.join(work, 'bindings.jsonl')) if l.strip()]:
     L.append('| %g | %d | %d | %.0f | %.0f | %.0f | %.3f | %.2f |' % (d['fraction'], d['vertices'], d['triangles'], d['cpp_ns'], d['c_ns'], d['python_ns'],
              d['c_over_cpp'], d['python_minus_cpp_us']))
+L.append('')
+L.append('## Compressed glTF against gltfpack')
+L.append('')
+L.append('`tomextract -c --lods 100` (KHR_mesh_quantization and EXT_meshopt_compression through Debian\'s meshoptimizer 0.18)')
+L.append('against the current gltfpack (1.3, npm) with `-c` and `-cc` on the same mesh (the .tom\'s finest level as plain')
+L.append('glTF), file bytes; the last column is a chain of four levels (100, 50, 25, 10%) in one compressed file.')
+L.append('')
+L.append('| asset | triangles | plain | tomextract -c | gltfpack -c | gltfpack -cc | -c / gltfpack -cc | chain of 4, -c |')
+L.append('|---|---:|---:|---:|---:|---:|---:|---:|')
+for d in [json.loads(l) for l in open(os.path.join(work, 'packed.jsonl')) if l.strip()]:
+    L.append('| %s | %d | %d | %d | %d | %d | %.3f | %d |' % (d['mesh'], d['triangles'], d['plain'], d['tom_c'], d['gltfpack_c'], d['gltfpack_cc'],
+             d['tom_c'] / d['gltfpack_cc'], d['chain_c']))
 L.append('')
 L.append('## Selectors')
 L.append('')

@@ -37,12 +37,15 @@ done
 root="$(cd "$(dirname "$0")/.." && pwd)"
 install_validator() {
   # from the npm registry into the git-ignored .tools/: Khronos' glTF validator (checks
-  # tomextract's .glb output) and gltfpack 0.18, the version of Debian's meshoptimizer decoders
-  # (writes the KHR_mesh_quantization / EXT_meshopt_compression inputs the tests decode)
-  if [ ! -f "$root/.tools/node_modules/gltf-validator/package.json" ] || [ ! -f "$root/.tools/node_modules/gltfpack/package.json" ]; then
+  # tomextract's .glb output), gltfpack 0.18, the version of Debian's meshoptimizer decoders
+  # (writes the KHR_mesh_quantization / EXT_meshopt_compression inputs the tests decode), and
+  # the current gltfpack (1.3, as gltfpack-current), the yardstick of scripts/bench.sh
+  local m="$root/.tools/node_modules"
+  if [ ! -f "$m/gltf-validator/package.json" ] || [ ! -f "$m/gltfpack/package.json" ] || [ ! -f "$m/gltfpack-current/package.json" ]; then
     mkdir -p "$root/.tools"
-    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 gltfpack@0.18.0 >/dev/null
-    echo "install-deps: gltf-validator and gltfpack installed in .tools/"
+    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 gltfpack@0.18.0 \
+      gltfpack-current@npm:gltfpack@1.3.0 >/dev/null
+    echo "install-deps: gltf-validator, gltfpack 0.18 and gltfpack 1.3 installed in .tools/"
   fi
 }
 if [ ${#missing[@]} -eq 0 ]; then

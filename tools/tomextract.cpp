@@ -100,6 +100,10 @@ int main(int argc, char** argv) {
     bool embed_images = false;
     app.add_flag("--embed-images", embed_images,
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
+    bool compress = false;
+    app.add_flag("-c,--compress", compress,
+                 "For .glb: quantize the vertex streams (KHR_mesh_quantization) and compress vertex and index data "
+                 "(EXT_meshopt_compression), as gltfpack -c does; both extensions are then required");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --max-error 0.5% -o bunny-half-percent.obj\n"
@@ -138,6 +142,10 @@ int main(int argc, char** argv) {
         return tom::vertex_count_for_error(m, *curve, bound, metric == "max");
     };
     auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
+    if (compress && !is_glb()) {
+        std::fprintf(stderr, "error: -c compresses a .glb; '%s' is not one\n", output.c_str());
+        return tools::exit_usage;
+    }
     if (embed_images && !is_glb()) {
         std::fprintf(stderr, "error: --embed-images writes images into a .glb; '%s' is not one\n", output.c_str());
         return tools::exit_usage;
@@ -212,7 +220,7 @@ int main(int argc, char** argv) {
                 written += tom::active_triangle_count(m, g.vertex_counts.front());
                 glb.push_back(g);
             }
-            tom::export_glb(output, glb, scene, texture_dir, embed_images);
+            tom::export_glb(output, glb, scene, texture_dir, embed_images, compress);
             const size_t level_count = glb.empty() ? 0 : glb.front().vertex_counts.size();
             std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", path.c_str(), glb.size(),
                         glb.size() == 1 ? "" : "es", level_count, level_count == 1 ? "" : "s",

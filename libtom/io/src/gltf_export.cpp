@@ -18,19 +18,44 @@
 #include "tom/extract.h"
 #include "tom/builder/writer.h"
 #include "tom/format.h"
+#include "gltf_compress.h"
 
 namespace tom {
 
 namespace {
 
 using nlohmann::json;
+using detail::encode_attributes;
+using detail::encode_triangles;
 
-constexpr int kFloat = 5126, kUint16 = 5123, kUint32 = 5125;
+constexpr int kFloat = 5126, kInt8 = 5120, kUint8 = 5121, kUint16 = 5123, kUint32 = 5125;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
 struct Writer {
     std::vector<uint8_t> bin;
     json views = json::array(), accessors = json::array();
+    bool compress = false;  // vertex and index views through EXT_meshopt_compression
+    size_t fallback = 0;    // then the bytes of the fallback buffer (1) their views lie in
+
+    // A view of `count` vertex elements of `bytes` bytes each, `stride` apart (a multiple of 4):
+    // the bytes themselves, or compressed their encoding, the view itself in the fallback buffer.
+    // `filter`: the EXT_meshopt_compression filter whose encoding `data` holds (compressed only).
+    int vertex_view(const void* data, size_t count, size_t bytes, size_t stride, const char* filter = nullptr) {
+        if (!compress) {
+            const int v = view(data, count * stride, kArrayBuffer);
+            if (stride != bytes) views[size_t(v)]["byteStride"] = stride;
+            return v;
+        }
+        const int v = compressed_view(encode_attributes(data, count, stride), count, stride, "ATTRIBUTES", kArrayBuffer);
+        views[size_t(v)]["byteStride"] = stride;
+        if (filter) views[size_t(v)]["extensions"]["EXT_meshopt_compression"]["filter"] = filter;
+        return v;
+    }
+    // A view of `count` indices of `stride` bytes (a triangle list).
+    int index_view(const void* data, size_t count, size_t stride) {
+        if (!compress) return view(data, count * stride, kElementArrayBuffer);
+        return compressed_view(encode_triangles(data, count, stride), count, stride, "TRIANGLES", kElementArrayBuffer);
+    }
 
     int view(const void* data, size_t bytes, int target) {
         while (bin.size() % 4) bin.push_back(0);
@@ -38,6 +63,21 @@ struct Writer {
         bin.insert(bin.end(), static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + bytes);
         views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}});
         if (target) views.back()["target"] = target;  // 0: an image's bytes, no vertex or index data
+        return int(views.size() - 1);
+    }
+    int compressed_view(const std::vector<uint8_t>& encoded, size_t count, size_t stride, const char* mode, int target) {
+        while (bin.size() % 4) bin.push_back(0);
+        const size_t offset = bin.size();
+        bin.insert(bin.end(), encoded.begin(), encoded.end());
+        fallback = (fallback + 3) / 4 * 4;
+        views.push_back({{"buffer", 1},
+                         {"byteOffset", fallback},
+                         {"byteLength", count * stride},
+                         {"target", target},
+                         {"extensions",
+                          {{"EXT_meshopt_compression",
+                            {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", encoded.size()}, {"byteStride", stride}, {"mode", mode}, {"count", count}}}}}});
+        fallback += count * stride;
         return int(views.size() - 1);
     }
     int accessor(int view_index, int component, size_t count, const char* type, json extra = json::object()) {
@@ -66,15 +106,14 @@ std::vector<float> unit_vectors(const float* src, uint32_t count, size_t width) 
 // The carried streams of `m` (its first `count` vertices): attributes by their names, and
 // "TARGET<k>/<ATTRIBUTE>" as morph target k's attribute. Elements are padded to a multiple of 4
 // bytes (glTF's vertex alignment); a target's POSITION has its bounds, as glTF requires.
-void write_carried_streams(Writer& w, const MeshView& m, uint32_t count, json& attributes, json& targets) {
+void write_carried_streams(Writer& w, const MeshView& m, const detail::VertexOrder& order, json& attributes, json& targets) {
     static const char* const types[] = {"SCALAR", "VEC2", "VEC3", "VEC4"};
+    const uint32_t count = uint32_t(order.order.size());
     for (uint32_t k = 0; k < m.extra_stream_count; ++k) {
         const VertexStreamView& x = m.extra_streams[k];
         const uint32_t elem = x.components * component_bytes(x.component_type), stride = (elem + 3) / 4 * 4;
-        std::vector<uint8_t> bytes(size_t(count) * stride, 0);
-        for (uint32_t v = 0; v < count; ++v) std::memcpy(&bytes[size_t(v) * stride], x.data + size_t(v) * elem, elem);
-        const int view = w.view(bytes.data(), bytes.size(), kArrayBuffer);
-        if (stride != elem) w.views[size_t(view)]["byteStride"] = stride;
+        const std::vector<uint8_t> bytes = detail::gather(x.data, elem, stride, order);
+        const int view = w.vertex_view(bytes.data(), count, elem, stride);
         json extra = json::object();
         if (x.normalized) extra["normalized"] = true;
         const std::string name(x.name);
@@ -100,6 +139,140 @@ void write_carried_streams(Writer& w, const MeshView& m, uint32_t count, json& a
         const size_t index = size_t(std::strtoul(name.c_str() + 6, nullptr, 10));
         while (targets.size() <= index) targets.push_back(json::object());
         targets[index][attribute] = accessor;
+    }
+}
+
+// One mesh's vertex streams, written once and shared by its levels: their accessors, the order
+// its vertices are in, and with quantized positions the dequantization its nodes take (null:
+// positions as they are).
+struct MeshStreams {
+    json attributes = json::object(), targets = json::array();
+    detail::VertexOrder order;
+    json dequantize;
+};
+
+detail::VertexOrder identity_order(uint32_t n) {
+    detail::VertexOrder o;
+    o.order.resize(n);
+    for (uint32_t v = 0; v < n; ++v) o.order[v] = v;
+    o.remap = o.order;
+    return o;
+}
+
+// The streams of `m`'s first `n` vertices as they are, floats (normals and tangents made unit).
+void write_float_streams(Writer& w, const MeshView& m, uint32_t n, MeshStreams& s) {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t v = 0; v < n; ++v)
+        for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], m.positions[3 * size_t(v) + k]), hi[k] = std::max(hi[k], m.positions[3 * size_t(v) + k]);
+    json& a = s.attributes;
+    a["POSITION"] = w.accessor(w.view(m.positions, size_t(n) * 12, kArrayBuffer), kFloat, n, "VEC3", {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
+    if (m.normals) {
+        const std::vector<float> normals = unit_vectors(m.normals, n, 3);
+        a["NORMAL"] = w.accessor(w.view(normals.data(), normals.size() * 4, kArrayBuffer), kFloat, n, "VEC3");
+    }
+    if (m.texcoords) a["TEXCOORD_0"] = w.accessor(w.view(m.texcoords, size_t(n) * 8, kArrayBuffer), kFloat, n, "VEC2");
+    if (m.colors) a["COLOR_0"] = w.accessor(w.view(m.colors, size_t(n) * 16, kArrayBuffer), kFloat, n, "VEC4");
+    if (m.texcoords1) a["TEXCOORD_1"] = w.accessor(w.view(m.texcoords1, size_t(n) * 8, kArrayBuffer), kFloat, n, "VEC2");
+    if (m.tangents && m.normals) {
+        const std::vector<float> tangents = unit_vectors(m.tangents, n, 4);
+        a["TANGENT"] = w.accessor(w.view(tangents.data(), tangents.size() * 4, kArrayBuffer), kFloat, n, "VEC4");
+    }
+}
+
+// The same streams quantized (gltf_compress.h) in `s.order`, through compressed views;
+// positions on the grid when `grid`, else floats.
+void write_quantized_streams(Writer& w, const MeshView& m, bool grid, MeshStreams& s) {
+    const detail::VertexOrder& order = s.order;
+    const size_t n = order.order.size();
+    const json normalized = {{"normalized", true}};
+    json& a = s.attributes;
+    if (grid) {
+        const detail::QuantizedPositions q = detail::quantize_positions(m.positions, order);
+        a["POSITION"] = w.accessor(w.vertex_view(q.values.data(), n, 6, 8), kUint16, n, "VEC3",
+                                   {{"min", {q.lo[0], q.lo[1], q.lo[2]}}, {"max", {q.hi[0], q.hi[1], q.hi[2]}}});
+        s.dequantize = q.dequantize;
+    } else {
+        std::vector<float> p(n * 3);
+        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t i = 0; i < n; ++i)
+            for (int k = 0; k < 3; ++k) {
+                p[3 * i + size_t(k)] = m.positions[3 * size_t(order.order[i]) + size_t(k)];
+                lo[k] = std::min(lo[k], p[3 * i + size_t(k)]), hi[k] = std::max(hi[k], p[3 * i + size_t(k)]);
+            }
+        a["POSITION"] = w.accessor(w.vertex_view(p.data(), n, 12, 12), kFloat, n, "VEC3", {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
+    }
+    if (m.normals) {
+        const std::vector<int8_t> q = detail::octahedral_unit_vectors(m.normals, 3, order);
+        a["NORMAL"] = w.accessor(w.vertex_view(q.data(), n, 3, 4, "OCTAHEDRAL"), kInt8, n, "VEC3", normalized);
+    }
+    auto texcoords = [&](const float* uv, const char* key) {
+        const std::vector<uint16_t> q = detail::quantize_texcoords(uv, order);
+        if (!q.empty()) {
+            a[key] = w.accessor(w.vertex_view(q.data(), n, 4, 4), kUint16, n, "VEC2", normalized);
+            return;
+        }
+        const std::vector<uint8_t> f = detail::gather(reinterpret_cast<const uint8_t*>(uv), 8, 8, order);  // outside [0, 1]: floats
+        a[key] = w.accessor(w.vertex_view(f.data(), n, 8, 8), kFloat, n, "VEC2");
+    };
+    if (m.texcoords) texcoords(m.texcoords, "TEXCOORD_0");
+    if (m.colors) {
+        const std::vector<uint8_t> q = detail::quantize_colors(m.colors, order);
+        a["COLOR_0"] = w.accessor(w.vertex_view(q.data(), n, 4, 4), kUint8, n, "VEC4", normalized);
+    }
+    if (m.texcoords1) texcoords(m.texcoords1, "TEXCOORD_1");
+    if (m.tangents && m.normals) {
+        const std::vector<int8_t> q = detail::octahedral_unit_vectors(m.tangents, 4, order);
+        a["TANGENT"] = w.accessor(w.vertex_view(q.data(), n, 4, 4, "OCTAHEDRAL"), kInt8, n, "VEC4", normalized);
+    }
+}
+
+// The vertex streams of `m`'s first `n` vertices. Compressed, in the order its finest level
+// `finest` first uses them, quantized; positions on the grid unless `float_positions` (a skinned
+// mesh, whose nodes' transforms skinning ignores, or a morphed one, whose deltas are floats).
+MeshStreams write_streams(Writer& w, const MeshView& m, uint32_t n, const std::vector<uint32_t>& finest, bool float_positions) {
+    MeshStreams s;
+    if (w.compress) {
+        s.order = detail::fetch_order(finest, n);
+        write_quantized_streams(w, m, !float_positions, s);
+    } else {
+        s.order = identity_order(n);
+        write_float_streams(w, m, n, s);
+    }
+    write_carried_streams(w, m, s.order, s.attributes, s.targets);
+    return s;
+}
+
+// KHR_mesh_quantization's positions lie on a grid whose offset and scale the node that draws
+// the mesh applies. A node without children, animation or a translation/rotation/scale takes
+// the dequantization into its matrix; any other hands its mesh to a new child that carries it
+// alone (so neither its children nor its animation see it). `dequantize`: per glTF mesh.
+void place_dequantization(json& doc, const std::vector<json>& dequantize) {
+    std::set<size_t> animated;
+    if (doc.contains("animations"))
+        for (const json& animation : doc["animations"])
+            for (const json& channel : animation.value("channels", json::array()))
+                if (channel.contains("target") && channel["target"].contains("node")) animated.insert(channel["target"]["node"].get<size_t>());
+    json& nodes = doc["nodes"];
+    const size_t count = nodes.size();
+    for (size_t i = 0; i < count; ++i) {
+        if (!nodes[i].contains("mesh")) continue;
+        const json& d = dequantize.at(nodes[i]["mesh"].get<size_t>());
+        if (d.is_null()) continue;
+        const bool own = !nodes[i].contains("children") && !animated.count(i) && !nodes[i].contains("translation") && !nodes[i].contains("rotation") &&
+                         !nodes[i].contains("scale");
+        if (own) {
+            float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}, q[16], out[16];
+            if (nodes[i].contains("matrix"))
+                for (int k = 0; k < 16; ++k) m[k] = nodes[i]["matrix"][size_t(k)].get<float>();
+            for (int k = 0; k < 16; ++k) q[k] = d[size_t(k)].get<float>();
+            multiply_4x4(m, q, out);
+            nodes[i]["matrix"] = out;
+            continue;
+        }
+        const json child = {{"mesh", nodes[i]["mesh"]}, {"matrix", d}};
+        nodes[i].erase("mesh");
+        nodes[i]["children"].push_back(nodes.size());
+        nodes.push_back(child);
     }
 }
 
@@ -383,10 +556,43 @@ void write_source_scene(json& doc, Writer& w, const json& src, const SourceGltf&
     }
 }
 
+// The stored glTF scene, parsed (null when the file has none).
+json parse_source(const Scene& scene, const std::string& path) {
+    if (scene.gltf.empty()) return json();
+    json source;
+    try {
+        source = json::parse(scene.gltf.json);
+    } catch (const json::exception& e) {
+        throw IoError("cannot write '" + path + "': the file's stored glTF scene is not JSON (" + e.what() + ")");
+    }
+    if (!source.is_object()) throw IoError("cannot write '" + path + "': the file's stored glTF scene is not a JSON object");
+    return source;
+}
+
+// Whether each mesh's positions must stay floats when compressed: a node of the stored scene
+// draws it with a skin, or it has morph targets.
+std::vector<uint8_t> float_positions(const std::vector<GlbMesh>& meshes, const json& source) {
+    std::vector<uint8_t> out(meshes.size(), 0);
+    for (size_t mi = 0; mi < meshes.size(); ++mi) {
+        const MeshView& m = *meshes[mi].mesh;
+        for (uint32_t k = 0; k < m.extra_stream_count; ++k)
+            if (m.extra_streams[k].name.rfind("TARGET", 0) == 0) out[mi] = 1;
+    }
+    if (source.is_object() && source.contains("nodes") && source["nodes"].is_array())
+        for (const json& node : source["nodes"])
+            if (node.is_object() && node.contains("skin") && node.contains("mesh") && node["mesh"].is_number_unsigned() && node["mesh"].get<size_t>() < out.size())
+                out[node["mesh"].get<size_t>()] = 1;
+    return out;
+}
+
 } // namespace
 
-void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene, const std::string& texture_dir, bool embed_images) {
+void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene, const std::string& texture_dir, bool embed_images, bool compress) {
     Writer w;
+    w.compress = compress;
+    const json source = parse_source(scene, path);  // the stored glTF scene, parsed once
+    const std::vector<uint8_t> keep_float = float_positions(meshes, source);
+    std::vector<json> dequantize;  // per glTF mesh
     size_t levels = 0;
     for (const GlbMesh& m : meshes) levels = std::max(levels, m.vertex_counts.size());
     if (levels == 0) throw IoError("cannot write '" + path + "': no resolution requested");
@@ -402,27 +608,13 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
         uint32_t n_max = 0;
         for (uint32_t n : gm.vertex_counts) n_max = std::max(n_max, std::min(n, m.vertex_count));
         if (n_max == 0) continue;
-        // vertex streams, shared by every level of this mesh
-        float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (uint32_t v = 0; v < n_max; ++v)
-            for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], m.positions[3 * size_t(v) + k]), hi[k] = std::max(hi[k], m.positions[3 * size_t(v) + k]);
-        json attributes;
-        attributes["POSITION"] = w.accessor(w.view(m.positions, size_t(n_max) * 12, kArrayBuffer), kFloat, n_max, "VEC3",
-                                            {{"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
-        if (m.normals) {
-            const std::vector<float> normals = unit_vectors(m.normals, n_max, 3);
-            attributes["NORMAL"] = w.accessor(w.view(normals.data(), normals.size() * 4, kArrayBuffer), kFloat, n_max, "VEC3");
-        }
-        if (m.texcoords) attributes["TEXCOORD_0"] = w.accessor(w.view(m.texcoords, size_t(n_max) * 8, kArrayBuffer), kFloat, n_max, "VEC2");
-        if (m.colors) attributes["COLOR_0"] = w.accessor(w.view(m.colors, size_t(n_max) * 16, kArrayBuffer), kFloat, n_max, "VEC4");
-        if (m.texcoords1) attributes["TEXCOORD_1"] = w.accessor(w.view(m.texcoords1, size_t(n_max) * 8, kArrayBuffer), kFloat, n_max, "VEC2");
-        if (m.tangents && m.normals) {
-            const std::vector<float> tangents = unit_vectors(m.tangents, n_max, 4);
-            attributes["TANGENT"] = w.accessor(w.view(tangents.data(), tangents.size() * 4, kArrayBuffer), kFloat, n_max, "VEC4");
-        }
-        json targets = json::array();
-        write_carried_streams(w, m, n_max, attributes, targets);
+        // vertex streams, shared by every level of this mesh (compressed: in the order its finest level uses them)
         std::vector<uint32_t> indices(size_t(m.triangle_count) * 3);
+        std::vector<uint32_t> finest;
+        if (compress) finest.assign(indices.begin(), indices.begin() + long(3 * size_t(extract(m, n_max, indices.data(), indices.size()).triangle_count)));
+        const MeshStreams streams = write_streams(w, m, n_max, finest, keep_float[mi]);
+        const json& attributes = streams.attributes;
+        const json& targets = streams.targets;
         std::vector<PartDraw> draws(part_count(m));
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
             const Extracted e = extract_parts(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size(), draws.data());
@@ -432,23 +624,25 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
             for (uint32_t p = 0; p < draws.size(); ++p) {
                 const PartDraw& d = draws[p];
                 if (d.index_count == 0) continue;
-                const uint32_t* part_indices = indices.data() + d.first_index;
+                std::vector<uint32_t> reordered;  // compressed: in the streams' vertex order, in vertex-cache order
+                if (compress) reordered = detail::optimized_indices(indices.data() + d.first_index, d.index_count, streams.order, n_max);
+                const uint32_t* part_indices = compress ? reordered.data() : indices.data() + d.first_index;
                 int view_index;
                 int component;
-                if (e.vertex_count <= 65535) {  // 16-bit, 65535 itself being reserved by glTF for restart
+                if ((compress ? n_max : e.vertex_count) <= 65535) {  // 16-bit, 65535 itself being reserved by glTF for restart
                     std::vector<uint16_t> small(part_indices, part_indices + d.index_count);
-                    view_index = w.view(small.data(), size_t(d.index_count) * 2, kElementArrayBuffer);
+                    view_index = w.index_view(small.data(), d.index_count, 2);
                     component = kUint16;
                 } else {
-                    view_index = w.view(part_indices, size_t(d.index_count) * 4, kElementArrayBuffer);
+                    view_index = w.index_view(part_indices, d.index_count, 4);
                     component = kUint32;
                 }
                 json own = attributes;
                 if (m.parts) {
-                    const uint32_t streams = part_at(m, p).attributes;
+                    const uint32_t part_streams = part_at(m, p).attributes;
                     const std::pair<const char*, uint32_t> optional[] = {{"TEXCOORD_0", 2}, {"COLOR_0", 4}, {"TEXCOORD_1", 8}, {"TANGENT", 16}};
                     for (const auto& [key, bit] : optional)
-                        if (!(streams & bit)) own.erase(key);
+                        if (!(part_streams & bit)) own.erase(key);
                 }
                 json primitive = {{"attributes", own}, {"indices", w.accessor(view_index, component, d.index_count, "SCALAR")}, {"mode", 4}};
                 if (!targets.empty()) primitive["targets"] = targets;
@@ -459,6 +653,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
                 primitives.push_back(primitive);
             }
             level_mesh[mi][level] = int(gltf_meshes.size());
+            dequantize.push_back(streams.dequantize);
             const std::string name(m.name);
             gltf_meshes.push_back({{"name", levels > 1 ? name + " level " + std::to_string(level) : name}, {"primitives", primitives}});
         }
@@ -467,25 +662,24 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
     doc["asset"] = {{"version", "2.0"}, {"generator", "libtom (tomextract)"}};
     doc["meshes"] = gltf_meshes;
     std::set<std::string> used;
-    json source;  // the stored glTF scene, parsed once
-    if (!scene.gltf.empty()) {
-        try {
-            source = json::parse(scene.gltf.json);
-        } catch (const json::exception& e) {
-            throw IoError("cannot write '" + path + "': the file's stored glTF scene is not JSON (" + e.what() + ")");
-        }
-        if (!source.is_object()) throw IoError("cannot write '" + path + "': the file's stored glTF scene is not a JSON object");
+    if (source.is_object())
         write_source_scene(doc, w, source, scene.gltf, level_mesh, path, used);
-    } else {
+    else
         write_instance_nodes(doc, scene, level_mesh, path, used);
+    std::set<std::string> required;  // image codecs without a fallback, and the compression's extensions
+    if (compress) {
+        place_dequantization(doc, dequantize);
+        required.insert("KHR_mesh_quantization");
+        required.insert("EXT_meshopt_compression");
     }
-    std::set<std::string> required;  // image codecs without a fallback
     write_materials(doc, w, scene, source.is_object() ? &source : nullptr, max_material, texture_dir, embed_images, path, required, used);
     used.insert(required.begin(), required.end());
     if (!used.empty()) doc["extensionsUsed"] = used;
     if (!required.empty()) doc["extensionsRequired"] = required;
     while (w.bin.size() % 4) w.bin.push_back(0);
     doc["buffers"] = {{{"byteLength", w.bin.size()}}};
+    if (w.fallback)  // compressed views lie in a buffer of no data, decoded from buffer 0
+        doc["buffers"].push_back({{"byteLength", (w.fallback + 3) / 4 * 4}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}});
     doc["bufferViews"] = w.views;
     doc["accessors"] = w.accessors;
     const std::vector<uint8_t> out = detail::glb_bytes(doc.dump(), &w.bin);

@@ -55,9 +55,15 @@ struct GlbMesh {
 /// source asset's; they are rewritten relative to the output; empty keeps them as stored), or
 /// with `embed_images` are read from there and embedded too. A WebP, KTX2 or AVIF image is shown
 /// through EXT_texture_webp, KHR_texture_basisu or EXT_texture_avif (used and required).
+/// With `compress` (tomextract -c), gltfpack -c's form: the vertex streams quantized
+/// (KHR_mesh_quantization: positions on a 14-bit grid whose dequantization the nodes carry,
+/// except a skinned or morphed mesh's; normals and tangents in bytes; texture coordinates in
+/// [0, 1] in 16 bits; colours in bytes) and the vertex and index views encoded with
+/// EXT_meshopt_compression (both required); vertices and triangles are reordered for the
+/// encoders, the triangles and their data unchanged.
 /// Written to a temporary name and renamed. \throw IoError when it cannot be written, when an
 /// image to embed cannot be read, or when a mesh refers to a material the scene does not store.
 void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, const Scene& scene = {}, const std::string& texture_dir = "",
-                bool embed_images = false);
+                bool embed_images = false, bool compress = false);
 
 } // namespace tom
