@@ -222,16 +222,28 @@ TEST_CASE("what a glTF holds and the .tom does not keep is named, never dropped 
         CHECK(r.dropped == expected);
         CHECK(!r.scene.gltf.empty());
     }
-    // what is not: a morph cube whose mesh has default weights (the .tom keeps deltas, not weights)
+    // a mesh's default morph weights and its extras are kept and come back on every level
     const std::string cube = test::sample("assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf");
     std::ifstream cube_in(cube);
     nlohmann::json weighted = nlohmann::json::parse(cube_in);
     weighted["meshes"][0]["weights"] = {0.5, 0.0};
+    weighted["meshes"][0]["extras"] = {{"tag", "cube"}};
     const fs::path weighted_dir = work_dir("weighted");
     for (const auto& e : fs::directory_iterator(fs::path(cube).parent_path()))
         if (e.path().extension() != ".gltf") fs::copy_file(e.path(), weighted_dir / e.path().filename());
     std::ofstream(weighted_dir / "weighted.gltf") << weighted.dump();
-    CHECK(tom::import_file((weighted_dir / "weighted.gltf").string()).dropped == std::vector<std::string>{"morph target weights (1 mesh)"});
+    {
+        const Stored w = store((weighted_dir / "weighted.gltf").string());
+        CHECK(w.imported.dropped.empty());
+        const tom::MeshView& m = w.file.mesh(0);
+        tom::export_glb((weighted_dir / "out.glb").string(), {{&m, {m.vertex_count, m.min_vertex_count}}}, w.file.scene());
+        const Glb out(file_bytes(weighted_dir / "out.glb"));
+        REQUIRE(out.doc["meshes"].size() == 2);
+        for (const auto& level : out.doc["meshes"]) {
+            CHECK(level["weights"] == nlohmann::json({0.5, 0.0}));
+            CHECK(level["extras"] == nlohmann::json({{"tag", "cube"}}));
+        }
+    }
     // a material extension in extensionsRequired is read (it changes no geometry) and named
     const std::string clearcoat = test::sample("assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf");
     std::ifstream in(clearcoat);

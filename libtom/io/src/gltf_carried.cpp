@@ -125,7 +125,7 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept
         if (const size_t n = size_of(doc, "skins")) out.push_back(counted("skins", n));
         if (const size_t n = size_of(doc, "animations")) out.push_back(counted("animations", n));
     }
-    if (const size_t n = weighted_meshes(doc)) out.push_back("morph target weights (" + std::to_string(n) + (n == 1 ? " mesh)" : " meshes)"));
+    if (const size_t n = weighted_meshes(doc); n && !scene_kept) out.push_back("morph target weights (" + std::to_string(n) + (n == 1 ? " mesh)" : " meshes)"));
     if (!scene_kept) {
         if (const size_t n = size_of(doc, "cameras")) out.push_back(counted("cameras", n));
         if (const size_t n = size_of(doc, "scenes"); n > 1) out.push_back(counted("scenes other than the default", n - 1));
@@ -151,10 +151,11 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept
                 out.push_back("extension " + e.get<std::string>());
     scan_materials(doc, out);
     if (const size_t n = size_of(doc, "samplers"); n && !scene_kept) out.push_back(counted("texture samplers", n));
-    // with the scene kept, so are its objects' extras and the materials' own
+    // with the scene kept, so are its objects' extras and the materials' and meshes' own
     size_t extras = count_extras(doc, scene_kept ? scene_keys : std::set<std::string>{});
-    if (scene_kept && doc.contains("materials") && doc["materials"].is_array())
-        for (const auto& m : doc["materials"]) extras -= count_extras(m) - count_extras(m, {}, false);
+    for (const char* key : {"materials", "meshes"})
+        if (scene_kept && doc.contains(key) && doc[key].is_array())
+            for (const auto& m : doc[key]) extras -= count_extras(m) - count_extras(m, {}, false);
     if (extras) out.push_back(counted("extras", extras));
     const auto asset = doc.find("asset");
     if (!scene_kept && asset != doc.end() && asset->is_object() && asset->contains("copyright")) out.push_back("asset copyright");

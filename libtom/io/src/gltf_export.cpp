@@ -537,6 +537,17 @@ void write_source_scene(json& doc, Writer& w, const json& src, const SourceGltf&
         }
         if (!any) throw IoError("cannot write '" + path + "': no mesh has a triangle at the finest level requested");
         nodes.insert(nodes.end(), lods.begin(), lods.end());
+        // each mesh's default morph weights (where its levels have as many targets) and extras, on every level
+        if (src.contains("meshes"))
+            for (size_t mi = 0; mi < level_mesh.size() && mi < src["meshes"].size(); ++mi)
+                for (const int g : level_mesh[mi]) {
+                    if (g < 0) continue;
+                    const json& kept = src["meshes"][mi];
+                    json& out = doc["meshes"][size_t(g)];
+                    const size_t targets = out["primitives"][0].value("targets", json::array()).size();
+                    if (kept.contains("weights") && kept["weights"].is_array() && kept["weights"].size() == targets && targets > 0) out["weights"] = kept["weights"];
+                    if (kept.contains("extras")) out["extras"] = kept["extras"];
+                }
         doc["nodes"] = nodes;
         if (!doc.contains("scenes")) {  // a source without scenes: its root nodes make one
             std::vector<uint8_t> child(stored_nodes, 0);

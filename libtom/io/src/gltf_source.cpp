@@ -1,7 +1,8 @@
 // A glTF's scene beyond its meshes and materials, kept as it is (tom::SourceGltf, section GLTF):
 // the node tree with its transforms, names, extensions and extras, the scenes, skins,
 // animations, cameras, the lights of KHR_lights_punctual, the texture samplers, the materials'
-// extensions that refer to no texture and their extras, and the asset's copyright. Nodes' `mesh` are renumbered to the
+// extensions that refer to no texture and their extras, the meshes' default morph weights and
+// extras, and the asset's copyright. Nodes' `mesh` are renumbered to the
 // imported meshes; the accessors that skins and animations read are copied, tightly packed, into
 // one binary blob (buffer 0) with a buffer view each.
 
@@ -105,6 +106,22 @@ SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std:
             kept.push_back(one);
         }
         if (any) out["materialExtensions"] = kept;
+    }
+    // per imported mesh, its glTF mesh's default morph weights and extras
+    if (doc.contains("meshes") && doc["meshes"].is_array()) {
+        json kept = json::array();
+        bool any = false;
+        for (size_t gm = 0; gm < mesh_parts.size() && gm < doc["meshes"].size(); ++gm) {
+            const json& m = doc["meshes"][gm];
+            for (size_t k = 0; k < mesh_parts[gm].size(); ++k) {
+                json one = json::object();
+                if (m.is_object() && m.contains("weights") && m["weights"].is_array()) one["weights"] = m["weights"];
+                if (m.is_object() && m.contains("extras")) one["extras"] = m["extras"];
+                any = any || !one.empty();
+                kept.push_back(one);
+            }
+        }
+        if (any) out["meshes"] = kept;
     }
     // the lights (KHR_lights_punctual's root list; the nodes keep their references)
     if (doc.contains("extensions") && doc["extensions"].is_object() && doc["extensions"].contains("KHR_lights_punctual"))
