@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <optional>
 
 #include "tcr/scene_budget.h"
@@ -45,6 +46,36 @@ std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<
         out.push_back(std::move(b));
     }
     return out;
+}
+
+// The folder the stored texture URIs are relative to when --texture-dir is not given: the
+// source's, as the manifest tombuild wrote beside `tom_path` records it (its paths are relative
+// to the folder tombuild ran in, found as the part of `tom_path`'s absolute path before the
+// recorded output). Empty when there is no such record, or no texture that is a file.
+std::string source_folder(const std::string& tom_path, const tom::Scene& scene) {
+    bool files = false;
+    for (const tom::Material& m : scene.materials)
+        for (const tom::TextureRef& t : m.textures) files = files || (t.image < 0 && !t.uri.empty());
+    if (!files) return "";
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path tom = fs::weakly_canonical(tom_path, ec);
+    std::ifstream manifest(tom.parent_path() / "manifest.jsonl");
+    for (std::string line; std::getline(manifest, line);) {
+        const nlohmann::json r = nlohmann::json::parse(line, nullptr, false);
+        if (!r.is_object() || !r.contains("input") || !r.contains("output") || !r["input"].is_string() || !r["output"].is_string()) continue;
+        const fs::path input = r["input"].get<std::string>(), output = fs::path(r["output"].get<std::string>()).lexically_normal();
+        if (output.is_absolute()) {
+            if (fs::weakly_canonical(output, ec) == tom) return input.parent_path().string();
+            continue;
+        }
+        // the folder tombuild ran in: tom's path without the recorded output's components
+        const std::string whole = tom.generic_string(), tail = "/" + output.generic_string();
+        if (whole.size() <= tail.size() || whole.compare(whole.size() - tail.size(), tail.size(), tail) != 0) continue;
+        const fs::path ran_in = whole.substr(0, whole.size() - tail.size());
+        return (input.is_absolute() ? input : ran_in / input).parent_path().string();
+    }
+    return "";
 }
 
 } // namespace
@@ -96,7 +127,8 @@ int main(int argc, char** argv) {
     app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
     std::string texture_dir;
     app.add_option("--texture-dir", texture_dir,
-                   "For .glb and .obj: the folder the stored texture URIs are relative to (the source asset's); they are rewritten relative to the output");
+                   "For .glb and .obj: the folder the stored texture URIs are relative to (default: the source asset's, from the manifest "
+                   "tombuild wrote beside the .tom); they are rewritten relative to the output");
     bool embed_images = false;
     app.add_flag("--embed-images", embed_images,
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
@@ -164,6 +196,7 @@ int main(int argc, char** argv) {
     }
     try {
         const tom::File file = tom::File::open(path);
+        if (texture_dir.empty()) texture_dir = source_folder(path, file.scene());
         if (const std::filesystem::path parent = std::filesystem::path(output).parent_path(); !parent.empty()) {
             std::error_code ec;
             std::filesystem::create_directories(parent, ec);  // a failure shows when the file is written

@@ -180,6 +180,14 @@ def images(path):
 assert images('$work/kept/box.glb') == images('$data/assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb')
 "
 check "--embed-images embeds a file image too" expect_exit 0 "$tools/tomextract" "$work/scenes/BoxTextured.tom" --lods 100 -o "$work/kept/box-embedded.glb" --texture-dir "$data/assimp/glTF2/BoxTextured-glTF" --embed-images
+check "without --texture-dir the source's folder comes from the manifest" bash -c "cd '$work/box' && '$tools/tomextract' ../scenes/BoxTextured.tom --lods 100 -o from-manifest.glb --embed-images >/dev/null"
+check "and the embedded image is the source's file, byte for byte" /usr/bin/python3 -c "
+import json, struct
+b = open('$work/box/from-manifest.glb', 'rb').read()
+n = struct.unpack('<I', b[12:16])[0]; d = json.loads(b[20:20 + n]); binary = b[28 + n:]
+v = d['bufferViews'][d['images'][0]['bufferView']]; o = v.get('byteOffset', 0)
+assert binary[o:o + v['byteLength']] == open('$data/assimp/glTF2/BoxTextured-glTF/CesiumLogoFlat.png', 'rb').read()
+"
 check "--embed-images needs a .glb" expect_exit 2 "$tools/tomextract" "$work/scenes/BoxTextured.tom" --fraction 1 -o "$work/kept/box.obj" --embed-images
 # every glTF2 sample that converts, back to glTF: materials, mesh nodes and images kept, and the
 # validator content (but for texcoord_crash.gltf, which the validator rejects as shipped)
