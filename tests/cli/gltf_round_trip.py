@@ -1,5 +1,6 @@
 """The round trip source -> .tom -> tomextract --lods 100 of a converted folder keeps, for every
-converted glTF, the materials (by name, in order), the nodes that draw meshes (by name), the bytes
+converted glTF, the materials (by name, in order, with their extensions and the images and
+samplers of the textures those refer to), the nodes that draw meshes (by name), the bytes
 of every material's base-colour image and its sampler, and the scene beyond the meshes: every
 node's name, transform, children, skin and camera, the skins' joints and inverse bind matrices,
 the animations' channels and keyframe data, the cameras and the scenes. Usage: gltf_round_trip.py OUTDIR (tombuild's output
@@ -66,6 +67,22 @@ def scene_beyond_meshes(d, binary, folder):
         tex = d['textures'][t['index']] if t is not None else {}
         samplers.append(d['samplers'][tex['sampler']] if 'sampler' in tex else None)
     return nodes, skins, animations, d.get('cameras', []), d.get('scenes', []), samplers
+def material_extensions(d, binary, folder):
+    # per material, its extensions (but those converted or baked), each texture they refer to
+    # replaced by its image's bytes and sampler
+    def resolve(j):
+        if isinstance(j, dict):
+            if 'index' in j:
+                tex = d['textures'][j['index']]
+                src = tex.get('source', next(iter(tex.get('extensions', {}).values()), {}).get('source'))
+                sampler = d['samplers'][tex['sampler']] if 'sampler' in tex else None
+                return {k: resolve(v) for k, v in j.items() if k != 'index'} | {'image': image_bytes(d, binary, src, folder), 'sampler': sampler}
+            return {k: resolve(v) for k, v in j.items()}
+        if isinstance(j, list):
+            return [resolve(v) for v in j]
+        return j
+    skip = ('KHR_materials_pbrSpecularGlossiness', 'KHR_texture_transform')
+    return [{k: resolve(v) for k, v in m.get('extensions', {}).items() if k not in skip} for m in d.get('materials', [])]
 checked = 0
 for line in open(os.path.join(out, 'manifest.jsonl')):
     rec = json.loads(line)
@@ -76,10 +93,11 @@ for line in open(os.path.join(out, 'manifest.jsonl')):
     assert [m.get('name', '') for m in s.get('materials', [])] == [m['name'] for m in r.get('materials', [])], src
     assert mesh_nodes(s) == mesh_nodes(r), (src, mesh_nodes(s), mesh_nodes(r))
     assert base_images(s, sb, folder) == base_images(r, rb, os.path.dirname(rt)), src
+    assert material_extensions(s, sb, folder) == material_extensions(r, rb, os.path.dirname(rt)), src
     kept, back = scene_beyond_meshes(s, sb, folder), scene_beyond_meshes(r, rb, os.path.dirname(rt))
     for what, a, b in zip(('nodes', 'skins', 'animations', 'cameras', 'scenes', 'samplers'), kept, back):
         assert a == b, (src, what, a, b)
     checked += 1
 converted = sum(1 for line in open(os.path.join(out, 'manifest.jsonl')) if json.loads(line).get('status') == 'converted')
-print(f"round trip: {checked} assets keep their materials, node trees, skins, animations, cameras, images and samplers")
+print(f"round trip: {checked} assets keep their materials with their extensions, node trees, skins, animations, cameras, images and samplers")
 assert checked == converted and checked >= 20, (checked, converted)

@@ -92,22 +92,20 @@ void scan_materials(const nlohmann::json& doc, std::vector<std::string>& out) {
 
 } // namespace
 
-// whether `j` holds a texture reference anywhere (an object with an "index")
-bool refers_to_texture(const nlohmann::json& j) {
+void texture_indices(const nlohmann::json& j, std::set<int>& out) {
     if (j.is_object()) {
-        if (j.contains("index")) return true;
-        for (const auto& [key, value] : j.items())
-            if (refers_to_texture(value)) return true;
+        const auto index = j.find("index");
+        if (index != j.end() && index->is_number_integer()) out.insert(index->get<int>());
+        for (const auto& [key, value] : j.items()) texture_indices(value, out);
     } else if (j.is_array()) {
-        for (const auto& value : j)
-            if (refers_to_texture(value)) return true;
+        for (const auto& value : j) texture_indices(value, out);
     }
-    return false;
 }
 
-bool carries_material_extension(const std::string& name, const nlohmann::json& value) {
-    // the specular-glossiness model is converted into the metallic-roughness one, not kept
-    return name != "KHR_materials_pbrSpecularGlossiness" && name != "KHR_texture_transform" && !refers_to_texture(value);
+bool carries_material_extension(const std::string& name) {
+    // the specular-glossiness model is converted into the metallic-roughness one, and texture
+    // transforms are baked into the texture coordinates: neither is kept
+    return name != "KHR_materials_pbrSpecularGlossiness" && name != "KHR_texture_transform";
 }
 
 bool is_interpreted_attribute(const std::string& name) { return interpreted_attributes.count(name) != 0; }
@@ -141,7 +139,7 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept
         if (materials != doc.end() && materials->is_array())
             for (const auto& m : *materials)
                 if (m.is_object() && m.contains("extensions") && m["extensions"].is_object())
-                    for (const auto& [name, value] : m["extensions"].items()) (carries_material_extension(name, value) ? kept : lost).insert(name);
+                    for (const auto& [name, value] : m["extensions"].items()) (carries_material_extension(name) ? kept : lost).insert(name);
         for (const std::string& name : lost) kept.erase(name);
     }
     const auto used = doc.find("extensionsUsed");

@@ -2,6 +2,7 @@
 // What of a glTF document the toolkit carries into a .tom and back out, and what it does not: the
 // importer's answer to "was anything lost?" (ImportResult::dropped).
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -15,11 +16,15 @@ namespace tom::detail {
 /// KHR_technique_webgl, an unknown one) cannot.
 bool can_read_required(const std::string& extension);
 
-/// Whether a material's extension `name` with value `value` is kept as it is (with the scene,
-/// tom::SourceGltf's "materialExtensions"): one that refers to no texture (KHR_materials_unlit,
-/// emissive_strength, ior, the factors of specular, transmission, volume, sheen, clearcoat, ...);
-/// a texture's index would name a texture of the source, which the exporter renumbers.
-bool carries_material_extension(const std::string& name, const nlohmann::json& value);
+/// Whether a material's extension `name` is kept (with the scene, tom::SourceGltf's
+/// "materialExtensions"): every one (KHR_materials_unlit, clearcoat, transmission, sheen, ...)
+/// but the specular-glossiness model, which becomes the metallic-roughness one, and
+/// KHR_texture_transform, which is baked into the texture coordinates. The textures an extension
+/// refers to are described in "extensionTextures" and renumbered by the exporter.
+bool carries_material_extension(const std::string& name);
+
+/// The texture indices a material extension's value refers to (its textureInfo objects' "index").
+void texture_indices(const nlohmann::json& j, std::set<int>& out);
 
 /// Whether the importer reads attribute `name` into a stream of its own (POSITION, NORMAL,
 /// TANGENT, TEXCOORD_0, TEXCOORD_1, COLOR_0); every other attribute is carried unread.

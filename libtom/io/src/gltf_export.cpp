@@ -320,12 +320,12 @@ struct MaterialWriter {
         return source->contains("samplers") && s < (*source)["samplers"].size() ? int(s) : -1;
     }
 
-    // a glTF image (and its texture) for reference `t`; -1 when it has neither bytes nor a URI
-    int texture_for(const TextureRef& t) {
+    // a glTF image (and its texture, with the source's `sampler` or none) for reference `t`; -1
+    // when it has neither bytes nor a URI
+    int texture_for(const TextureRef& t, int sampler) {
         namespace fs = std::filesystem;
         std::string key = t.image >= 0 ? "#" + std::to_string(t.image) : t.uri;
         if (key.empty()) return -1;
-        const int sampler = sampler_of_reference();
         fs::path file;
         if (t.image < 0) {
             std::string uri = t.uri;
@@ -373,9 +373,57 @@ struct MaterialWriter {
         if (list[k].contains("extras")) mat["extras"] = list[k]["extras"];
         if (!list[k].contains("extensions") || !list[k]["extensions"].is_object()) return;
         for (const auto& [name, value] : list[k]["extensions"].items()) {
-            mat["extensions"][name] = value;
+            json kept = value;
+            renumber_textures(kept);
+            mat["extensions"][name] = kept;
             used.insert(name);
         }
+    }
+
+    // The texture a kept material extension refers to by the source's index `t`, written as the
+    // stored scene describes it ("extensionTextures"); -1 when it describes none (checked: a
+    // hostile file's description names no image or sampler it does not store).
+    int extension_texture(const json& t) {
+        if (!t.is_number_unsigned() || !source->contains("extensionTextures")) return -1;
+        const json& list = (*source)["extensionTextures"];
+        if (t.get<size_t>() >= list.size() || !list[t.get<size_t>()].is_object()) return -1;
+        const json& d = list[t.get<size_t>()];
+        TextureRef ref;
+        if (d.contains("image")) {
+            if (!d["image"].is_number_unsigned() || d["image"].get<size_t>() >= scene.images.size()) return -1;
+            ref.image = d["image"].get<int32_t>();
+        } else if (d.contains("uri") && d["uri"].is_string()) {
+            ref.uri = d["uri"].get<std::string>();
+            if (d.contains("mimeType") && d["mimeType"].is_string()) ref.mime_type = d["mimeType"].get<std::string>();
+        }
+        int sampler = -1;
+        if (d.contains("sampler") && d["sampler"].is_number_unsigned() && source->contains("samplers") && d["sampler"].get<size_t>() < (*source)["samplers"].size())
+            sampler = d["sampler"].get<int>();
+        return texture_for(ref, sampler);
+    }
+
+    // Every textureInfo (an object with an "index") in an extension's value gets the index of the
+    // texture written for it, or goes when there is none.
+    void renumber_textures(json& j) {
+        if (j.is_array()) {
+            for (json& value : j) renumber_textures(value);
+            return;
+        }
+        if (!j.is_object()) return;
+        std::vector<std::string> gone;
+        for (auto it = j.begin(); it != j.end(); ++it) {
+            json& value = it.value();
+            if (!value.is_object() || !value.contains("index")) {
+                renumber_textures(value);
+                continue;
+            }
+            const int index = extension_texture(value["index"]);
+            if (index < 0) gone.push_back(it.key());
+            else value["index"] = index;
+            if (index >= 0 && value.contains("extensions") && value["extensions"].is_object())  // KHR_texture_transform, say
+                for (const auto& [name, unused] : value["extensions"].items()) used.insert(name);
+        }
+        for (const std::string& key : gone) j.erase(key);
     }
 
     json material(const Material& m) {
@@ -386,7 +434,7 @@ struct MaterialWriter {
         if (m.alpha_mode == AlphaMode::mask) mat["alphaCutoff"] = m.alpha_cutoff;
         if (m.double_sided) mat["doubleSided"] = true;
         for (const TextureRef& t : m.textures) {
-            const int index = texture_for(t);
+            const int index = texture_for(t, sampler_of_reference());
             ++reference;
             if (index < 0) continue;
             const json info = {{"index", index}, {"texCoord", t.texcoord}};

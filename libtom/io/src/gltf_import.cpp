@@ -442,9 +442,9 @@ ImportResult import_gltf(const std::string& path, bool binary) {
         result.meshes.push_back(join_parts(primitives, stem + "/" + mesh_name));
     }
     read_joint_positions(model, mesh_parts, path, quantized, result.meshes);
-    std::vector<int> texture_samplers;
-    result.scene = gltf_scene(model, mesh_parts, embedded, path, texture_samplers);
-    result.scene.gltf = source_gltf(model, doc, mesh_parts, texture_samplers);
+    TextureSources textures;
+    result.scene = gltf_scene(model, doc, mesh_parts, embedded, path, textures);
+    result.scene.gltf = source_gltf(model, doc, mesh_parts, textures);
     result.dropped = gltf_dropped(doc, !result.scene.gltf.empty(), std::move(result.dropped));
     if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
     return result;

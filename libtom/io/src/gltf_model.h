@@ -8,6 +8,8 @@
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <map>
 #include <string>
@@ -26,12 +28,20 @@ using EmbeddedImages = std::map<int, std::vector<uint8_t>>;
 /// triangle primitives of glTF mesh m; each node with a mesh gives one instance per part, with
 /// the node's world transform. A texture whose image is in `embedded` shows that image, stored
 /// in the scene (Scene::images, once per source image); others keep the image's URI.
-/// `texture_samplers` receives, per texture reference of the materials in order, the sampler of
-/// the glTF texture it came from (-1 for none).
+/// What the stored glTF scene needs to know of the textures: per texture reference of the
+/// materials in order, the sampler of the glTF texture it came from (-1 for none); and the
+/// textures the kept material extensions refer to (by source texture index), each described as
+/// {"image": K} (stored, Scene::images) or {"uri": U, "mimeType": M}, with its "sampler".
+struct TextureSources {
+    std::vector<int> samplers;
+    std::map<int, nlohmann::json> extension;
+};
+
+/// `textures` receives the above for the materials of `doc` (the document `model` decoded).
 /// \throw ImportError naming `path` and the node for a cycle or a node tree that would give
 /// more than 1,000,000 instances.
-Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
-                 const std::string& path, std::vector<int>& texture_samplers);
+Scene gltf_scene(const tinygltf::Model& model, const nlohmann::json& doc, const std::vector<std::vector<uint32_t>>& mesh_parts,
+                 const EmbeddedImages& embedded, const std::string& path, TextureSources& textures);
 
 /// Bakes the KHR_texture_transform of material `material` (its base colour texture's, else the
 /// first of its textures that has one) into the TEXCOORD set it applies to: .tom keeps texture

@@ -6,6 +6,8 @@
 #include <map>
 
 #include "gltf_model.h"
+
+#include "gltf_carried.h"
 #include "tom/errors.h"
 
 namespace tom::detail {
@@ -51,20 +53,40 @@ struct MaterialReader {
         return it->second;
     }
 
-    void texture_ref(int texture, int texcoord, TextureRole role, Material& out) {
-        if (texture < 0 || size_t(texture) >= model.textures.size()) return;
+    // the image texture `texture` shows: stored, or its URI (and type); texture must exist
+    TextureRef image_of(int texture) {
         const int source = texture_source(model.textures[size_t(texture)]);
         TextureRef ref;
-        ref.role = role;
-        ref.texcoord = texcoord > 0 ? uint32_t(texcoord) : 0u;
         if (source >= 0 && size_t(source) < model.images.size()) {
             const tinygltf::Image& image = model.images[size_t(source)];
             ref.image = store_image(source);
             ref.mime_type = ref.image >= 0 ? scene.images[size_t(ref.image)].mime_type : image.mimeType;
             if (ref.image < 0 && image.uri.rfind("data:", 0) != 0) ref.uri = image.uri;
         }
+        return ref;
+    }
+
+    void texture_ref(int texture, int texcoord, TextureRole role, Material& out) {
+        if (texture < 0 || size_t(texture) >= model.textures.size()) return;
+        TextureRef ref = image_of(texture);
+        ref.role = role;
+        ref.texcoord = texcoord > 0 ? uint32_t(texcoord) : 0u;
         out.textures.push_back(std::move(ref));
         samplers.push_back(model.textures[size_t(texture)].sampler);
+    }
+
+    // texture `texture` as the stored scene describes one a material extension refers to, or null
+    // when it does not exist or shows no image
+    nlohmann::json describe(int texture) {
+        if (texture < 0 || size_t(texture) >= model.textures.size()) return nullptr;
+        const TextureRef ref = image_of(texture);
+        nlohmann::json out = nlohmann::json::object();
+        if (ref.image >= 0) out["image"] = ref.image;
+        else if (!ref.uri.empty()) out["uri"] = ref.uri;
+        else return nullptr;
+        if (!ref.mime_type.empty()) out["mimeType"] = ref.mime_type;
+        if (const int s = model.textures[size_t(texture)].sampler; s >= 0) out["sampler"] = s;
+        return out;
     }
 
     Material material(const tinygltf::Material& m);
@@ -223,12 +245,21 @@ std::string bake_texture_transform(const tinygltf::Model& model, int material, M
                     : "";
 }
 
-Scene gltf_scene(const tinygltf::Model& model, const std::vector<std::vector<uint32_t>>& mesh_parts, const EmbeddedImages& embedded,
-                 const std::string& path, std::vector<int>& texture_samplers) {
+Scene gltf_scene(const tinygltf::Model& model, const nlohmann::json& doc, const std::vector<std::vector<uint32_t>>& mesh_parts,
+                 const EmbeddedImages& embedded, const std::string& path, TextureSources& textures) {
     Scene scene;
     MaterialReader reader{model, embedded, scene};
     for (const tinygltf::Material& m : model.materials) scene.materials.push_back(reader.material(m));
-    texture_samplers = std::move(reader.samplers);
+    textures.samplers = std::move(reader.samplers);
+    // the textures of the material extensions kept, their images stored after the materials' own
+    std::set<int> referred;
+    if (doc.contains("materials") && doc["materials"].is_array())
+        for (const nlohmann::json& m : doc["materials"])
+            if (m.is_object() && m.contains("extensions") && m["extensions"].is_object())
+                for (const auto& [name, value] : m["extensions"].items())
+                    if (carries_material_extension(name)) texture_indices(value, referred);
+    for (const int t : referred)
+        if (nlohmann::json d = reader.describe(t); !d.is_null()) textures.extension[t] = std::move(d);
     const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
     if (size_t(which) < model.scenes.size()) {
         Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};

@@ -1,7 +1,7 @@
 // A glTF's scene beyond its meshes and materials, kept as it is (tom::SourceGltf, section GLTF):
 // the node tree with its transforms, names, extensions and extras, the scenes, skins,
 // animations, cameras, the lights of KHR_lights_punctual, the texture samplers, the materials'
-// extensions that refer to no texture and their extras, the meshes' default morph weights and
+// extensions (the textures they refer to described apart) and extras, the meshes' default morph weights and
 // extras, and the asset's copyright. Nodes' `mesh` are renumbered to the
 // imported meshes; the accessors that skins and animations read are copied, tightly packed, into
 // one binary blob (buffer 0) with a buffer view each.
@@ -81,12 +81,21 @@ bool copy_accessor(const tinygltf::Model& model, const json& doc, int index, std
 } // namespace
 
 SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std::vector<std::vector<uint32_t>>& mesh_parts,
-                       const std::vector<int>& texture_samplers) {
+                       const TextureSources& textures) {
     json out = json::object();
-    if (doc.contains("samplers") && std::any_of(texture_samplers.begin(), texture_samplers.end(), [](int s) { return s >= 0; })) {
+    const bool sampled = std::any_of(textures.samplers.begin(), textures.samplers.end(), [](int s) { return s >= 0; }) ||
+                         std::any_of(textures.extension.begin(), textures.extension.end(), [](const auto& t) { return t.second.contains("sampler"); });
+    if (doc.contains("samplers") && sampled) {
         out["samplers"] = doc["samplers"];
         out["textureSamplers"] = json::array();
-        for (const int s : texture_samplers) out["textureSamplers"].push_back(s >= 0 ? json(s) : json(nullptr));
+        for (const int s : textures.samplers) out["textureSamplers"].push_back(s >= 0 ? json(s) : json(nullptr));
+    }
+    if (!textures.extension.empty()) {
+        out["extensionTextures"] = json::array();
+        for (const auto& [t, description] : textures.extension) {
+            while (out["extensionTextures"].size() < size_t(t)) out["extensionTextures"].push_back(nullptr);
+            out["extensionTextures"].push_back(description);
+        }
     }
     for (const char* key : {"nodes", "scenes", "scene", "skins", "animations", "cameras"})
         if (doc.contains(key)) out[key] = doc[key];
@@ -100,7 +109,7 @@ SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std:
             json one = json::object();
             if (m.is_object() && m.contains("extensions") && m["extensions"].is_object())
                 for (const auto& [name, value] : m["extensions"].items())
-                    if (carries_material_extension(name, value)) one["extensions"][name] = value;
+                    if (carries_material_extension(name)) one["extensions"][name] = value;
             if (m.is_object() && m.contains("extras")) one["extras"] = m["extras"];
             any = any || !one.empty();
             kept.push_back(one);
