@@ -416,6 +416,52 @@ TEST_CASE("compressed glTF output: the same triangles within the 14-bit grid, ca
     }
 }
 
+TEST_CASE("a sparse accessor is made dense: a sparse morph target carries the same deltas", "[fidelity][carried]") {
+    // the morph cube as a GLB, its first target's POSITION rewritten as a sparse accessor: the
+    // elements that move are spoiled in its base and given again by its sparse values
+    const fs::path source = test::sample("assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf");
+    Glb glb;
+    std::ifstream in(source);
+    glb.doc = nlohmann::json::parse(in);
+    glb.bin = file_bytes(source.parent_path() / "AnimatedMorphCube.bin");
+    glb.doc["buffers"][0].erase("uri");
+    const size_t target = glb.doc["meshes"][0]["primitives"][0]["targets"][0]["POSITION"].get<size_t>();
+    nlohmann::json& accessor = glb.doc["accessors"][target];
+    const size_t at = glb.doc["bufferViews"][accessor["bufferView"].get<size_t>()]["byteOffset"].get<size_t>() + accessor.value("byteOffset", size_t(0));
+    std::vector<uint16_t> indices;
+    std::vector<float> values;
+    for (uint16_t v = 0; v < accessor["count"].get<uint16_t>(); ++v) {
+        float d[3];
+        std::memcpy(d, &glb.bin[at + 12 * size_t(v)], 12);
+        if (d[1] == 0) continue;
+        indices.push_back(v);
+        values.insert(values.end(), d, d + 3);
+        const float spoiled[3] = {7, 7, 7};
+        std::memcpy(&glb.bin[at + 12 * size_t(v)], spoiled, 12);
+    }
+    REQUIRE((!indices.empty() && indices.size() < accessor["count"].get<size_t>()));
+    const size_t index_view = glb.doc["accessors"][glb.add(indices, "SCALAR", 5123, indices.size())]["bufferView"].get<size_t>();
+    const size_t value_view = glb.doc["accessors"][glb.add(values, "VEC3", 5126, indices.size())]["bufferView"].get<size_t>();
+    nlohmann::json& sparse_accessor = glb.doc["accessors"][target];
+    sparse_accessor["sparse"] = {{"count", indices.size()}, {"indices", {{"bufferView", index_view}, {"componentType", 5123}}}, {"values", {{"bufferView", value_view}}}};
+    const fs::path dir = work_dir("sparse");
+    const std::vector<uint8_t> bytes = glb.bytes();
+    std::ofstream(dir / "sparse.glb", std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+    const tom::ImportResult dense = tom::import_file(source.string()), sparse = tom::import_file((dir / "sparse.glb").string());
+    CHECK(sparse.dropped.empty());
+    CHECK(carried_elements(sparse) == carried_elements(dense));
+    REQUIRE(sparse.meshes.size() == 1);
+    for (const tom::VertexStream& x : sparse.meshes[0].extra_streams)
+        if (x.name == "TARGET0/POSITION")
+            for (const tom::VertexStream& y : dense.meshes[0].extra_streams)
+                if (y.name == x.name) CHECK(x.data == y.data);  // in vertex order too
+    // an index past the accessor's elements is refused, named
+    std::memcpy(&glb.bin[glb.doc["bufferViews"][index_view]["byteOffset"].get<size_t>()], "\xff\x00", 2);
+    const std::vector<uint8_t> bad = glb.bytes();
+    std::ofstream(dir / "bad.glb", std::ios::binary).write(reinterpret_cast<const char*>(bad.data()), long(bad.size()));
+    CHECK_THROWS_WITH(tom::import_file((dir / "bad.glb").string()), Catch::Contains("bad.glb") && Catch::Contains("sparse index 0 is 255, past its 24 elements"));
+}
+
 TEST_CASE("an OBJ's texture coordinates reach glTF the right way up and come back unchanged", "[fidelity][texcoords]") {
     const std::string spider = test::sample("assimp/OBJ/spider.obj");
     // the file's vt values, as (u, v) pairs

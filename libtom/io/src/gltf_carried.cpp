@@ -1,7 +1,7 @@
 // What a glTF import keeps and what it names as dropped (see the header). The lists follow what
 // the importer, the .tom format and the glTF exporter carry: geometry with the streams POSITION,
 // NORMAL, TANGENT, TEXCOORD_0/1 and COLOR_0, every other attribute and the morph targets'
-// deltas carried unread (sparse accessors aside, which the importer names itself);
+// deltas carried unread (sparse ones made dense);
 // metallic-roughness materials and their textures;
 // images (embedded ones stored, external ones by URI); the default scene's mesh nodes as
 // instances with their names and world transforms.

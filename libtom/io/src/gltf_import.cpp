@@ -9,6 +9,7 @@
 #include "gltf_model.h"
 
 #include <algorithm>
+#include <deque>
 #include <cmath>
 #include <iterator>
 #include <optional>
@@ -70,12 +71,68 @@ public:
 
     [[noreturn]] void fail(const std::string& what) const { throw ImportError(where_ + ": " + what); }
 
-    // Validates accessor `index` and returns a pointer to element 0 plus the stride.
-    const uint8_t* locate(int index, const char* role, size_t& count, size_t& stride, int& components, int& ctype) const {
+    // Validates accessor `index` and returns a pointer to element 0 plus the stride. A sparse
+    // accessor is made dense first (`expect`: the element count it must have, 0 for any; one
+    // without a buffer view must have an expected count, so that no count the file merely
+    // declares sizes an allocation).
+    const uint8_t* locate(int index, const char* role, size_t& count, size_t& stride, int& components, int& ctype, size_t expect = 0) const {
         const std::string name = std::string(role) + " accessor " + std::to_string(index);
         if (index < 0 || size_t(index) >= model_.accessors.size()) fail(name + " does not exist");
         const tinygltf::Accessor& a = model_.accessors[size_t(index)];
-        if (a.sparse.isSparse) fail(name + " is sparse, which is not supported");
+        if (a.sparse.isSparse) return densify(a, name, expect, count, stride, components, ctype);
+        return dense(a, name, count, stride, components, ctype);
+    }
+
+    // A sparse accessor's elements: its base (its buffer view's, or zeros) with the substitutes
+    // its sparse indices and values give, held by the reader.
+    const uint8_t* densify(const tinygltf::Accessor& a, const std::string& name, size_t expect, size_t& count, size_t& stride, int& components,
+                           int& ctype) const {
+        components = component_count(a.type);
+        ctype = a.componentType;
+        const size_t elem = size_t(components) * size_t(component_bytes(ctype));
+        if (elem == 0) fail(name + " has an invalid type or component type");
+        if (expect && a.count != expect)
+            fail(name + " has " + std::to_string(a.count) + " elements but POSITION has " + std::to_string(expect));
+        if (a.bufferView < 0 && !expect) fail(name + " is sparse without a buffer view, and nothing bounds its element count");
+        std::vector<uint8_t> out(a.count * elem, 0);
+        if (a.bufferView >= 0) {
+            size_t n, base_stride;
+            int c, t;
+            const uint8_t* base = dense(a, name, n, base_stride, c, t);
+            for (size_t i = 0; i < n; ++i) std::memcpy(&out[i * elem], base + i * base_stride, elem);
+        }
+        const auto& sp = a.sparse;
+        const size_t index_bytes = size_t(component_bytes(sp.indices.componentType));
+        if (sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            sp.indices.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+            fail(name + ": sparse indices have component type " + std::to_string(sp.indices.componentType) + ", not an unsigned integer");
+        const uint8_t* indices = view_range(sp.indices.bufferView, sp.indices.byteOffset, size_t(sp.count) * index_bytes, name + " sparse indices");
+        const uint8_t* values = view_range(sp.values.bufferView, sp.values.byteOffset, size_t(sp.count) * elem, name + " sparse values");
+        for (size_t i = 0; i < size_t(sp.count); ++i) {
+            uint32_t at = 0;
+            std::memcpy(&at, indices + i * index_bytes, index_bytes);  // little-endian
+            if (at >= a.count) fail(name + ": sparse index " + std::to_string(i) + " is " + std::to_string(at) + ", past its " + std::to_string(a.count) + " elements");
+            std::memcpy(&out[size_t(at) * elem], values + i * elem, elem);
+        }
+        count = a.count;
+        stride = elem;
+        dense_.push_back(std::move(out));
+        return dense_.back().data();
+    }
+
+    // `bytes` bytes at `offset` of buffer view `view`, checked to lie in it and its buffer
+    const uint8_t* view_range(int view, size_t offset, size_t bytes, const std::string& what) const {
+        if (view < 0 || size_t(view) >= model_.bufferViews.size()) fail(what + ": buffer view " + std::to_string(view) + " does not exist");
+        const tinygltf::BufferView& v = model_.bufferViews[size_t(view)];
+        if (v.buffer < 0 || size_t(v.buffer) >= model_.buffers.size()) fail(what + ": buffer view " + std::to_string(view) + " refers to a missing buffer");
+        const std::vector<unsigned char>& data = model_.buffers[size_t(v.buffer)].data;
+        if (v.byteOffset > data.size() || v.byteLength > data.size() - v.byteOffset || offset > v.byteLength || bytes > v.byteLength - offset)
+            fail(what + ": " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " do not fit buffer view " + std::to_string(view));
+        return data.data() + v.byteOffset + offset;
+    }
+
+    // a dense accessor's element 0 and stride
+    const uint8_t* dense(const tinygltf::Accessor& a, const std::string& name, size_t& count, size_t& stride, int& components, int& ctype) const {
         if (a.bufferView < 0 || size_t(a.bufferView) >= model_.bufferViews.size())
             fail(name + " has no data (buffer view " + std::to_string(a.bufferView) + "; a failed Draco decode leaves it so)");
         const tinygltf::BufferView& view = model_.bufferViews[size_t(a.bufferView)];
@@ -121,7 +178,7 @@ public:
     std::vector<float> read_floats(int index, const char* role, int want_min, int want_max, Kind kind, size_t expect_count) const {
         size_t count, stride;
         int components, ctype;
-        const uint8_t* p = locate(index, role, count, stride, components, ctype);
+        const uint8_t* p = locate(index, role, count, stride, components, ctype, expect_count);
         const std::string name = std::string(role) + " accessor " + std::to_string(index);
         if (components < want_min || components > want_max) fail(name + " has " + std::to_string(components) + " components");
         if (expect_count && count != expect_count)
@@ -163,12 +220,11 @@ public:
     }
 
     // An attribute the importer does not interpret, its elements copied as they are (no
-    // conversion); std::nullopt for a sparse accessor, which is not carried.
-    std::optional<VertexStream> read_carried(int index, const std::string& name, size_t expect_count) const {
-        if (index >= 0 && size_t(index) < model_.accessors.size() && model_.accessors[size_t(index)].sparse.isSparse) return std::nullopt;
+    // conversion; a sparse accessor made dense).
+    VertexStream read_carried(int index, const std::string& name, size_t expect_count) const {
         size_t count, stride;
         int components, ctype;
-        const uint8_t* p = locate(index, name.c_str(), count, stride, components, ctype);
+        const uint8_t* p = locate(index, name.c_str(), count, stride, components, ctype, expect_count);
         if (count != expect_count)
             fail(name + " accessor " + std::to_string(index) + " has " + std::to_string(count) + " elements but POSITION has " + std::to_string(expect_count));
         if (components > 4) fail(name + " accessor " + std::to_string(index) + " is not a SCALAR or VEC2-4");
@@ -246,6 +302,7 @@ private:
     const tinygltf::Model& model_;
     std::string where_;
     bool quantized_;  // the file uses KHR_mesh_quantization
+    mutable std::deque<std::vector<uint8_t>> dense_;  // sparse accessors made dense, while the reader lives
 };
 
 // Triangle lists from TRIANGLES, TRIANGLE_STRIP and TRIANGLE_FAN index sequences.
@@ -294,13 +351,9 @@ std::vector<uint32_t> primitive_triangles(const PrimitiveReader& reader, const t
 }
 
 // The attributes the importer does not interpret (TEXCOORD_2.., COLOR_1.., JOINTS_n, WEIGHTS_n,
-// "_CUSTOM") and every morph target's deltas ("TARGET<k>/<ATTRIBUTE>"), carried unread; a sparse
-// accessor is named in `dropped` instead.
-void read_carried_streams(const PrimitiveReader& reader, const tinygltf::Primitive& prim, size_t n, Mesh& mesh, std::vector<std::string>& dropped) {
-    auto carry = [&](int index, const std::string& name) {
-        if (std::optional<VertexStream> x = reader.read_carried(index, name, n)) mesh.extra_streams.push_back(std::move(*x));
-        else dropped.push_back("sparse accessor of " + name + " (" + mesh.name + ")");
-    };
+// "_CUSTOM") and every morph target's deltas ("TARGET<k>/<ATTRIBUTE>"), carried unread.
+void read_carried_streams(const PrimitiveReader& reader, const tinygltf::Primitive& prim, size_t n, Mesh& mesh) {
+    auto carry = [&](int index, const std::string& name) { mesh.extra_streams.push_back(reader.read_carried(index, name, n)); };
     for (const auto& [name, index] : prim.attributes)
         if (!is_interpreted_attribute(name)) carry(index, name);
     for (size_t k = 0; k < prim.targets.size(); ++k)
@@ -428,7 +481,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
                     mesh.colors.swap(c);
                 }
             }
-            read_carried_streams(reader, prim, n, mesh, result.dropped);
+            read_carried_streams(reader, prim, n, mesh);
             if (const std::string w = bake_texture_transform(model, prim.material, mesh); !w.empty())
                 result.warnings.push_back(mesh.name + ": " + w);
             mesh.indices = primitive_triangles(reader, prim, mode, n);

@@ -31,10 +31,11 @@ using EmbeddedImages = std::map<int, std::vector<uint8_t>>;
 /// What the stored glTF scene needs to know of the textures: per texture reference of the
 /// materials in order, the sampler of the glTF texture it came from (-1 for none); and the
 /// textures the kept material extensions refer to (by source texture index), each described as
-/// {"image": K} (stored, Scene::images) or {"uri": U, "mimeType": M}, with its "sampler".
+/// the JSON text {"image": K} (stored, Scene::images) or {"uri": U, "mimeType": M}, with its
+/// "sampler" (text: a json member would widen this struct's visibility past nlohmann's).
 struct TextureSources {
     std::vector<int> samplers;
-    std::map<int, nlohmann::json> extension;
+    std::map<int, std::string> extension;
 };
 
 /// `textures` receives the above for the materials of `doc` (the document `model` decoded).

@@ -7,6 +7,8 @@
 
 #include "gltf_model.h"
 
+#include <nlohmann/json.hpp>
+
 #include "gltf_carried.h"
 #include "tom/errors.h"
 
@@ -259,7 +261,7 @@ Scene gltf_scene(const tinygltf::Model& model, const nlohmann::json& doc, const 
                 for (const auto& [name, value] : m["extensions"].items())
                     if (carries_material_extension(name)) texture_indices(value, referred);
     for (const int t : referred)
-        if (nlohmann::json d = reader.describe(t); !d.is_null()) textures.extension[t] = std::move(d);
+        if (const nlohmann::json d = reader.describe(t); !d.is_null()) textures.extension[t] = d.dump();
     const int which = model.defaultScene >= 0 ? model.defaultScene : 0;
     if (size_t(which) < model.scenes.size()) {
         Flattener f{model, mesh_parts, path, scene, std::vector<uint8_t>(model.nodes.size(), 0)};

@@ -84,7 +84,7 @@ SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std:
                        const TextureSources& textures) {
     json out = json::object();
     const bool sampled = std::any_of(textures.samplers.begin(), textures.samplers.end(), [](int s) { return s >= 0; }) ||
-                         std::any_of(textures.extension.begin(), textures.extension.end(), [](const auto& t) { return t.second.contains("sampler"); });
+                         std::any_of(textures.extension.begin(), textures.extension.end(), [](const auto& t) { return json::parse(t.second).contains("sampler"); });
     if (doc.contains("samplers") && sampled) {
         out["samplers"] = doc["samplers"];
         out["textureSamplers"] = json::array();
@@ -94,7 +94,7 @@ SourceGltf source_gltf(const tinygltf::Model& model, const json& doc, const std:
         out["extensionTextures"] = json::array();
         for (const auto& [t, description] : textures.extension) {
             while (out["extensionTextures"].size() < size_t(t)) out["extensionTextures"].push_back(nullptr);
-            out["extensionTextures"].push_back(description);
+            out["extensionTextures"].push_back(json::parse(description));
         }
     }
     for (const char* key : {"nodes", "scenes", "scene", "skins", "animations", "cameras"})
