@@ -11,14 +11,21 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
 #include "glb.h"
 #include "tom/builder/builder.h"
+#include "tom/builder/writer.h"
+#include "tom/format.h"
+#include "tom/io/export.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/io/import.h"
@@ -83,7 +90,8 @@ test::Glb tube_glb(const Tube& tube) {
 }
 
 fs::path write(const test::Glb& glb, const char* name) {
-    const fs::path dir = fs::temp_directory_path() / "tom_animation_test";
+    // a folder per process: ctest runs this file's test cases side by side
+    const fs::path dir = fs::temp_directory_path() / ("tom_animation_test_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const fs::path path = dir / name;
     const std::vector<uint8_t> bytes = glb.bytes();
@@ -286,5 +294,82 @@ TEST_CASE("a skin whose joints or weights break glTF's rules is refused with the
         std::fill(glb.bin.begin() + long(at + 64), glb.bin.begin() + long(at + 64 + 48), uint8_t(0));  // the elbow's 3x3 part
         const fs::path path = write(glb, "singular.glb");
         CHECK_THROWS_WITH(tom::import_file(path.string()), Catch::Contains("singular.glb") && Catch::Contains("skin 0 inverseBindMatrices: matrix 1 is singular"));
+    }
+}
+
+namespace {
+
+// The elements of accessor `a` of `glb` (tightly packed or strided), as a multiset of byte strings.
+std::multiset<std::string> elements(const test::Glb& glb, size_t a) {
+    const nlohmann::json& accessor = glb.doc["accessors"][a];
+    const nlohmann::json& view = glb.doc["bufferViews"][accessor["bufferView"].get<size_t>()];
+    const size_t components = std::map<std::string, size_t>{{"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4}, {"MAT4", 16}}.at(accessor["type"]);
+    const size_t bytes = components * tom::component_bytes(accessor["componentType"].get<uint32_t>());
+    const size_t stride = view.value("byteStride", bytes), at = view.value("byteOffset", size_t(0)) + accessor.value("byteOffset", size_t(0));
+    std::multiset<std::string> out;
+    for (size_t i = 0; i < accessor["count"].get<size_t>(); ++i) out.insert(std::string(reinterpret_cast<const char*>(&glb.bin[at + i * stride]), bytes));
+    return out;
+}
+
+// The asset at `source` through tombuild's steps and tomextract at 100% and 25%: the output GLB.
+fs::path round_trip(const fs::path& source) {
+    tom::ImportResult r = tom::import_file(source.string());
+    std::vector<tom::TomMesh> built;
+    for (tom::Mesh& m : r.meshes) {
+        tom::clean_mesh(m);
+        built.push_back(tom::build(m));
+    }
+    const std::vector<uint8_t> bytes = tom::serialize(built, r.scene);
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size(), source.string());
+    const tom::MeshView& m = file.mesh(0);
+    const fs::path out = source.parent_path() / (source.stem().string() + "-levels.glb");
+    tom::export_glb(out.string(), {{&m, {m.vertex_count, tom::vertex_count_for_fraction(m, 0.25)}}}, file.scene());
+    return out;
+}
+
+// Khronos' validator on `path` (installed by scripts/install-deps.sh): its exit code.
+int validate(const fs::path& path) {
+    const fs::path script = fs::path(TOM_DATA_DIR).parent_path() / "scripts/validate-gltf.mjs";
+    REQUIRE(fs::exists(fs::path(TOM_DATA_DIR).parent_path() / ".tools/node_modules/gltf-validator"));
+    return std::system(("node '" + script.string() + "' '" + path.string() + "' > /dev/null").c_str());
+}
+
+} // namespace
+
+TEST_CASE("the skinned and the morphed tube come back out of tomextract whole, and valid", "[animation][round_trip]") {
+    SECTION("skinned: the skin, its joints' nodes and matrices, every level's joints and weights") {
+        const fs::path source = skinned_tube();
+        const test::Glb in(test::file_bytes(source)), out(test::file_bytes(round_trip(source)));
+        CHECK(out.doc["skins"][0]["joints"] == in.doc["skins"][0]["joints"]);
+        CHECK(elements(out, out.doc["skins"][0]["inverseBindMatrices"].get<size_t>()) ==
+              elements(in, in.doc["skins"][0]["inverseBindMatrices"].get<size_t>()));
+        for (size_t k = 0; k < 3; ++k) CHECK(out.doc["nodes"][k]["name"] == in.doc["nodes"][k]["name"]);
+        CHECK(out.doc["nodes"][2]["translation"] == in.doc["nodes"][2]["translation"]);
+        const nlohmann::json& body = out.doc["nodes"][0];
+        CHECK(body["skin"] == 0);
+        const size_t lod = body["extensions"]["MSFT_lod"]["ids"][0].get<size_t>();
+        CHECK(out.doc["nodes"][lod]["skin"] == 0);
+        const nlohmann::json& source_attributes = in.doc["meshes"][0]["primitives"][0]["attributes"];
+        for (const char* name : {"JOINTS_0", "WEIGHTS_0"}) {
+            INFO(name);
+            // the finest level holds the source's elements (in the levels' order); the coarser shares them
+            const size_t finest = out.doc["meshes"][0]["primitives"][0]["attributes"][name].get<size_t>();
+            CHECK(elements(out, finest) == elements(in, source_attributes[name].get<size_t>()));
+            CHECK(out.doc["meshes"][1]["primitives"][0]["attributes"][name] == finest);
+        }
+        CHECK(validate(round_trip(source)) == 0);
+    }
+    SECTION("morphed: both targets' deltas on every level, the default weights") {
+        const fs::path source = morphed_tube();
+        const test::Glb in(test::file_bytes(source)), out(test::file_bytes(round_trip(source)));
+        REQUIRE(out.doc["meshes"].size() == 2);
+        for (const auto& level : out.doc["meshes"]) {
+            CHECK(level["weights"] == in.doc["meshes"][0]["weights"]);
+            REQUIRE(level["primitives"][0]["targets"].size() == 2);
+            for (size_t k = 0; k < 2; ++k)
+                CHECK(elements(out, level["primitives"][0]["targets"][k]["POSITION"].get<size_t>()) ==
+                      elements(in, in.doc["meshes"][0]["primitives"][0]["targets"][k]["POSITION"].get<size_t>()));
+        }
+        CHECK(validate(round_trip(source)) == 0);
     }
 }
