@@ -1,6 +1,6 @@
 // The exporters on hostile .tom files: every file the reader accepts is written as OBJ (with its
-// .mtl), PLY and binary glTF at its finest and coarsest resolutions. An exporter may refuse a
-// file with tom::IoError, but never read out of bounds, loop by a count the file merely
+// .mtl), PLY and binary glTF (plain and compressed) at its finest and coarsest resolutions. An
+// exporter may refuse a file with tom::IoError, but never read out of bounds, loop by a count the file merely
 // declares (a material index, a texture count) or allocate what the file's size cannot justify.
 
 #include <cstdint>
@@ -46,9 +46,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         }
         std::vector<tom::GlbMesh> meshes;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) meshes.push_back({&file.mesh(i), {file.mesh(i).vertex_count, file.mesh(i).min_vertex_count}});
-        try {
-            tom::export_glb(base + ".glb", meshes, file.scene(), fuzz::folder());
-        } catch (const tom::IoError&) {
+        for (const bool compress : {false, true}) {  // plain, and quantized and compressed (tomextract -c)
+            try {
+                tom::export_glb(base + ".glb", meshes, file.scene(), fuzz::folder(), false, compress);
+            } catch (const tom::IoError&) {
+            }
         }
     } catch (const tom::FormatError&) {
     }

@@ -251,7 +251,9 @@ void place_dequantization(json& doc, const std::vector<json>& dequantize) {
     if (doc.contains("animations"))
         for (const json& animation : doc["animations"])
             for (const json& channel : animation.value("channels", json::array()))
-                if (channel.contains("target") && channel["target"].contains("node")) animated.insert(channel["target"]["node"].get<size_t>());
+                if (channel.is_object() && channel.contains("target") && channel["target"].is_object() && channel["target"].contains("node") &&
+                    channel["target"]["node"].is_number_unsigned())
+                    animated.insert(channel["target"]["node"].get<size_t>());
     json& nodes = doc["nodes"];
     const size_t count = nodes.size();
     for (size_t i = 0; i < count; ++i) {
