@@ -78,6 +78,43 @@ std::string source_folder(const std::string& tom_path, const tom::Scene& scene) 
     return "";
 }
 
+// The meshes' resolutions (file order; --mesh's alone) for `triangles` in total, shared in
+// proportion to their triangle counts: the largest common fraction whose levels, each the
+// largest resolution within its share (a mesh at its coarsest level keeps that), sum to at most
+// `triangles`. A mesh that cannot go lower takes more than its share, and the others give it up,
+// so the total exceeds `triangles` only when every mesh's coarsest level does.
+std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<uint32_t> only, uint64_t triangles) {
+    std::vector<const tom::MeshView*> meshes;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i)
+        if (!only || *only == i) meshes.push_back(&file.mesh(i));
+    auto at = [&](double fraction, std::vector<uint32_t>& out) {  // the levels at `fraction` and their triangles
+        uint64_t total = 0;
+        out.clear();
+        for (const tom::MeshView* m : meshes) {
+            const uint32_t share = uint32_t(std::floor(fraction * m->triangle_count));
+            uint32_t n = tom::vertex_count_for_triangles(*m, share);
+            while (n > m->min_vertex_count && tom::active_triangle_count(*m, n) > share) --n;
+            out.push_back(n);
+            total += tom::active_triangle_count(*m, n);
+        }
+        return total;
+    };
+    std::vector<uint32_t> levels, trial;
+    if (at(1.0, levels) <= triangles) return levels;
+    double lo = 0, hi = 1;
+    at(0.0, levels);  // every mesh at its coarsest: the answer when nothing fits
+    for (int step = 0; step < 48; ++step) {
+        const double mid = 0.5 * (lo + hi);
+        if (at(mid, trial) <= triangles) {
+            lo = mid;
+            levels = trial;
+        } else {
+            hi = mid;
+        }
+    }
+    return levels;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -89,7 +126,9 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "tomextract 0.1.0");
     app.add_option("file", path, "A .tom file")->required();
     auto* f = app.add_option("-f,--fraction", fraction, "Fraction of each mesh's triangles, in [0,1]")->check(CLI::Range(0.0, 1.0));
-    auto* t = app.add_option("-t,--triangles", triangles, "Triangle count (for several meshes: in total, shared in proportion)");
+    auto* t = app.add_option("-t,--triangles", triangles,
+                             "Triangle count (for several meshes: in total, shared in proportion; a mesh at its coarsest level keeps it and "
+                             "the others give up what it takes beyond its share)");
     auto* v = app.add_option("-n,--vertices", vertices, "Vertex count (per mesh, clamped to its range)");
     f->excludes(t)->excludes(v);
     t->excludes(v);
@@ -221,6 +260,18 @@ int main(int argc, char** argv) {
             budget_levels.push_back(share.vertex_counts);
         }
         auto budget_level = [&](uint32_t i, size_t k) { return budget_levels[k][mesh_index ? 0 : i]; };
+        // --triangles: the proportional share
+        std::vector<uint32_t> shared;
+        if (triangles) {
+            shared = proportional_levels(file, mesh_index, *triangles);
+            uint64_t total = 0;
+            for (size_t k = 0, i = 0; i < file.mesh_count(); ++i)
+                if (!mesh_index || *mesh_index == i) total += tom::active_triangle_count(file.mesh(uint32_t(i)), shared[k++]);
+            if (total > *triangles)
+                std::fprintf(stderr, "warning: %s: the meshes' coarsest levels hold %llu triangles, more than the %llu asked for; each is at its coarsest\n",
+                             path.c_str(), static_cast<unsigned long long>(total), static_cast<unsigned long long>(*triangles));
+        }
+        auto shared_level = [&](uint32_t i) { return shared[mesh_index ? 0 : i]; };
         if (is_glb()) {
             std::vector<tom::GlbMesh> glb;
             uint64_t written = 0;
@@ -246,7 +297,7 @@ int main(int argc, char** argv) {
                 } else if (fraction) {
                     g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction));
                 } else if (triangles) {
-                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, total_tris ? double(*triangles) / double(total_tris) : 1.0));
+                    g.vertex_counts.push_back(shared_level(i));
                 } else {
                     g.vertex_counts.push_back(uint32_t(std::min<uint64_t>(*vertices, m.vertex_count)));
                 }
@@ -275,7 +326,7 @@ int main(int argc, char** argv) {
             else if (fraction)
                 n = tom::vertex_count_for_fraction(m, *fraction);
             else if (triangles)
-                n = tom::vertex_count_for_fraction(m, total_tris ? double(*triangles) / double(total_tris) : 1.0);
+                n = shared_level(i);
             else
                 n = uint32_t(std::min<uint64_t>(*vertices, m.vertex_count));
             tom::ExportPart part;

@@ -128,6 +128,8 @@ assert len(multi) == 4, multi.keys()
 for k, levels in multi.items():
     assert len(levels) == 3 and all(l == levels[0] for l in levels), (k, levels)
 "
+check "--triangles on a scene with floored meshes never exceeds the count" bash -c "'$tools/tomextract' '$work/engine/2CylinderEngine.tom' --triangles 20000 -o '$work/engine-20k.obj' | grep -q ' 20000 triangles\\| 1999[0-9] triangles'"
+check "and below every floor writes the floors with a warning" bash -c "'$tools/tomextract' '$work/engine/2CylinderEngine.tom' --triangles 5000 -o '$work/engine-5k.obj' 2>'$work/5k.err' && grep -q 'more than the 5000 asked for' '$work/5k.err'"
 check "--scene-budget shares a scene's triangles, one level per budget" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --scene-budget 40000,30000 -o "$work/engine-budget.glb"
 check "drawing at most each budget, certified near the optimum" /usr/bin/python3 -c "
 import re
