@@ -203,10 +203,12 @@ for t in $(cd "$work/gltf2" && find . -name '*.tom'); do
 done
 check "the glTF2 samples keep materials, mesh nodes and image bytes through the round trip" /usr/bin/python3 "$src/tests/cli/gltf_round_trip.py" "$work/gltf2"
 mv "$work/gltf2/issue_3269/texcoord_crash.glb" "$work/texcoord_crash.glb"
-# ClearCoatTest.gltf has one error as shipped (a clear-coat normal map on a primitive without tangents): the output keeps it, and no other
-mv "$work/gltf2/ClearCoat-glTF/ClearCoatTest.glb" "$work/ClearCoatTest.glb"
-check "and validate with no errors" node "$src/scripts/validate-gltf.mjs" $(find "$work/gltf2" -name '*.glb')
-check "the clear-coat sample's only error is the source's own" bash -c "node '$src/scripts/validate-gltf.mjs' '$work/ClearCoatTest.glb' | grep -q '1 errors' && node '$src/scripts/validate-gltf.mjs' '$work/ClearCoatTest.glb' | grep -q 'MESH_PRIMITIVE_NO_TANGENT_SPACE: .*(/meshes/13/primitives/0/material)'" 
+# ClearCoatTest.gltf has one error as shipped (a clear-coat normal map on a primitive without
+# tangents): the output keeps it, and no other (validated where it was written: its image URIs
+# are relative to that folder)
+clearcoat="$work/gltf2/ClearCoat-glTF/ClearCoatTest.glb"
+check "and validate with no errors" node "$src/scripts/validate-gltf.mjs" $(find "$work/gltf2" -name '*.glb' ! -path "$clearcoat")
+check "the clear-coat sample's only error is the source's own" bash -c "node '$src/scripts/validate-gltf.mjs' '$clearcoat' | grep -q '1 errors' && node '$src/scripts/validate-gltf.mjs' '$clearcoat' | grep -q 'MESH_PRIMITIVE_NO_TANGENT_SPACE: .*(/meshes/13/primitives/0/material)'" 
 # the same samples compressed (-c): valid, and read back with every triangle
 for t in $(cd "$work/gltf2" && find . -name '*.tom'); do
   mkdir -p "$work/gltf2c/$(dirname "$t")"
