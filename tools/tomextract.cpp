@@ -92,8 +92,7 @@ std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<u
         out.clear();
         for (const tom::MeshView* m : meshes) {
             const uint32_t share = uint32_t(std::floor(fraction * m->triangle_count));
-            uint32_t n = tom::vertex_count_for_triangles(*m, share);
-            while (n > m->min_vertex_count && tom::active_triangle_count(*m, n) > share) --n;
+            const uint32_t n = tom::vertex_count_within_triangles(*m, share);
             out.push_back(n);
             total += tom::active_triangle_count(*m, n);
         }

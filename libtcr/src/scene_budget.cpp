@@ -77,10 +77,7 @@ void check(const std::vector<BudgetMesh>& meshes) {
 
 // The largest resolution of `m` with at most `triangles` triangles (its coarsest at least).
 uint32_t resolution_within(const tom::MeshView& m, double triangles) {
-    const uint32_t t = uint32_t(std::min<double>(m.triangle_count, std::floor(triangles + 1e-9)));
-    uint32_t n = tom::vertex_count_for_triangles(m, t);
-    while (n > m.min_vertex_count && tom::active_triangle_count(m, n) > t) --n;
-    return n;
+    return tom::vertex_count_within_triangles(m, uint32_t(std::min<double>(m.triangle_count, std::floor(triangles + 1e-9))));
 }
 
 // The share's state while it is polished: per mesh its resolution, triangles and model.

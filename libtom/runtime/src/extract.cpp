@@ -363,6 +363,12 @@ uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) 
     return m.splits_pair(lo) ? lo + 1 : lo;  // a resolution that keeps a seam pair together
 }
 
+uint32_t vertex_count_within_triangles(const MeshView& m, uint32_t triangle_count) noexcept {
+    uint32_t n = vertex_count_for_triangles(m, triangle_count);
+    while (n > m.min_vertex_count && active_triangle_count(m, n) > triangle_count) --n;
+    return n;
+}
+
 uint32_t vertex_count_for_fraction(const MeshView& m, double fraction) noexcept {
     if (!(fraction > 0.0)) return m.min_vertex_count;
     if (fraction >= 1.0) return m.vertex_count;

@@ -25,6 +25,10 @@ uint32_t active_triangle_count(const MeshView& mesh, uint32_t vertex_count) noex
 /// (the full vertex count if `triangle_count` exceeds the mesh's).
 uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_count) noexcept;
 
+/// Largest resolution n whose active triangle count is <= `triangle_count` (the coarsest,
+/// min_vertex_count, when even that has more): for budgets that must not be exceeded.
+uint32_t vertex_count_within_triangles(const MeshView& mesh, uint32_t triangle_count) noexcept;
+
 /// Resolution for a fraction in [0, 1] of the mesh's triangles (see vertex_count_for_triangles).
 uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction) noexcept;
 
