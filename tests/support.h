@@ -51,6 +51,13 @@ struct Topology {
     int nonmanifold_edges = 0;  ///< edges used more than twice
     int euler() const { return vertices - edges + faces; }
 };
+/// Welding by position joins vertices within 1e-6 of the bounding box's diagonal (the builder's
+/// BuildParams::copy_tolerance: exporters' copies differ in the last bits).
 Topology topology(const float* positions, const uint32_t* indices, size_t triangle_count, bool weld_by_position);
+
+/// The positions with every vertex moved onto its point: vertices within 1e-6 of the diagonal of
+/// each other (and chains of such) take the lexicographically smallest position among them, so
+/// that the same points get the same position whatever the vertex order.
+std::vector<float> snap_copies(const float* positions, size_t vertex_count);
 
 } // namespace test

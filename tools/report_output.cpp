@@ -57,6 +57,7 @@ nlohmann::ordered_json report_json(const tom::MeshReport& r, const ReportContext
     j["build_seconds"] = ctx.build_seconds;
     j["import_seconds"] = ctx.import_seconds;
     j["report_seconds"] = ctx.report_seconds;
+    j["welded_vertices"] = ctx.welded_vertices;
     const double fv = double(r.memory.face_vertex_bytes);
     j["memory"] = {{"face_vertex_bytes", r.memory.face_vertex_bytes},
                    {"tom_bytes", r.memory.tom_bytes},

@@ -15,6 +15,7 @@ struct ReportContext {
     double import_seconds = 0;   ///< reading and cleaning the file (all its meshes)
     double build_seconds = 0;    ///< tom::build for this mesh
     double report_seconds = 0;   ///< make_report for this mesh
+    uint32_t welded_vertices = 0; ///< identical vertices clean_mesh merged (tom::CleanStats)
     tom::ReportParams params;
 };
 

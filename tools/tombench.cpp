@@ -116,7 +116,7 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
 } // namespace
 
 int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const tom::BuildParams& params,
-        const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
+        const tom::CleanOptions& clean, const std::string& meshopt_out, const std::vector<double>& meshopt_levels);
 
 // The generated bumpy sphere of about `triangles` triangles (2 s (s - 1) for s rings and segments).
 tom::Mesh generated_sphere(uint32_t triangles) {
@@ -186,7 +186,7 @@ int main(int argc, char** argv) {
     try {
         tom::BuildParams params = build.params();
         if (params.threads == 0) params.threads = std::max(1u, std::thread::hardware_concurrency());
-        return run(inputs, generated, json, repeats, params, meshopt_out, meshopt_levels);
+        return run(inputs, generated, json, repeats, params, build.clean(), meshopt_out, meshopt_levels);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tools::exit_failed;
@@ -194,14 +194,14 @@ int main(int argc, char** argv) {
 }
 
 int run(const std::vector<std::string>& inputs, uint32_t generated, bool json, int repeats, const tom::BuildParams& params,
-        const std::string& meshopt_out, const std::vector<double>& meshopt_levels) {
+        const tom::CleanOptions& clean, const std::string& meshopt_out, const std::vector<double>& meshopt_levels) {
     std::vector<tom::Mesh> meshes;
     int status = tools::exit_ok;
     for (const std::string& in : inputs) {
         try {
             tom::ImportResult r = tom::import_file(in);
             for (tom::Mesh& m : r.meshes) {
-                tom::clean_mesh(m);
+                tom::clean_mesh(m, clean);
                 if (!m.indices.empty()) meshes.push_back(std::move(m));
             }
         } catch (const std::exception& e) {

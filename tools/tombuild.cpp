@@ -67,6 +67,7 @@ const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom:
 nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams& params) {
     nlohmann::ordered_json j;
     j["build"] = tools::build_params_json(params);
+    j["weld"] = !opt.build.no_weld;
     j["index_size"] = opt.index_size;
     j["error_curve"] = !opt.no_error_curve;
     if (!opt.no_error_curve) {
@@ -94,6 +95,7 @@ struct Outcome {
 // What a conversion needs besides the job: the settings, and what the provenance records.
 struct Settings {
     tom::BuildParams params;
+    tom::CleanOptions clean;
     tom::WriteOptions write;
     tom::ReportParams report;
     nlohmann::ordered_json output_options, report_options;
@@ -170,7 +172,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             throw tom::ImportError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
         std::vector<tom::CleanStats> cleans;
         for (tom::Mesh& mesh : imported.meshes) {
-            cleans.push_back(tom::clean_mesh(mesh));
+            cleans.push_back(tom::clean_mesh(mesh, settings.clean));
             if (mesh.indices.empty()) throw tom::ImportError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
         }
         const double import_seconds = seconds_since(start);
@@ -202,6 +204,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 ctx.file = job.input;
                 ctx.import_seconds = import_seconds;
                 ctx.build_seconds = build_seconds;
+                ctx.welded_vertices = clean.welded_vertices;
                 ctx.params = rparams;
                 const auto report_start = std::chrono::steady_clock::now();
                 const tom::MeshReport r = tom::make_report(mesh, t, rparams);
@@ -221,10 +224,12 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 char line[512];
                 std::snprintf(line, sizeof line,
                               "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
-                              "%u border vertices, %u seam vertices, %u passes%s%s\n",
+                              "%u border vertices, %u seam vertices, %u passes%s%s%s\n",
                               t.name.c_str(), t.parts.empty() ? "" : (" (" + std::to_string(t.parts.size()) + " parts)").c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
                               tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices,
-                              stats.border_vertices, stats.seam_vertices, stats.passes, clean.degenerate_triangles ? (", " + std::to_string(clean.degenerate_triangles) + " degenerate triangles dropped").c_str() : "",
+                              stats.border_vertices, stats.seam_vertices, stats.passes,
+                              clean.welded_vertices ? (", " + std::to_string(clean.welded_vertices) + " identical vertices welded").c_str() : "",
+                              clean.degenerate_triangles ? (", " + std::to_string(clean.degenerate_triangles) + " degenerate triangles dropped").c_str() : "",
                               clean.unreferenced_vertices ? (", " + std::to_string(clean.unreferenced_vertices) + " unused vertices dropped").c_str() : "");
                 details += line;
             }
@@ -539,6 +544,7 @@ int main(int argc, char** argv) {
         }
         Settings settings;
         settings.params = opt.build.params();
+        settings.clean = opt.build.clean();
         settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
         settings.output_options = output_options(opt, settings.params);
         settings.report_options = report_options(opt);

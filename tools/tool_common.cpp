@@ -43,9 +43,18 @@ void BuildOptions::add_to(CLI::App& app, const std::string& group) {
                    "Largest rotation, in degrees, a substitution may give a surviving triangle's normal (90: flips only; default 60)")
         ->check(CLI::Range(1.0f, 90.0f))
         ->group(group);
+    app.add_option("--copy-tolerance", numbers.copy_tolerance,
+                   "Vertices closer than this share of the bounding box's diagonal are copies of one point (seams, hard edges, pole "
+                   "fans); copies of a point move together, so the mesh never cracks (default 1e-6; 0: exact copies only)")
+        ->check(CLI::Range(0.0f, 0.01f))
+        ->group(group);
     app.add_flag("--lock-borders", numbers.lock_borders,
                  "Never move vertices on open borders (of the mesh welded by position), so tiles and modular pieces keep meeting their "
                  "neighbours at every resolution (meshoptimizer's LockBorder, gltfpack -slb)")
+        ->group(group);
+    app.add_flag("--no-weld", no_weld,
+                 "Keep the file's vertices as they are; by default identical vertices (same position and the same value in every "
+                 "stream, joints, weights and morph deltas included) are merged first, so unindexed files simplify")
         ->group(group);
     app.add_option("--build-threads", numbers.threads,
                    "Threads that evaluate each mesh's substitutions (default 0: one per core, shared among -j jobs); "
@@ -69,7 +78,8 @@ nlohmann::ordered_json build_params_json(const tom::BuildParams& params) {
             {"attribute_weight", params.attribute_weight},
             {"animation_weight", params.animation_weight},
             {"max_rotation_degrees", params.max_rotation_degrees},
-            {"lock_borders", params.lock_borders}};
+            {"lock_borders", params.lock_borders},
+            {"copy_tolerance", params.copy_tolerance}};
 }
 
 int parse(CLI::App& app, int argc, char** argv) {

@@ -25,9 +25,11 @@ int parse(CLI::App& app, int argc, char** argv);
 struct BuildOptions {
     std::string predicate = "quadric", strategy = "passes";
     tom::BuildParams numbers;  // the numeric settings, bound to their options directly
+    bool no_weld = false;      // --no-weld: the file's vertices as they are (tom::CleanOptions)
 
     void add_to(CLI::App& app, const std::string& group);
     tom::BuildParams params() const;
+    tom::CleanOptions clean() const { return {!no_weld}; }
 };
 
 /// The builder settings as JSON (reports and benchmark output): predicate, strategy,

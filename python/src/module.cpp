@@ -189,12 +189,12 @@ tom::WriteOptions write_options(const std::string& index_size) {
     return o;
 }
 
-BuiltMesh build_mesh(const tom::Mesh& source, const tom::BuildParams& params) {
+BuiltMesh build_mesh(const tom::Mesh& source, const tom::BuildParams& params, const tom::CleanOptions& clean) {
     BuiltMesh out;
     {
         py::gil_scoped_release release;
         tom::Mesh cleaned = source;
-        tom::clean_mesh(cleaned);
+        tom::clean_mesh(cleaned, clean);
         out.built = std::make_shared<tom::TomMesh>(tom::build(cleaned, params));
     }
     out.view = out.built->view();
@@ -416,7 +416,7 @@ PYBIND11_MODULE(_tom, m) {
 
     m.def("build", [](py::object positions, py::object triangles, py::object normals, py::object uv, const std::string& name, const std::string& predicate,
                       const std::string& strategy, float pair_threshold, float attribute_weight, float max_rotation_degrees, unsigned threads, bool foresight,
-                      bool lock_borders) {
+                      bool lock_borders, float animation_weight, bool weld) {
         const std::shared_ptr<tom::Mesh> source = py::isinstance<SourceMesh>(positions) ? positions.cast<SourceMesh>().mesh : make_mesh(positions, triangles, normals, uv, name);
         tom::BuildParams p;
         p.predicate = parse_predicate(predicate);
@@ -427,10 +427,12 @@ PYBIND11_MODULE(_tom, m) {
         p.threads = threads;
         p.foresight = foresight;
         p.lock_borders = lock_borders;
-        return build_mesh(*source, p);
+        p.animation_weight = animation_weight;
+        return build_mesh(*source, p, tom::CleanOptions{weld});
     }, py::arg("positions"), py::arg("triangles") = py::none(), py::arg("normals") = py::none(), py::arg("uv") = py::none(), py::kw_only(), py::arg("name") = "mesh",
        py::arg("predicate") = "quadric", py::arg("strategy") = "passes", py::arg("pair_threshold") = 0.0f, py::arg("attribute_weight") = 1.0f,
        py::arg("max_rotation_degrees") = 60.0f, py::arg("threads") = 0u, py::arg("foresight") = true, py::arg("lock_borders") = false,
+       py::arg("animation_weight") = 1.0f, py::arg("weld") = true,
        "Simplifies a mesh into TOM order: positions (n, 3) and triangles (t, 3), or a tom.Mesh as the first argument\n"
        "(which keeps its parts: an OBJ's usemtl groups, a glTF mesh's primitives).\n"
        "The keywords are tombuild's options (docs/TOOLS.md); the result is the same for any thread count.");

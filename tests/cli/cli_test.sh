@@ -24,11 +24,14 @@ cp "$data/meshes/fandisk.off" "$work/hostile/a.off"
 cp "$data/meshes/cow.off" "$work/hostile/c.off"
 cp "$src"/tests/data/hostile/* "$work/hostile/"
 check "a batch with the fuzzing run's files converts the good ones and exits 1" expect_exit 1 "$tools/tombuild" "$work/hostile" -o "$work/hostile-out" --report-json "$work/hostile-reports"
-check "the good inputs of that batch are converted" test -s "$work/hostile-out/a.tom" -a -s "$work/hostile-out/c.tom" -a -s "$work/hostile-out/E-coincident-neighbours.tom" -a -s "$work/hostile-out/M-obj-comment-inside-face.tom"
+check "the good inputs of that batch are converted" test -s "$work/hostile-out/a.tom" -a -s "$work/hostile-out/c.tom" -a -s "$work/hostile-out/M-obj-comment-inside-face.tom"
 check "every converted file of that batch is valid" bash -c "for f in '$work'/hostile-out/*.tom; do '$tools/tominfo' \"\$f\" >/dev/null || exit 1; done"
-check "each hostile input is named with its reason" bash -c "n=\$(grep -c '^error: .*hostile/[A-Z][0-9]*-' '$work/stderr'); test \"\$n\" -eq 15"
-check "the batch's summary lists the converted meshes" test "$(wc -l < "$work/hostile-reports/summary.csv")" -eq 7
-check "tombuild -v on the coincident-copies OBJ ends" timeout 20 "$tools/tombuild" "$work/hostile/E-coincident-neighbours.obj" -o "$work/hostile-v" -v
+check "each hostile input is named with its reason" bash -c "n=\$(grep -c '^error: .*hostile/[A-Z][0-9]*-' '$work/stderr'); test \"\$n\" -eq 16"
+check "the batch's summary lists the converted meshes" test "$(wc -l < "$work/hostile-reports/summary.csv")" -eq 6
+# its two zero-area triangles share identical corners: welded, nothing is left (an error naming
+# the mesh); with --no-weld the copies are kept and it converts
+check "the coincident-copies OBJ welds to nothing: an error naming its mesh" bash -c "'$tools/tombuild' '$work/hostile/E-coincident-neighbours.obj' -o '$work/hostile-w' 2>&1 | grep -q \"mesh 'E-coincident-neighbours' has no non-degenerate triangle\""
+check "tombuild -v --no-weld on the coincident-copies OBJ ends" timeout 20 "$tools/tombuild" "$work/hostile/E-coincident-neighbours.obj" -o "$work/hostile-v" -v --no-weld
 
 # a batch survives any one input: each converts in a worker process with a time and a memory
 # limit. One batch, run one input at a time, whose first worker crashes (SIGSEGV sent to it
@@ -216,7 +219,8 @@ for t in $(cd "$work/gltf2" && find . -name '*.tom'); do
 done
 rm -f "$work/gltf2c/issue_3269/texcoord_crash.glb" "$work/gltf2c/ClearCoat-glTF/ClearCoatTest.glb"
 check "-c output of the glTF2 samples validates with no errors" node "$src/scripts/validate-gltf.mjs" $(find "$work/gltf2c" -name '*.glb')
-"$tools/tombuild" "$work/gltf2c" -o "$work/gltf2c-back" -q --no-error-curve 2>/dev/null
+# (--no-weld: quantization makes a few vertices identical, whose zero-area triangles a weld drops)
+"$tools/tombuild" "$work/gltf2c" -o "$work/gltf2c-back" -q --no-error-curve --no-weld 2>/dev/null
 check "and tombuild reads every one back with the triangles it was written with" /usr/bin/python3 -c "
 import json, os
 def triangles(manifest, root):

@@ -216,6 +216,20 @@ def test_an_obj_with_usemtl_builds_with_its_parts_and_locked_borders_stay():
     assert locked.min_vertex_count >= border > free.min_vertex_count
 
 
+def test_an_unindexed_mesh_is_welded_unless_asked_and_simplifies_either_way():
+    """Every triangle its own three vertices: welded on import by default, kept with weld=False."""
+    positions, triangles = grid(20)
+    loose = positions[triangles.reshape(-1)]
+    corners = np.arange(len(loose), dtype=np.uint32).reshape(-1, 3)
+    welded = tom.build(loose, corners, threads=1)
+    kept = tom.build(loose, corners, threads=1, weld=False)
+    assert welded.vertex_count == len(positions)
+    assert kept.vertex_count == len(loose)
+    for built in (welded, kept):
+        coarse, _ = built.extract(fraction=0.0)
+        assert len(coarse) <= len(triangles) // 10
+
+
 def test_provenance_names_the_input_tombuild_read(bunny):
     """tombuild's PROV: the tool, the input's size and XXH3-128 digest, the options."""
     prov = json.loads(tom.open(str(bunny)).provenance)

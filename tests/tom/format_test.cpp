@@ -350,8 +350,8 @@ TEST_CASE("rules 9 to 15: structure behind valid checksums", "[format][corrupt]"
     CHECK(rule_of(b) == 15);
 }
 
-TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[format][corrupt][seams]") {
-    // a UV sphere cut along a meridian: its seam copies collapse in pairs
+TEST_CASE("rule 16: groups of copies join removed vertices, a run of bits one group", "[format][corrupt][seams]") {
+    // a UV sphere cut along a meridian: its seam copies collapse in pairs, its poles' in fans
     const tom::Mesh seam_sphere = test::generated_meshes()[2].mesh;
     REQUIRE(test::generated_meshes()[2].name.find("seam") != std::string::npos);
     tom::BuildStats stats;
@@ -363,10 +363,18 @@ TEST_CASE("rule 16: seam pairs join removed vertices and never overlap", "[forma
     REQUIRE(f.mesh(0).pair_bits != nullptr);
     const Section pairs = find(sections_of(good), "PAIR");  // a copy: the list is a temporary
     std::vector<uint8_t> b = good;
-    for (size_t k = 0; k < pairs.bytes; ++k) b[pairs.offset + k] = 0xFF;  // every bit: overlapping pairs
+    for (size_t k = 0; k < pairs.bytes; ++k) b[pairs.offset + k] = 0xFF;  // every bit: survivors among them
     fix_checksums(b);
     CHECK(rule_of(b) == 16);
-    CHECK(message_of(b).find("must not overlap") != std::string::npos);
+    CHECK(message_of(b).find("a group must join removed vertices") != std::string::npos);
+    // the removed vertices as one run of bits: one group, valid (extraction then keeps it whole)
+    b = good;
+    const tom::MeshView& m = f.mesh(0);
+    for (uint32_t i = m.min_vertex_count; i + 1 < m.vertex_count; ++i) b[pairs.offset + i / 8] |= uint8_t(1u << (i % 8));
+    fix_checksums(b);
+    const tom::File one_group = tom::File::from_bytes(b.data(), b.size());
+    CHECK(one_group.mesh(0).whole_groups_below(m.vertex_count - 1) == m.min_vertex_count);
+    CHECK(one_group.mesh(0).whole_groups_above(m.min_vertex_count + 1) == m.vertex_count);
     b = good;
     b[pairs.offset] |= 1;  // vertex 0 is a survivor
     fix_checksums(b);

@@ -69,7 +69,7 @@ tom::Mesh two_material_grid() {
     return joined;
 }
 
-// Open edges of triangles welded by exact position, as position pairs.
+// Open edges of triangles welded by exact position (of snapped copies), as position pairs.
 std::set<std::pair<std::array<float, 3>, std::array<float, 3>>> open_edges(const float* positions, const uint32_t* indices, size_t triangles) {
     std::map<std::pair<std::array<float, 3>, std::array<float, 3>>, int> count;
     auto at = [&](uint32_t v) { return std::array<float, 3>{positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]}; };
@@ -98,7 +98,10 @@ LevelReport check_parts(const tom::Mesh& input, const tom::TomMesh& built) {
     const tom::MeshView v = built.view();
     REQUIRE(tom::part_count(v) == std::max<size_t>(1, input.parts.size()));
     LevelReport report;
-    const auto input_edges = open_edges(input.positions.data(), input.indices.data(), input.triangle_count());
+    // welded by position within the builder's copy tolerance (the same points in both orders)
+    const std::vector<float> input_points = test::snap_copies(input.positions.data(), input.vertex_count());
+    const std::vector<float> level_points = test::snap_copies(v.positions, v.vertex_count);
+    const auto input_edges = open_edges(input_points.data(), input.indices.data(), input.triangle_count());
     report.input_open = input_edges.size();
     std::set<std::array<float, 3>> boundary;  // the welded input's open boundary: where a level may have open edges
     for (const auto& [a, b] : input_edges) boundary.insert(a), boundary.insert(b);
@@ -119,7 +122,7 @@ LevelReport check_parts(const tom::Mesh& input, const tom::TomMesh& built) {
             CHECK(draws[p].material == tom::part_at(v, p).material);
             next += draws[p].index_count;
         }
-        const auto level_edges = open_edges(v.positions, whole.data(), a.triangle_count);
+        const auto level_edges = open_edges(level_points.data(), whole.data(), a.triangle_count);
         const size_t open = level_edges.size();
         CHECK(open <= report.input_open);
         // no crack: every open edge of the level runs between points of the input's own boundary

@@ -40,12 +40,9 @@ namespace {
 
 using detail::thread_count;
 
-// Each vertex's kind from the edges of its fan: interior, border (one open edge out and one in,
-// whose ends become its loop neighbours) or locked.
-void classify_by_edges(Builder& b, detail::Team& team) {
-    const uint32_t n = b.n;
-    const Topology& topo = b.topo;
-    VertexClasses& cl = b.classes;
+// Each vertex's kind from the edges of its fan in `topo` (n vertices): interior, border (one
+// open edge out and one in, whose ends become its loop neighbours) or locked.
+void classify_by_edges(const Topology& topo, uint32_t n, VertexClasses& cl, detail::Team& team) {
     cl.kind.assign(n, kInterior);
     cl.border_next.assign(n, kNone);
     cl.border_prev.assign(n, kNone);
@@ -106,94 +103,153 @@ void classify_by_edges(Builder& b, detail::Team& team) {
     });
 }
 
-// Coincident vertices (split by attributes, or duplicated in the input) must not drift apart.
-// An open-addressing table of exact position bits groups them into position classes (wedge,
-// next_copy): a group of two border vertices whose border neighbours are coincident too is a seam
-// (the two collapse together, when `allow_seams`); any other group is locked.
-void group_coincident(Builder& b, bool allow_seams) {
+// Union-find over vertices whose root is a set's lowest vertex: the first copy names a class.
+struct FirstCopy {
+    std::vector<uint32_t> parent;
+    explicit FirstCopy(uint32_t n) : parent(n) {
+        for (uint32_t v = 0; v < n; ++v) parent[v] = v;
+    }
+    uint32_t find(uint32_t v) {
+        while (parent[v] != v) v = parent[v] = parent[parent[v]];
+        return v;
+    }
+    void join(uint32_t a, uint32_t c) {
+        a = find(a), c = find(c);
+        if (a < c) parent[c] = a;
+        else parent[a] = c;
+    }
+};
+
+// Coincident vertices (split by attributes, duplicated or never indexed in the input) are
+// copies of one point: vertices within `tolerance` of each other (object units; 0: the same
+// position bits) join one position class. Candidates come from a hash of cells twice the
+// tolerance wide: a vertex looks in its own cell and, along each axis, the neighbour on its
+// nearer side (8 cells). Returns false when every class has one vertex.
+bool find_position_classes(Builder& b, float tolerance) {
     const uint32_t n = b.n;
     VertexClasses& cl = b.classes;
-    cl.partner.assign(n, kNone);
-    {
-        size_t cap = 16;
-        while (cap < size_t(n) * 2) cap *= 2;
-        std::vector<uint32_t> table(cap, kNone), first(n, kNone), count(n, 0), second(n, kNone);
-        auto same = [&](uint32_t a, uint32_t c) { return std::memcmp(&b.pos[a], &b.pos[c], sizeof(Vec3)) == 0; };
-        for (uint32_t v = 0; v < n; ++v) {
-            uint32_t bits[3];
-            std::memcpy(bits, &b.pos[v], 12);
-            uint64_t h = (uint64_t(bits[0]) * 73856093u) ^ (uint64_t(bits[1]) * 19349663u) ^ (uint64_t(bits[2]) * 83492791u);
-            h ^= h >> 29;
-            h *= 0xbf58476d1ce4e5b9ULL;
-            h ^= h >> 32;
-            for (size_t i = size_t(h) & (cap - 1);; i = (i + 1) & (cap - 1)) {
-                if (table[i] == kNone) {
-                    table[i] = v;
-                    first[v] = v;
-                    count[v] = 1;
-                    break;
-                }
-                if (same(table[i], v)) {
-                    first[v] = table[i];
-                    if (++count[table[i]] == 2) second[table[i]] = v;
-                    break;
+    const double cell = tolerance > 0 ? 2.0 * double(tolerance) : 1.0;
+    auto coord = [&](float x) {
+        constexpr double kLimit = double(int64_t(1) << 40);
+        const double c = std::floor(double(x) / cell);
+        return int64_t(c > -kLimit ? (c < kLimit ? c : kLimit) : -kLimit);
+    };
+    auto cell_hash = [](int64_t x, int64_t y, int64_t z) {
+        uint64_t h = (uint64_t(x) * 73856093ULL) ^ (uint64_t(y) * 19349663ULL) ^ (uint64_t(z) * 83492791ULL);
+        h ^= h >> 29;
+        h *= 0xbf58476d1ce4e5b9ULL;
+        return h ^ (h >> 32);
+    };
+    size_t cap = 16;
+    while (cap < size_t(n) * 2) cap *= 2;
+    struct Slot {
+        int64_t x, y, z;
+        uint32_t head;  // the cell's last vertex; earlier ones follow next_in_cell
+    };
+    std::vector<Slot> table(cap, Slot{0, 0, 0, kNone});
+    std::vector<uint32_t> next_in_cell(n, kNone);
+    auto slot_of = [&](int64_t x, int64_t y, int64_t z) -> Slot& {
+        for (size_t i = size_t(cell_hash(x, y, z)) & (cap - 1);; i = (i + 1) & (cap - 1))
+            if (table[i].head == kNone || (table[i].x == x && table[i].y == y && table[i].z == z)) return table[i];
+    };
+    FirstCopy classes(n);
+    const double t2 = double(tolerance) * double(tolerance);
+    bool any = false;
+    for (uint32_t v = 0; v < n; ++v) {
+        const Vec3 p = b.pos[v];
+        const int64_t c[3] = {coord(p.x), coord(p.y), coord(p.z)};
+        int64_t side[3];
+        for (int k = 0; k < 3; ++k) {
+            const double f = double((&p.x)[k]) / cell - double(c[k]);
+            side[k] = f < 0.5 ? -1 : 1;
+        }
+        for (int corner = 0; corner < 8; ++corner) {
+            const int64_t x = c[0] + (corner & 1 ? side[0] : 0), y = c[1] + (corner & 2 ? side[1] : 0), z = c[2] + (corner & 4 ? side[2] : 0);
+            const Slot& slot = slot_of(x, y, z);
+            for (uint32_t w = slot.head; w != kNone; w = next_in_cell[w]) {
+                const Vec3 d = sub(b.pos[w], p);
+                const double d2 = double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
+                if (d2 <= t2) {
+                    classes.join(v, w);
+                    any = true;
                 }
             }
         }
-        // position classes: the first copy names the class; copies are linked in a circle
-        cl.wedge.assign(first.begin(), first.end());
-        cl.next_copy.resize(n);
-        {
-            std::vector<uint32_t> last(n, kNone);
-            for (uint32_t v = 0; v < n; ++v) cl.next_copy[v] = v;
-            for (uint32_t v = 0; v < n; ++v) {
-                const uint32_t r = first[v];
-                if (v == r) {
-                    last[r] = v;
-                    continue;
-                }
-                cl.next_copy[v] = r;          // v closes the circle
-                cl.next_copy[last[r]] = v;    // after the class's previous copy
-                last[r] = v;
-            }
+        Slot& own = slot_of(c[0], c[1], c[2]);
+        own.x = c[0], own.y = c[1], own.z = c[2];
+        next_in_cell[v] = own.head;
+        own.head = v;
+    }
+    // position classes: the first copy names the class; copies are linked in a circle
+    cl.wedge.resize(n);
+    cl.next_copy.resize(n);
+    std::vector<uint32_t> last(n, kNone);
+    for (uint32_t v = 0; v < n; ++v) {
+        const uint32_t r = cl.wedge[v] = classes.find(v);
+        cl.next_copy[v] = r;  // v closes the circle
+        if (v != r) cl.next_copy[last[r]] = v;  // after the class's previous copy
+        last[r] = v;
+    }
+    return any;
+}
+
+// Kinds and border loops of the mesh welded by position: each class one point. A point with
+// several copies is a group (a border group on an open border) when it is manifold there (its
+// copies' fans make one disk or half-disk) and no triangle holds two of its copies; otherwise
+// its copies are locked. With `allow_groups` false
+// (the heap strategy, pair contraction) every point with copies is locked.
+void classify_welded(Builder& b, bool allow_groups, detail::Team& team) {
+    const uint32_t n = b.n;
+    VertexClasses& cl = b.classes;
+    std::vector<uint32_t> welded;
+    welded.reserve(b.topo.idx.size());
+    std::vector<uint8_t> folded(n, 0);  // a triangle holds two copies of the point
+    for (size_t t = 0; t < b.topo.idx.size(); t += 3) {
+        const uint32_t a = cl.wedge[b.topo.idx[t]], c = cl.wedge[b.topo.idx[t + 1]], d = cl.wedge[b.topo.idx[t + 2]];
+        if (a == c || c == d || a == d) {
+            folded[a] = folded[c] = folded[d] = 1;
+            continue;
         }
-        auto pos_eq = [&](uint32_t a, uint32_t c) { return a != kNone && c != kNone && same(a, c); };
-        for (uint32_t v = 0; v < n; ++v) {
-            const uint32_t r = first[v];
-            if (count[r] < 2) continue;
-            const uint32_t a = r, c = second[r];
-            // two copies joined by an edge (a zero-length border edge, or an interior one between
-            // two triangles with two coincident corners) would each be the other's target: they
-            // are locked, not a seam
-            bool adjacent = false;
-            b.topo.each(a, [&](uint32_t t) { adjacent |= b.topo.contains(t, c); });
-            const bool seam = count[r] == 2 && cl.kind[a] == kBorder && cl.kind[c] == kBorder && !adjacent &&
-                              ((pos_eq(cl.border_next[a], cl.border_prev[c]) && pos_eq(cl.border_prev[a], cl.border_next[c])) ||
-                               (pos_eq(cl.border_next[a], cl.border_next[c]) && pos_eq(cl.border_prev[a], cl.border_prev[c])));
-            if (seam && allow_seams) {
-                cl.kind[v] = kSeam;
-                cl.partner[v] = v == a ? c : a;
-            } else {
-                cl.kind[v] = kLocked;
-            }
+        welded.insert(welded.end(), {a, c, d});
+    }
+    Topology points;
+    points.build(n, std::move(welded));
+    VertexClasses by_point;
+    classify_by_edges(points, n, by_point, team);
+    cl.border_next.swap(by_point.border_next);
+    cl.border_prev.swap(by_point.border_prev);
+    for (uint32_t v = 0; v < n; ++v) {
+        const uint32_t r = cl.wedge[v];
+        if (cl.next_copy[r] == r) {
+            cl.kind[v] = folded[r] ? kLocked : by_point.kind[r];
+            continue;
         }
+        uint32_t copies = 0;
+        for (uint32_t x = r; copies <= GroupMove::kMaxCopies; x = cl.next_copy[x]) {
+            ++copies;
+            if (cl.next_copy[x] == r) break;
+        }
+        const uint8_t point = by_point.kind[r];
+        const bool group = allow_groups && !folded[r] && (point == kInterior || point == kBorder) && copies <= GroupMove::kMaxCopies;
+        cl.kind[v] = !group ? kLocked : v != r ? kCopy : point == kBorder ? kBorderGroup : kGroup;
     }
 }
 
-// The vertex classes: kinds by edges, then coincident copies grouped. A border vertex whose loop
-// neighbour is locked keeps its pointers; pointers of locked vertices are never followed from a
-// locked vertex itself.
-void classify(Builder& b, BuildStats& stats, bool allow_seams, bool lock_borders, detail::Team& team) {
-    classify_by_edges(b, team);
-    group_coincident(b, allow_seams);
-    // what is still a border after the copies are grouped is open in the welded mesh
-    if (lock_borders)
-        for (uint8_t& kind : b.classes.kind)
-            if (kind == kBorder) kind = kLocked;
+// The vertex classes: kinds by edges and, where some vertices are copies of one point, by the
+// edges of the mesh welded by position. A border vertex whose loop neighbour is locked keeps its
+// pointers; pointers of locked vertices are never followed from a locked vertex itself.
+void classify(Builder& b, BuildStats& stats, float tolerance, bool allow_groups, bool lock_borders, detail::Team& team) {
+    classify_by_edges(b.topo, b.n, b.classes, team);
+    if (find_position_classes(b, tolerance)) classify_welded(b, allow_groups, team);
+    if (lock_borders) {
+        std::vector<uint8_t>& kind = b.classes.kind;
+        for (uint32_t v = 0; v < b.n; ++v)  // (a copy after its group's first copy)
+            if (kind[v] == kBorder || kind[v] == kBorderGroup || (kind[v] == kCopy && kind[b.classes.wedge[v]] == kLocked)) kind[v] = kLocked;
+    }
     for (const uint8_t kind : b.classes.kind) {
         stats.locked_vertices += kind == kLocked;
         stats.border_vertices += kind == kBorder;
-        stats.seam_vertices += kind == kSeam;
+        stats.seam_vertices += kind == kGroup || kind == kCopy || kind == kBorderGroup;
     }
 }
 
@@ -217,7 +273,8 @@ void init_quadrics(Builder& b, detail::Team& team) {
         const uint32_t c[3] = {i0, i1, i2};
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = c[k], e = c[(k + 1) % 3];
-            if ((!mine(a) && !mine(e)) || b.classes.border_next[a] != e || b.classes.border_prev[e] != a) continue;
+            const uint32_t pa_ = b.classes.wedge[a], pe_ = b.classes.wedge[e];  // open in the welded mesh
+            if ((!mine(a) && !mine(e)) || b.classes.border_next[pa_] != pe_ || b.classes.border_prev[pe_] != pa_) continue;
             const Vec3 pa = b.pos[a], pe = b.pos[e];
             const Vec3 edge = sub(pe, pa);
             Vec3 en = cross(edge, nrm);
@@ -306,7 +363,7 @@ void run_heap(Builder& b) {
         }
     };
     for (uint32_t v = 0; v < b.n; ++v)
-        if (b.classes.kind[v] != kLocked) {
+        if (kCollapseRules[b.classes.kind[v]].moves) {
             Candidate c;
             if (b.best_target(v, c, true, b.scratch)) heap.push_back({c.cost, v, c.u, stamp[v]});
         }
@@ -331,7 +388,7 @@ void run_heap(Builder& b) {
             if (w != e.u) ring.push_back(w);
         });
         for (uint32_t w : ring) {
-            if (b.classes.kind[w] == kLocked) continue;
+            if (!kCollapseRules[b.classes.kind[w]].moves) continue;
             b.topo.compact(w);
             evaluate_vertex(w);
         }
@@ -479,6 +536,13 @@ void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
     b.removed_target.reserve(b.n);
 }
 
+// BuildParams::copy_tolerance in object units: a share of the bounding box's diagonal.
+float copy_tolerance(const LocalMesh& local, const BuildParams& params) {
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k) d2 += double(local.bounds_max[k] - local.bounds_min[k]) * double(local.bounds_max[k] - local.bounds_min[k]);
+    return float(std::max(0.0, double(params.copy_tolerance)) * std::sqrt(d2));
+}
+
 // What the substitutions no longer read goes before they run: the local copy's triangles (the
 // topology holds its own) and, unless they are the only copy, its vertex streams other than
 // normals (the attribute term holds its scaled values); its positions and normals stay (the
@@ -591,15 +655,13 @@ void order_triangles(const Builder& b, const Mesh& input, uint32_t input_bits, c
     });
 }
 
-// A seam collapse removed two vertices at steps j, j + 1: they sit at n-2-j and n-1-j, and no
-// resolution may take one without the other.
-void mark_seam_pairs(const Builder& b, TomMesh& out) {
-    if (b.pair_steps.empty()) return;
+// A group collapse removed k copies at steps j .. j + k - 1: they sit at n-j-k .. n-1-j, and no
+// resolution may take some without the others (bits n-j-k .. n-j-2: each joins i and i + 1).
+void mark_groups(const Builder& b, TomMesh& out) {
+    if (b.group_steps.empty()) return;
     out.pair_bits.assign((size_t(b.n) + 7) / 8, 0);
-    for (const uint32_t j : b.pair_steps) {
-        const uint32_t i = b.n - 2 - j;
-        out.pair_bits[i / 8] |= uint8_t(1u << (i % 8));
-    }
+    for (const auto& [j, k] : b.group_steps)
+        for (uint32_t i = b.n - j - k; i + 1 < b.n - j; ++i) out.pair_bits[i / 8] |= uint8_t(1u << (i % 8));
 }
 
 } // namespace
@@ -667,9 +729,10 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     Builder b;
     set_up(b, local, params);
 
-    // seams collapse in pairs in the passes strategy; the heap strategy and pair contraction
-    // keep coincident copies locked
-    classify(b, stats, params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders, team);
+    // coincident copies move as groups in the passes strategy; the heap strategy and pair
+    // contraction keep them locked (pair contraction takes only exact copies: it joins near ones)
+    classify(b, stats, params.pair_threshold > 0.0f ? 0.0f : copy_tolerance(local, params), params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders,
+             team);
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
     b.attributes.init(local.mesh, params.attribute_weight, animation, b.predicate == Predicate::quadric, team);
     animation = {};
@@ -695,7 +758,7 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     order_triangles(b, input, input_bits, new_index, out, team);
     std::copy(local.bounds_min, local.bounds_min + 3, out.bounds_min);
     std::copy(local.bounds_max, local.bounds_max + 3, out.bounds_max);
-    mark_seam_pairs(b, out);
+    mark_groups(b, out);
 
     stats.substitutions = uint32_t(b.removed_order.size());
     if (stats_out) *stats_out = stats;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "tom/errors.h"
@@ -91,6 +92,82 @@ void check_parts(const Mesh& mesh) {
     }
     if (!mesh.parts.empty() && next != mesh.triangle_count())
         throw ImportError("mesh '" + mesh.name + "': the parts cover " + std::to_string(next) + " of " + std::to_string(mesh.triangle_count()) + " triangles");
+}
+
+// Identical vertices (CleanOptions::weld) merged into the first of them: an open-addressing table
+// of the vertices' hashes over the position and every stream, compared value by value (0 and -0
+// alike; a NaN equals nothing). Returns vertex -> the vertex that stands for it.
+std::vector<uint32_t> identical_vertices(const Mesh& mesh) {
+    struct Stream {
+        const float* values;
+        size_t width;
+    };
+    std::vector<Stream> streams{{mesh.positions.data(), 3}};
+    for_each_attribute_stream(mesh, [&](const std::vector<float>& s, size_t width, const char*) {
+        if (!s.empty()) streams.push_back({s.data(), width});
+    });
+    const uint32_t n = mesh.vertex_count();
+    auto hash_of = [&](uint32_t v) {
+        uint64_t h = 0x9e3779b97f4a7c15ULL;
+        auto mix = [&](uint64_t x) {
+            h ^= x + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
+            h *= 0xbf58476d1ce4e5b9ULL;
+        };
+        for (const Stream& s : streams)
+            for (size_t k = 0; k < s.width; ++k) {
+                const float x = s.values[v * s.width + k];
+                uint32_t bits = 0;
+                if (x != 0.0f) std::memcpy(&bits, &x, 4);
+                mix(bits);
+            }
+        for (const VertexStream& x : mesh.extra_streams) {
+            const size_t bytes = x.element_bytes();
+            for (size_t k = 0; k < bytes; ++k) mix(x.data[v * bytes + k]);
+        }
+        return h ^ (h >> 31);
+    };
+    auto same = [&](uint32_t a, uint32_t b) {
+        for (const Stream& s : streams)
+            for (size_t k = 0; k < s.width; ++k)
+                if (!(s.values[a * s.width + k] == s.values[b * s.width + k])) return false;
+        for (const VertexStream& x : mesh.extra_streams) {
+            const size_t bytes = x.element_bytes();
+            if (std::memcmp(&x.data[a * bytes], &x.data[b * bytes], bytes) != 0) return false;
+        }
+        return true;
+    };
+    size_t cap = 16;
+    while (cap < size_t(n) * 2) cap *= 2;
+    std::vector<uint32_t> table(cap, UINT32_MAX), first(n);
+    for (uint32_t v = 0; v < n; ++v)
+        for (size_t i = size_t(hash_of(v)) & (cap - 1);; i = (i + 1) & (cap - 1)) {
+            if (table[i] == UINT32_MAX) {
+                table[i] = first[v] = v;
+                break;
+            }
+            if (same(table[i], v)) {
+                first[v] = table[i];
+                break;
+            }
+        }
+    return first;
+}
+
+// Welds identical vertices: each triangle's corners rewritten to the first of their copies (the
+// others, now unreferenced, go with the unreferenced vertices). Returns the referenced vertices
+// merged.
+uint32_t weld_identical(Mesh& mesh) {
+    const std::vector<uint32_t> first = identical_vertices(mesh);
+    std::vector<uint8_t> counted(first.size(), 0);
+    uint32_t welded = 0;
+    for (uint32_t& i : mesh.indices) {
+        if (first[i] != i && !counted[i]) {
+            counted[i] = 1;
+            ++welded;
+        }
+        i = first[i];
+    }
+    return welded;
 }
 
 } // namespace
@@ -196,7 +273,7 @@ void compute_normals(Mesh& mesh) {
     mesh.normals.swap(acc);
 }
 
-CleanStats clean_mesh(Mesh& mesh) {
+CleanStats clean_mesh(Mesh& mesh, const CleanOptions& options) {
     CleanStats stats;
     if (mesh.positions.size() % 3 != 0)
         throw ImportError("mesh '" + mesh.name + "': position stream length " + std::to_string(mesh.positions.size()) + " is not a multiple of 3");
@@ -218,6 +295,7 @@ CleanStats clean_mesh(Mesh& mesh) {
     check_parts(mesh);
     for (float& x : mesh.normals)
         if (!std::isfinite(x)) x = 0.0f;  // renormalised below
+    if (options.weld) stats.welded_vertices = weld_identical(mesh);
 
     // drop triangles with a repeated corner: they cover no area and can never be drawn
     size_t out = 0;
@@ -241,7 +319,7 @@ CleanStats clean_mesh(Mesh& mesh) {
     uint32_t next = 0;
     for (uint32_t v = 0; v < n; ++v)
         if (remap[v] == 0) remap[v] = next++;
-    stats.unreferenced_vertices = n - next;
+    stats.unreferenced_vertices = n - next - stats.welded_vertices;
     if (next != n) {
         compact_stream(mesh.positions, remap, 3, next);
         for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char*) { compact_stream(stream, remap, width, next); });

@@ -218,7 +218,7 @@ public:
     PassRunner(Builder& b, float fraction, bool foresight, detail::Team& team, BuildStats& stats)
         : b_(b), topo_(b.topo), fraction_(fraction), foresight_(foresight), team_(team), stats_(stats), helpers_(team.size() - 1) {
         for (uint32_t v = 0; v < b.n; ++v)
-            if (b.classes.kind[v] != kLocked) s_.live.push_back(v);
+            if (kCollapseRules[b.classes.kind[v]].moves) s_.live.push_back(v);
         s_.best.resize(b.n);
         s_.has.assign(b.n, 0);
         s_.dirty.assign(b.n, 1);
@@ -306,30 +306,38 @@ private:
     void try_candidate(size_t ci) {
         const Candidate c = c_.items[ci];
         if (s_.pass_mark[c.v] == s_.pass || s_.pass_mark[c.u] == s_.pass) return;  // not independent of this pass's earlier ones
-        if (kCollapseRules[b_.classes.kind[c.v]].with_partner)
-            collapse_seam(c);
+        if (kCollapseRules[b_.classes.kind[c.v]].as_group)
+            collapse_group(c);
         else
             collapse(c, ci);
     }
 
-    // A seam collapse: both copies move, each to the copy of the target on its side.
-    void collapse_seam(const Candidate& c) {
-        const VertexClasses& cl = b_.classes;
-        const uint32_t v2 = cl.partner[c.v], u2 = b_.seam_target(c.v, c.u);
-        if (b_.removed[c.v] || b_.removed[c.u] || v2 == kNone || u2 == kNone || s_.pass_mark[v2] == s_.pass || s_.pass_mark[u2] == s_.pass ||
-            !b_.border_move_allowed(c.v, c.u) || !b_.border_move_allowed(v2, u2) || b_.illegal(c.v, c.u, b_.scratch) ||
-            b_.illegal(v2, u2, b_.scratch)) {
+    // A group collapse: every copy of v's point moves, each onto a copy of u's point
+    // (Builder::group_move); one step of the order, whatever its number of copies.
+    void collapse_group(const Candidate& c) {
+        GroupMove& move = group_;
+        bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch);
+        for (uint32_t i = 0; ok && i < move.count; ++i) ok = s_.pass_mark[move.from[i]] != s_.pass && s_.pass_mark[move.to[i]] != s_.pass;
+        if (!ok) {
             reject(c.v);
             return;
         }
-        for (const uint32_t x : {c.v, c.u, v2, u2}) ring_changed(x);
-        b_.pair_steps.push_back(uint32_t(b_.removed_order.size()));
-        substitute(c.v, c.u, nullptr);
-        substitute(v2, u2, nullptr);
-        b_.classes.partner[c.u] = u2;  // the targets are the seam's copies from now on
-        b_.classes.partner[u2] = c.u;
-        for (const uint32_t x : {c.v, c.u, v2, u2}) s_.pass_mark[x] = s_.pass;
-        c_.executed += 2;
+        for (uint32_t i = 0; i < move.count; ++i) {
+            ring_changed(move.from[i]);
+            ring_changed(move.to[i]);
+        }
+        b_.group_steps.push_back({uint32_t(b_.removed_order.size()), move.count});
+        for (uint32_t i = 0; i < move.count; ++i) {
+            // merged now, not with the chunk: several copies may share a target
+            b_.substitute(move.from[i], move.to[i]);
+            b_.merge_quadrics(move.to[i], move.from[i]);
+            topo_.splice(move.from[i], move.to[i]);
+        }
+        for (uint32_t i = 0; i < move.count; ++i) {
+            s_.pass_mark[move.from[i]] = s_.pass_mark[move.to[i]] = s_.pass;
+            s_.dirty[move.to[i]] = 1;
+        }
+        c_.executed += move.count;
     }
 
     // A single substitution v -> u, when the oracle allows it.
@@ -364,6 +372,10 @@ private:
     // was). Borders and seams are evaluated again.
     void update_neighbour_costs(const Candidate& c, const Foresight* f) {
         auto neighbour = [&](uint32_t w, const float* foreseen) {
+            if (b_.classes.kind[w] == kCopy) {  // its group's first copy decides for it
+                s_.dirty[b_.classes.wedge[w]] = 1;
+                return;
+            }
             if (w == c.v || w == c.u || s_.dirty[w] || b_.classes.kind[w] == kLocked) return;
             if (!s_.has[w] || s_.best[w].u == c.v || b_.classes.kind[w] != kInterior) {
                 s_.dirty[w] = 1;
@@ -395,6 +407,7 @@ private:
     void ring_changed(uint32_t x) {
         b_.each_corner(x, [&](uint32_t w) {
             s_.dirty[w] = 1;
+            s_.dirty[b_.classes.wedge[w]] = 1;  // a copy's group
             touch(w);
         });
     }
@@ -491,7 +504,7 @@ private:
     void foresee(const Candidate& e, Foresight& f, Scratch& sc) const {
         f.verdict = kUnknown;
         f.ring = f.fan = kRingUnknown;
-        if (s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].with_partner || b_.removed[e.u])
+        if (s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].as_group || b_.removed[e.u])
             return;
         f.verdict = b_.illegal(e.v, e.u, sc) ? kIllegal : kLegal;
         if (f.verdict == kIllegal || b_.predicate != Predicate::quadric) return;
@@ -563,6 +576,7 @@ private:
     Lookahead ahead_;
     std::vector<uint32_t> evaluate_, unused_;  // (unused_: split_in_order's second list, always empty here)
     std::vector<Scratch> helpers_;
+    GroupMove group_;  // collapse_group()'s (2 KB)
 };
 
 } // namespace

@@ -54,22 +54,27 @@ inline double evaluate(const Quadric& q, Vec3 p) {
     return r > 0 && q.w > 0 ? r / q.w : 0;
 }
 
-// A vertex's kind, from classify(): what its neighbourhood lets it do.
-enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2, kSeam = 3, kKindCount = 4 };
+// A vertex's kind, from classify(): what its neighbourhood lets it do. Kinds are those of the
+// mesh welded by position (coincident copies one point): a vertex next to a seam is interior.
+enum Kind : uint8_t { kInterior = 0, kBorder = 1, kLocked = 2, kGroup = 3, kCopy = 4, kBorderGroup = 5, kKindCount = 6 };
 
 // The collapse rules of the vertex kinds, read in one place (as meshoptimizer's kCanCollapse).
 // Any vertex may be a target; what differs is where a vertex may go.
 struct CollapseRule {
-    bool moves;         // may be substituted at all
+    bool moves;         // may be substituted at all (a group: with its copies)
     bool along_border;  // only onto a neighbour on its border loop (or onto a pair partner)
-    bool with_partner;  // its coincident copy moves with it, onto the target's copy
+    bool as_group;      // all copies of its point move at once, onto copies of one neighbouring point
 };
 constexpr CollapseRule kCollapseRules[kKindCount] = {
     {true, false, false},  // interior: onto any edge neighbour
     {true, true, false},   // border: along its loop, so the border keeps its shape
-    {false, false, false}, // locked (non-manifold, border corners, coincident copies): never moves
-    {true, true, true},    // seam: one of two coincident copies on an attribute seam; both move
-                           // along the seam together and stay coincident at every resolution
+    {false, false, false}, // locked (non-manifold, border corners, copies of a border point): never moves
+    {true, false, true},   // group: the first of the coincident copies of an interior point (split by
+                           // seams, hard edges, pole fans, or an unindexed file); the copies move
+                           // together onto one neighbouring point, so the surface welded by position
+                           // stays closed at every resolution
+    {false, false, false}, // copy: a group's other copies, moved by it
+    {true, true, true},    // border group: the same for a point on an open border, along its loop
 };
 
 constexpr uint32_t kNone = UINT32_MAX;
@@ -177,10 +182,19 @@ struct Topology {
 // Each vertex's kind and the links classify() gives it.
 struct VertexClasses {
     std::vector<uint8_t> kind;
-    std::vector<uint32_t> border_next, border_prev;  // a border or seam vertex's loop neighbours
-    std::vector<uint32_t> partner;     // a seam vertex's coincident copy, or kNone
+    // a border point's loop neighbours, in the welded mesh: position classes (their first
+    // copies), held at the class's first copy
+    std::vector<uint32_t> border_next, border_prev;
     std::vector<uint32_t> wedge;       // the position class of a vertex: its first coincident copy
     std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
+};
+
+// One group substitution: the copies of a point, each onto a copy of the target point.
+struct GroupMove {
+    static constexpr uint32_t kMaxCopies = 256;  // a point with more copies stays locked
+    uint32_t count = 0;
+    uint32_t from[kMaxCopies], to[kMaxCopies];
+    float cost = 0;
 };
 
 // Shared state of one build: the mesh, the current triangles, the vertex classes, the costs'
@@ -201,26 +215,63 @@ struct Builder {
     // the record: which vertices went, in order, and where
     std::vector<uint8_t> removed;
     std::vector<uint32_t> removed_order, removed_target;
-    std::vector<uint32_t> pair_steps;  // substitution j and j + 1 are one seam collapse
+    // group substitutions: (first step, copies); their steps are one move
+    std::vector<std::pair<uint32_t, uint32_t>> group_steps;
     Scratch scratch;  // the calling thread's; workers bring their own
 
     // A border loop of three edges cannot lose a vertex (it would fold onto itself).
     // A border vertex moves along its loop, or onto a pair partner (joining two parts).
     bool border_move_allowed(uint32_t v, uint32_t u) const {
         if (!kCollapseRules[classes.kind[v]].along_border) return true;
-        if (u != classes.border_next[v] && u != classes.border_prev[v])
+        const uint32_t wu = classes.wedge[u];
+        if (wu != classes.border_next[v] && wu != classes.border_prev[v])
             return !pairs.empty() && std::find(pairs[v].begin(), pairs[v].end(), u) != pairs[v].end();
         return classes.border_next[classes.border_next[v]] != classes.border_prev[v];
     }
 
-    // For a seam vertex v moving to its border neighbour u: the copy's matching move v' -> u',
-    // u' the copy's border neighbour at u's position; kNone when there is none.
-    uint32_t seam_target(uint32_t v, uint32_t u) const {
-        const uint32_t w = classes.partner[v];
-        if (w == kNone || removed[w]) return kNone;
-        for (const uint32_t c : {classes.border_next[w], classes.border_prev[w]})
-            if (c != kNone && !removed[c] && std::memcmp(&pos[c], &pos[u], sizeof(Vec3)) == 0) return c;
-        return kNone;
+    // The group substitution of v's point onto the point `target` (a class): each copy p goes to
+    // the copy of the target it shares a triangle with, or, sharing none, to the copy its cost
+    // prefers (a pole's fan onto a seam point: each copy to the side of its texture coordinates).
+    // False when a copy shares triangles with two copies of the target (the one left would keep
+    // a zero-area triangle), or, with check_legal, when the oracle refuses a copy's move.
+    bool group_move(uint32_t v, uint32_t target, bool check_legal, GroupMove& move, Scratch& sc) const {
+        move.count = 0;
+        move.cost = 0;
+        uint32_t p = v;
+        do {
+            if (move.count == GroupMove::kMaxCopies) return false;
+            uint32_t adjacent = kNone;
+            bool twice = false;
+            topo.each(p, [&](uint32_t t) {
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t w = topo.idx[3 * t + k];
+                    if (classes.wedge[w] != target) continue;
+                    if (adjacent != kNone && adjacent != w) twice = true;
+                    adjacent = w;
+                }
+            });
+            if (twice) return false;
+            uint32_t to = adjacent;
+            float c = 0;
+            if (to != kNone) {
+                c = cost(p, to);
+            } else {  // the cheapest copy of the target, the first on ties
+                uint32_t q = target;
+                do {
+                    const float cq = cost(p, q);
+                    if (to == kNone || cq < c) to = q, c = cq;
+                    q = classes.next_copy[q];
+                } while (q != target);
+            }
+            move.from[move.count] = p;
+            move.to[move.count++] = to;
+            move.cost += c;
+            p = classes.next_copy[p];
+        } while (p != v);
+        if (check_legal)
+            for (uint32_t i = 0; i < move.count; ++i)
+                if (illegal(move.from[i], move.to[i], sc)) return false;
+        return true;
     }
 
     // The binary oracle's geometric and topological tests for v -> u:
@@ -263,6 +314,11 @@ struct Builder {
             uint32_t a, c;
             topo.others(t, v, a, c);
             if (a != u && c != u) {
+                // another copy of u's point would stay in a triangle with u: zero area, and a crack
+                if (classes.wedge[a] == wu || classes.wedge[c] == wu) {
+                    bad = true;
+                    return;
+                }
                 const Vec3 pa = pos[a], pc = pos[c];
                 const Vec3 n0 = cross(sub(pa, pv), sub(pc, pv));
                 const Vec3 n1 = cross(sub(pa, pu), sub(pc, pu));
@@ -290,12 +346,21 @@ struct Builder {
                 const uint32_t wa = classes.wedge[a], wc = classes.wedge[c];
                 if (wa != wv && stamp[wa] == mark && !is_opposite(wa)) bad = true;
                 if (wc != wv && stamp[wc] == mark && !is_opposite(wc)) bad = true;
-                // a tetrahedron folds flat: u's triangle (u, a, c) with both a and c opposite
-                // would be duplicated by v's (v, a, c) rewritten to u
-                if (!bad && y == u && co == 2 && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
-                    topo.each(v, [&](uint32_t s2) {
-                        if (!bad && !topo.contains(s2, u) && topo.contains(s2, a) && topo.contains(s2, c)) bad = true;
-                    });
+                // a tetrahedron folds flat: u's point's triangle (u, a, c) with both a and c
+                // opposite would be duplicated by v's (v, a, c) rewritten to u (points: a copy of
+                // v's point may hold it)
+                if (!bad && co == 2 && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
+                    auto holds = [&](uint32_t s2, uint32_t w) {
+                        const uint32_t* corner = &topo.idx[3 * s2];
+                        return classes.wedge[corner[0]] == w || classes.wedge[corner[1]] == w || classes.wedge[corner[2]] == w;
+                    };
+                    uint32_t x = v;
+                    do {
+                        topo.each(x, [&](uint32_t s2) {
+                            if (!bad && !holds(s2, wu) && holds(s2, wa) && holds(s2, wc)) bad = true;
+                        });
+                        x = classes.next_copy[x];
+                    } while (x != v && !bad);
                 }
             });
             y = classes.next_copy[y];
@@ -385,6 +450,7 @@ struct Builder {
     bool best_target(uint32_t v, Candidate& best, bool check_legal, Scratch& sc) const {
         const CollapseRule& rule = kCollapseRules[classes.kind[v]];
         if (!rule.moves || removed[v]) return false;
+        if (rule.as_group) return best_group_target(v, best, check_legal, sc);
         if (!check_legal && predicate == Predicate::quadric && classes.kind[v] == kInterior && pairs.empty()) {
             // the common case, in one sweep: each edge neighbour costed as it is met, the cheapest kept
             // an interior vertex's fan is closed and consistently oriented (every edge has one
@@ -414,17 +480,14 @@ struct Builder {
             if (!border_move_allowed(v, u)) return;
             targets.push_back({0.0f, v, u});
         };
-        if (rule.with_partner) {
-            for (const uint32_t u : {classes.border_next[v], classes.border_prev[v]}) {
-                if (stamp[u] == seen || removed[u]) continue;
-                stamp[u] = seen;
-                const uint32_t u2 = seam_target(v, u);
-                if (u2 == kNone || !border_move_allowed(v, u) || !border_move_allowed(classes.partner[v], u2)) continue;
-                targets.push_back({0.0f, v, u});
-            }
-        } else if (rule.along_border) {
-            offer(classes.border_next[v]);
-            offer(classes.border_prev[v]);
+        if (rule.along_border) {
+            // the copies of its loop neighbours (points of the welded mesh) that v's triangles hold
+            topo.each(v, [&](uint32_t t) {
+                uint32_t a, b;
+                topo.others(t, v, a, b);
+                for (const uint32_t w : {a, b})
+                    if (classes.wedge[w] == classes.border_next[v] || classes.wedge[w] == classes.border_prev[v]) offer(w);
+            });
         } else {
             topo.each(v, [&](uint32_t t) {
                 uint32_t a, b;
@@ -440,10 +503,7 @@ struct Builder {
                     targets.push_back({0.0f, v, u});
                 }
         if (targets.empty()) return false;
-        for (Candidate& c : targets) {
-            c.cost = cost(v, c.u);
-            if (rule.with_partner) c.cost += cost(classes.partner[v], seam_target(v, c.u));  // both copies move
-        }
+        for (Candidate& c : targets) c.cost = cost(v, c.u);
         if (!check_legal) {
             best = targets[0];
             for (const Candidate& c : targets)
@@ -455,7 +515,50 @@ struct Builder {
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
         for (const Candidate& c : targets)
-            if (!illegal(v, c.u, sc) && (!rule.with_partner || !illegal(classes.partner[v], seam_target(v, c.u), sc))) {
+            if (!illegal(v, c.u, sc)) {
+                best = c;
+                return true;
+            }
+        return false;
+    }
+
+    // best_target() for a group's first copy v: the neighbouring points (the classes of its copies'
+    // triangles' corners), each costed as the sum of its copies' moves (group_move); the target
+    // is the point's first copy.
+    bool best_group_target(uint32_t v, Candidate& best, bool check_legal, Scratch& sc) const {
+        std::vector<Candidate>& targets = sc.targets;
+        targets.clear();
+        const uint32_t seen = sc.next_visit();
+        sc.stamp[v] = seen;
+        const bool along_border = kCollapseRules[classes.kind[v]].along_border;
+        uint32_t p = v;
+        do {
+            topo.each(p, [&](uint32_t t) {
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t w = classes.wedge[topo.idx[3 * t + k]];
+                    if (sc.stamp[w] == seen) continue;
+                    sc.stamp[w] = seen;
+                    if (!along_border || ((w == classes.border_next[v] || w == classes.border_prev[v]) && border_move_allowed(v, w)))
+                        targets.push_back({0.0f, v, w});
+                }
+            });
+            p = classes.next_copy[p];
+        } while (p != v);
+        GroupMove move;
+        size_t kept = 0;
+        for (const Candidate& c : targets)
+            if (group_move(v, c.u, false, move, sc)) targets[kept++] = {move.cost, v, c.u};
+        targets.resize(kept);
+        if (targets.empty()) return false;
+        std::sort(targets.begin(), targets.end(), [](const Candidate& a, const Candidate& b) {
+            return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
+        });
+        if (!check_legal) {
+            best = targets[0];
+            return true;
+        }
+        for (const Candidate& c : targets)
+            if (group_move(v, c.u, true, move, sc)) {
                 best = c;
                 return true;
             }
@@ -517,17 +620,17 @@ struct Builder {
         }
         removed_order.push_back(v);
         removed_target.push_back(u);
-        if (kCollapseRules[classes.kind[v]].along_border) {
-            const uint32_t p = classes.border_prev[v], q = classes.border_next[v];
-            if (u == q) {
-                classes.border_prev[u] = p;
-                classes.border_next[p] = u;
-            } else if (u == p) {
-                classes.border_next[u] = q;
-                classes.border_prev[q] = u;
+        if (kCollapseRules[classes.kind[v]].along_border) {  // (links are points: u's class)
+            const uint32_t p = classes.border_prev[v], q = classes.border_next[v], wu = classes.wedge[u];
+            if (wu == q) {
+                classes.border_prev[wu] = p;
+                classes.border_next[p] = wu;
+            } else if (wu == p) {
+                classes.border_next[wu] = q;
+                classes.border_prev[q] = wu;
             } else {  // a pair contraction joined this border to another part
-                classes.border_next[p] = u;
-                classes.border_prev[q] = u;
+                classes.border_next[p] = wu;
+                classes.border_prev[q] = wu;
                 if (classes.kind[u] != kLocked) classes.kind[u] = kLocked;
             }
         }

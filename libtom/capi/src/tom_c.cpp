@@ -127,7 +127,7 @@ tom_status gather(const float* data, size_t stride, uint32_t components, uint32_
     return TOM_OK;
 }
 
-tom_status to_mesh(const tom_build_mesh& in, uint32_t which, tom::Mesh& m) {
+tom_status to_mesh(const tom_build_mesh& in, uint32_t which, const tom::CleanOptions& clean, tom::Mesh& m) {
     const std::string where = "tom_build: mesh " + std::to_string(which);
     if (!in.positions) return fail(TOM_ERROR_ARGUMENT, where + ": positions is NULL");
     if (!in.indices && in.triangle_count > 0) return fail(TOM_ERROR_ARGUMENT, where + ": indices is NULL");
@@ -149,7 +149,7 @@ tom_status to_mesh(const tom_build_mesh& in, uint32_t which, tom::Mesh& m) {
     for (uint32_t p = 0; p < in.part_count; ++p)
         m.parts.push_back({in.parts[p].first_triangle, in.parts[p].triangle_count, in.parts[p].material, in.parts[p].attributes & tom::attribute_bits(m)});
     if (m.parts.size() == 1) m.material = m.parts[0].material, m.parts.clear();
-    tom::clean_mesh(m);  // throws ImportError naming the mesh for an index past its vertices or parts that do not tile
+    tom::clean_mesh(m, clean);  // throws ImportError naming the mesh for an index past its vertices or parts that do not tile
     return TOM_OK;
 }
 
@@ -171,10 +171,11 @@ tom_status build_image(const tom_build_mesh* meshes, uint32_t mesh_count, const 
     bp.threads = p.threads;
     bp.foresight = p.foresight != 0;
     bp.lock_borders = p.lock_borders != 0;
+    bp.animation_weight = p.animation_weight;
     std::vector<tom::TomMesh> built;
     for (uint32_t i = 0; i < mesh_count; ++i) {
         tom::Mesh m;
-        const tom_status s = to_mesh(meshes[i], i, m);
+        const tom_status s = to_mesh(meshes[i], i, tom::CleanOptions{p.weld != 0}, m);
         if (s != TOM_OK) return s;
         built.push_back(tom::build(m, bp));
     }
@@ -423,6 +424,8 @@ void tom_build_params_default(tom_build_params* params) {
     params->foresight = d.foresight ? 1 : 0;
     params->index_size = 0;
     params->lock_borders = d.lock_borders ? 1 : 0;
+    params->animation_weight = d.animation_weight;
+    params->weld = tom::CleanOptions{}.weld ? 1 : 0;
 }
 
 tom_status tom_build_memory(const tom_build_mesh* meshes, uint32_t mesh_count, const tom_build_params* params, const tom_allocator* allocator, void** out_bytes,

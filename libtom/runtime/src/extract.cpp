@@ -52,11 +52,12 @@ inline bool alive(const I* substitute, const C* tri, uint32_t n) noexcept {
     return a != b && b != c && a != c;
 }
 
-// Into [min_vertex_count, vertex_count], and never between the two copies of a seam pair
-// (resolution n takes vertices [0, n): n - 1 without n would open the seam): one below then.
+// Into [min_vertex_count, vertex_count], and never among the copies of a group (resolution n
+// takes vertices [0, n): some copies of a point without the others would open a crack): the
+// highest resolution below that keeps every group whole.
 inline uint32_t clamp_resolution(const MeshView& m, uint32_t n) noexcept {
     n = std::min(std::max(n, m.min_vertex_count), m.vertex_count);
-    return m.splits_pair(n) ? n - 1 : n;
+    return m.whole_groups_below(n);
 }
 
 // The active prefix at resolution n <= src.resolution, from the corners of `src`.
@@ -360,7 +361,7 @@ uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) 
         else
             lo = mid + 1;
     }
-    return m.splits_pair(lo) ? lo + 1 : lo;  // a resolution that keeps a seam pair together
+    return m.whole_groups_above(lo);  // a resolution that keeps every group of copies whole
 }
 
 uint32_t vertex_count_within_triangles(const MeshView& m, uint32_t triangle_count) noexcept {

@@ -291,18 +291,16 @@ void File::Impl::validate(const OpenOptions& options) {
             v.metadata = p;
             v.metadata_bytes = bytes;
         }
-        // rule 16: seam pairs: (V + 7) / 8 bytes, pairs of removed vertices, never overlapping
+        // rule 16: groups: (V + 7) / 8 bytes, each set bit joining two removed vertices (a run of
+        // set bits one group, since 1.7)
         if (ms.pairs) {
             if (ms.pairs->bytes != (nv + 7) / 8)
                 fail(ms.pairs->offset, mesh_field + " PAIR", 16, std::to_string(ms.pairs->bytes) + " bytes where the vertex count requires " + std::to_string((nv + 7) / 8));
             const uint8_t* bits = data + ms.pairs->offset;
-            bool previous = false;
             for (uint32_t i = 0; i < v.vertex_count; ++i) {
                 const bool set = (bits[i / 8] >> (i % 8)) & 1u;
-                if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count || previous))
-                    fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16,
-                         "a pair must join two removed vertices and pairs must not overlap");
-                previous = set;
+                if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count))
+                    fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16, "a group must join removed vertices");
             }
             v.pair_bits = bits;
         }

@@ -282,6 +282,8 @@ typedef struct tom_build_params {
     int foresight;
     uint32_t index_size; /* stored index width: 0 automatic, 16 or 32 */
     int lock_borders;    /* non-zero: vertices on open borders are never removed (tombuild --lock-borders) */
+    float animation_weight; /* weight of the skinning and morph-target terms (tombuild --animation-weight) */
+    int weld;            /* non-zero (the default): identical vertices are merged first (0: tombuild --no-weld) */
 } tom_build_params;
 
 void tom_build_params_default(tom_build_params* params);

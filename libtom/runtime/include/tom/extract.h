@@ -17,8 +17,8 @@ struct Extracted {
 };
 
 /// Number of triangles alive at resolution `vertex_count` (clamped to
-/// [min_vertex_count, vertex_count], and one lower where it would split a seam pair: see
-/// MeshView::splits_pair), over all parts. O(P log T) chain walks; allocates nothing.
+/// [min_vertex_count, vertex_count], and lowered to keep every group of copies whole: see
+/// MeshView::whole_groups_below), over all parts. O(P log T) chain walks; allocates nothing.
 uint32_t active_triangle_count(const MeshView& mesh, uint32_t vertex_count) noexcept;
 
 /// Smallest resolution n whose active triangle count is >= `triangle_count`
@@ -80,8 +80,9 @@ struct MorphedVertex {
 /// Attributes of vertex n at the fractional resolution n + a, a in [0, 1]: interpolated from its
 /// substitute's (a = 0: the surface of resolution n) to its own (a = 1: resolution n + 1). Draw
 /// vertices [0, n + 1) with this vertex replaced and the index buffer of resolution n + 1. When
-/// n and n + 1 are a seam pair (mesh.splits_pair(n + 1)), morph both, n and n + 1 with the same
-/// a, and draw the index buffer of n + 2.
+/// n is the first copy of a group (mesh.splits_pair(n + 1): a seam's pair, a pole's fan), morph
+/// every copy of the group with the same a and draw the index buffer of the resolution above it
+/// (mesh.whole_groups_above(n + 1)).
 /// \pre min_vertex_count <= n < vertex_count. Allocates nothing.
 MorphedVertex geomorph(const MeshView& mesh, uint32_t n, float a) noexcept;
 

@@ -84,7 +84,9 @@ struct MeshView {
     float bounds_min[3] = {0, 0, 0};
     float bounds_max[3] = {0, 0, 0};
     const uint8_t* metadata = nullptr; ///< metadata entries (FORMAT.md, section META)
-    const uint8_t* pair_bits = nullptr;  ///< bit i: vertices i and i + 1 are a seam pair (section PAIR), or null
+    /// bit i: vertices i and i + 1 are copies of one point, removed together (section PAIR; a run
+    /// of set bits is one group of copies), or null
+    const uint8_t* pair_bits = nullptr;
     size_t metadata_bytes = 0;
     /// Optional extraction shortcut (section COAR): the corners of the triangles active at
     /// resolution coarse_resolution, already mapped to it, so coarser resolutions walk on from
@@ -105,9 +107,20 @@ struct MeshView {
     uint32_t substitute_at(uint32_t i) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(substitute)[i] : static_cast<const uint32_t*>(substitute)[i];
     }
-    /// True when resolution n would take one copy of a seam pair without the other.
+    /// True when resolution n would take some copies of a group (a seam's pair, a pole's fan)
+    /// without the others.
     bool splits_pair(uint32_t n) const noexcept {
         return pair_bits && n > 0 && n < vertex_count && (pair_bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
+    }
+    /// The highest resolution <= n that splits no group (n itself when none is split).
+    uint32_t whole_groups_below(uint32_t n) const noexcept {
+        while (splits_pair(n)) --n;
+        return n;
+    }
+    /// The lowest resolution >= n that splits no group.
+    uint32_t whole_groups_above(uint32_t n) const noexcept {
+        while (splits_pair(n)) ++n;
+        return n;
     }
     uint32_t corner(uint32_t c) const noexcept {
         return index_size == 2 ? static_cast<const uint16_t*>(triangles)[c] : static_cast<const uint32_t*>(triangles)[c];

@@ -69,20 +69,35 @@ uint32_t attribute_bits(const Mesh& mesh) noexcept;
 
 /// What clean_mesh() changed.
 struct CleanStats {
+    uint32_t welded_vertices = 0;        ///< identical copies merged into an earlier vertex (CleanOptions::weld)
     uint32_t degenerate_triangles = 0;   ///< triangles with a repeated index, removed
     uint32_t unreferenced_vertices = 0;  ///< vertices used by no triangle, removed
 };
 
-/// Checks a mesh and brings it to the form the builder expects.
+/// How clean_mesh() treats vertices.
+struct CleanOptions {
+    /// Identical vertices (the same position and the same value in every stream, carried ones
+    /// included: joints, weights, morph deltas) become one, the first; triangles that then repeat
+    /// a corner are dropped. An unindexed file (every triangle its own three vertices) becomes an
+    /// indexed mesh that can simplify, and its computed normals are smooth; a file's deliberate
+    /// splits (hard edges, seams) differ in some stream and stay. Off: the file's vertices as they
+    /// are (tombuild --no-weld).
+    bool weld = true;
+};
+
+/// Checks a mesh and brings it to the form the builder expects: identical vertices welded (by
+/// default, see CleanOptions), degenerate triangles and unreferenced vertices dropped, normals
+/// computed where absent.
 /// \throw ImportError naming `mesh.name` when an index is >= vertex_count, a
 ///        position is not finite, a stream has the wrong size (a carried stream also when its
 ///        type is unknown, its components not 1 to 4 or its name repeated), or the mesh has
 ///        more than 2^32-2 vertices.
-/// \post every triangle has three distinct indices; every vertex is referenced;
+/// \post every triangle has three distinct indices; every vertex is referenced; with weld, no
+///       two vertices are identical;
 ///       normals are present (area-weighted from the triangles when absent); the parts still
 ///       tile the triangles (a part left without triangles is dropped; one part left means none).
 /// \throw ImportError also when the parts do not tile the triangles.
-CleanStats clean_mesh(Mesh& mesh);
+CleanStats clean_mesh(Mesh& mesh, const CleanOptions& options = {});
 
 /// One mesh made of several: vertices and triangles appended in order, one part per input (an
 /// input with parts keeps them). The streams are the union of the inputs'; where an input lacks

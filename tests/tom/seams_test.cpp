@@ -1,0 +1,283 @@
+// Meshes written as exporters and generators write them (Blender's glTF export, three.js'
+// SphereGeometry, CylinderGeometry, CapsuleGeometry, TorusGeometry): a texture seam column of
+// copies, poles and cap centres as fans of per-segment copies, hard edges as copies with other
+// normals, and the seam's copies either exact or differing in the last bits, as a generator's
+// sin(2 pi) makes them. Every level, welded by position, must stay closed.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "support.h"
+#include "tom/builder/builder.h"
+#include "tom/builder/mesh.h"
+#include "tom/extract.h"
+#include "tom/metrics/distance.h"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A point of a lathe's profile: radius, height, the normal's radial and height components, and
+// the texture coordinate v.
+struct ProfilePoint {
+    double r, z, nr, nz, v;
+};
+
+// The profile revolved about z in `segments` steps, written the exporters' way: each ring has
+// segments + 1 columns, the last at u = 1 a copy of the first (computed from the angle 2 pi when
+// `last_bit`, so its position differs in the last bits, else copied exactly); a ring of radius 0
+// is a fan of `segments` copies of its point, one per triangle, at u = (j + 1/2) / segments; two
+// profile points at one place are a hard edge (copies with their own normals, no band between).
+tom::Mesh lathe(const std::vector<ProfilePoint>& profile, uint32_t segments, bool last_bit, const char* name) {
+    tom::Mesh m;
+    m.name = name;
+    std::vector<uint32_t> ring_start;
+    for (const ProfilePoint& p : profile) {
+        ring_start.push_back(m.vertex_count());
+        const bool pole = p.r == 0;
+        const uint32_t columns = pole ? segments : segments + 1;
+        for (uint32_t j = 0; j < columns; ++j) {
+            const double u = pole ? (j + 0.5) / segments : double(j) / segments;
+            const double angle = 2 * kPi * (j == segments && !last_bit ? 0.0 : double(j) / segments);
+            const double c = std::cos(angle), s = std::sin(angle);
+            m.positions.insert(m.positions.end(), {float(p.r * c), float(p.r * s), float(p.z)});
+            m.normals.insert(m.normals.end(), {float(p.nr * c), float(p.nr * s), float(p.nz)});
+            m.texcoords.insert(m.texcoords.end(), {float(u), float(p.v)});
+        }
+    }
+    for (size_t k = 0; k + 1 < profile.size(); ++k) {
+        const ProfilePoint &a = profile[k], &b = profile[k + 1];
+        if (a.r == b.r && a.z == b.z) continue;  // a hard edge: no band
+        for (uint32_t j = 0; j < segments; ++j) {
+            const uint32_t A = ring_start[k] + j, D = ring_start[k] + j + 1;
+            const uint32_t B = ring_start[k + 1] + j, C = ring_start[k + 1] + j + 1;
+            if (a.r == 0) {
+                m.indices.insert(m.indices.end(), {A, B, C});  // the upper fan: A is the pole's copy j
+            } else if (b.r == 0) {
+                m.indices.insert(m.indices.end(), {A, B, D});  // the lower fan: B is the pole's copy j
+            } else {
+                m.indices.insert(m.indices.end(), {A, B, C});
+                m.indices.insert(m.indices.end(), {A, C, D});
+            }
+        }
+    }
+    return m;
+}
+
+// A UV sphere of `rings` bands from pole to pole (three.js' SphereGeometry, Blender's UV sphere).
+tom::Mesh uv_sphere(uint32_t rings, uint32_t segments, bool last_bit) {
+    std::vector<ProfilePoint> profile;
+    for (uint32_t i = 0; i <= rings; ++i) {
+        const double phi = kPi * i / rings;
+        const double r = i == 0 || i == rings ? 0.0 : std::sin(phi), z = std::cos(phi);
+        profile.push_back({r, z, r, z, 1.0 - double(i) / rings});
+    }
+    return lathe(profile, segments, last_bit, last_bit ? "uv sphere, last-bit seam" : "uv sphere, exact seam");
+}
+
+// A capsule: two hemispheres joined by a cylinder of height 2 (three.js' CapsuleGeometry).
+tom::Mesh capsule(uint32_t cap_rings, uint32_t segments, bool last_bit) {
+    std::vector<ProfilePoint> profile;
+    const uint32_t rows = 2 * cap_rings + 1;
+    uint32_t row = 0;
+    for (int half = 0; half < 2; ++half)
+        for (uint32_t i = 0; i <= cap_rings; ++i, ++row) {
+            const double phi = kPi / 2 * (half == 0 ? double(i) / cap_rings : 1.0 + double(i) / cap_rings);
+            const double r = (half == 0 && i == 0) || (half == 1 && i == cap_rings) ? 0.0 : std::sin(phi), nz = std::cos(phi);
+            profile.push_back({r, nz + (half == 0 ? 1.0 : -1.0), r, nz, 1.0 - double(row) / rows});
+        }
+    return lathe(profile, segments, last_bit, "capsule");
+}
+
+// A cylinder of radius 1 and height 2 with caps (three.js' CylinderGeometry): the side's rims and
+// the caps' rims are copies with other normals (hard edges), each cap's centre a fan of copies.
+tom::Mesh capped_cylinder(uint32_t height_rings, uint32_t segments, bool last_bit) {
+    std::vector<ProfilePoint> profile{{0, 1, 0, 1, 1}, {1, 1, 0, 1, 1}};
+    for (uint32_t i = 0; i <= height_rings; ++i) {
+        const double z = 1.0 - 2.0 * i / height_rings;
+        profile.push_back({1, z, 1, 0, 1.0 - double(i) / height_rings});
+    }
+    profile.push_back({1, -1, 0, -1, 0});
+    profile.push_back({0, -1, 0, -1, 0});
+    return lathe(profile, segments, last_bit, "capped cylinder");
+}
+
+// A torus (three.js' TorusGeometry): a seam column and a seam ring, both rows of copies.
+tom::Mesh torus(uint32_t tube_segments, uint32_t segments, bool last_bit) {
+    std::vector<ProfilePoint> profile;
+    for (uint32_t i = 0; i <= tube_segments; ++i) {
+        const double a = 2 * kPi * (i == tube_segments && !last_bit ? 0.0 : double(i) / tube_segments);
+        profile.push_back({1.0 + 0.35 * std::cos(a), 0.35 * std::sin(a), std::cos(a), std::sin(a), double(i) / tube_segments});
+    }
+    tom::Mesh m = lathe(profile, segments, last_bit, "torus");
+    return m;
+}
+
+// A triangle list welded by position within 1e-5 (the seam's last-bit copies meet): its open
+// edges (an edge's uses one way less its uses the other) and its Euler characteristic.
+struct Welded {
+    int open = 0, euler = 0;
+};
+Welded weld(const float* positions, const uint32_t* indices, size_t triangle_count) {
+    std::map<std::tuple<long, long, long>, uint32_t> points;
+    auto point = [&](uint32_t v) {
+        const auto key = std::make_tuple(std::lround(positions[3 * v] * 1e5), std::lround(positions[3 * v + 1] * 1e5), std::lround(positions[3 * v + 2] * 1e5));
+        return points.emplace(key, uint32_t(points.size())).first->second;
+    };
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;
+    for (size_t t = 0; t < triangle_count; ++t)
+        for (int k = 0; k < 3; ++k) ++directed[{point(indices[3 * t + k]), point(indices[3 * t + (k + 1) % 3])}];
+    Welded w;
+    int edges2 = 0;  // each undirected edge counted from both directions
+    for (const auto& [edge, count] : directed) {
+        const auto reverse = directed.find({edge.second, edge.first});
+        w.open += std::abs(count - (reverse == directed.end() ? 0 : reverse->second));
+        edges2 += reverse == directed.end() ? 2 : 1;
+    }
+    std::map<uint32_t, int> used;
+    for (size_t c = 0; c < 3 * triangle_count; ++c) used[point(indices[c])] = 1;
+    w.euler = int(used.size()) - edges2 / 2 + int(triangle_count);
+    return w;
+}
+
+struct Level {
+    uint32_t vertices, triangles;
+    Welded welded;
+};
+
+// The open edges of the levels at 50%, 25%, 10%, 5% of the triangles and of the coarsest.
+std::vector<Level> levels(const tom::TomMesh& built) {
+    const tom::MeshView m = built.view();
+    std::vector<uint32_t> buffer(built.triangles.size());
+    std::vector<Level> out;
+    for (double share : {1.0, 0.5, 0.25, 0.1, 0.05, 0.0}) {
+        const uint32_t n = share > 0 ? tom::vertex_count_for_triangles(m, uint32_t(share * m.triangle_count)) : m.min_vertex_count;
+        const tom::Extracted e = tom::extract(m, n, buffer.data(), buffer.size());
+        out.push_back({e.vertex_count, e.triangle_count, weld(built.positions.data(), buffer.data(), e.triangle_count)});
+    }
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("exporter-written spheres, capsules, capped cylinders and tori never crack at seams and poles", "[builder][seams]") {
+    for (const bool last_bit : {false, true}) {
+        for (tom::Mesh mesh : {uv_sphere(96, 192, last_bit), capsule(24, 64, last_bit), capped_cylinder(8, 64, last_bit), torus(32, 64, last_bit)}) {
+            INFO(mesh.name << (last_bit ? " (last-bit copies)" : " (exact copies)"));
+            tom::clean_mesh(mesh);
+            const uint32_t triangles = mesh.triangle_count();
+            const Welded input = weld(mesh.positions.data(), mesh.indices.data(), triangles);
+            REQUIRE(input.open == 0);  // closed as written
+            tom::BuildStats stats;
+            const tom::TomMesh built = tom::build(mesh, {}, &stats);
+            CHECK(stats.seam_vertices > 0);
+            for (const Level& level : levels(built)) {
+                INFO(level.vertices << " vertices, " << level.triangles << " triangles");
+                CHECK(level.welded.open == 0);
+                CHECK(level.welded.euler == input.euler);  // no handle closed, no sphere pinched
+            }
+            // the seams and poles do not hold the floor up
+            const uint32_t floor = tom::active_triangle_count(built.view(), built.min_vertex_count);
+            INFO("coarsest " << floor << " of " << triangles << " triangles");
+            CHECK(floor <= triangles / 20);
+        }
+    }
+}
+
+namespace {
+
+// Every triangle with its own three vertices, as an unindexed file stores it; with face normals
+// (flat shading) when `flat`, else without normals.
+tom::Mesh unindexed(const tom::Mesh& m, bool flat) {
+    tom::Mesh out;
+    out.name = m.name + (flat ? ", flat-shaded" : ", unindexed");
+    for (uint32_t t = 0; t < m.triangle_count(); ++t) {
+        const float* p[3];
+        for (int k = 0; k < 3; ++k) p[k] = &m.positions[3 * size_t(m.indices[3 * t + k])];
+        const double e1[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]}, e2[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int k = 0; k < 3; ++k) {
+            out.positions.insert(out.positions.end(), p[k], p[k] + 3);
+            if (flat) out.normals.insert(out.normals.end(), {float(n[0] / len), float(n[1] / len), float(n[2] / len)});
+            out.indices.push_back(3 * t + uint32_t(k));
+        }
+    }
+    return out;
+}
+
+tom::Surface surface_of(const tom::Mesh& m) { return {m.positions.data(), m.vertex_count(), m.indices.data(), m.triangle_count()}; }
+
+// The two-sided mean distance (the larger direction's, per diagonal) of `built` at `triangles`
+// against `original`, and the level's share of folded edges: interior edges whose two triangles
+// face nearly opposite ways (dihedral turn above 150 degrees), a wedge or a sheet.
+struct Quality {
+    uint32_t triangles;
+    double mean, folded;
+};
+Quality quality(const tom::Mesh& original, const tom::TomMesh& built, uint32_t triangles) {
+    const tom::MeshView m = built.view();
+    std::vector<uint32_t> idx(built.triangles.size());
+    const tom::Extracted e = tom::extract(m, tom::vertex_count_within_triangles(m, triangles), idx.data(), idx.size());
+    const tom::Distance d = tom::metro_distance(surface_of(original), {built.positions.data(), e.vertex_count, idx.data(), e.triangle_count});
+    const std::vector<float> points = test::snap_copies(built.positions.data(), e.vertex_count);
+    std::map<std::pair<std::array<float, 3>, std::array<float, 3>>, std::array<double, 3>> first_normal;
+    size_t edges = 0, folded = 0;
+    for (uint32_t t = 0; t < e.triangle_count; ++t) {
+        std::array<float, 3> c[3];
+        for (int k = 0; k < 3; ++k) std::copy_n(&points[3 * size_t(idx[3 * t + k])], 3, c[k].data());
+        const double e1[3] = {c[1][0] - c[0][0], c[1][1] - c[0][1], c[1][2] - c[0][2]}, e2[3] = {c[2][0] - c[0][0], c[2][1] - c[0][1], c[2][2] - c[0][2]};
+        std::array<double, 3> n = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (len == 0) continue;
+        for (double& x : n) x /= len;
+        for (int k = 0; k < 3; ++k) {
+            const auto key = std::minmax(c[k], c[(k + 1) % 3]);
+            const auto [it, fresh] = first_normal.emplace(std::make_pair(key.first, key.second), n);
+            if (fresh) continue;
+            ++edges;
+            folded += n[0] * it->second[0] + n[1] * it->second[1] + n[2] * it->second[2] < std::cos(150.0 * kPi / 180.0);
+        }
+    }
+    return {e.triangle_count, std::max(d.forward.mean, d.backward.mean) / d.diagonal, edges ? double(folded) / double(edges) : 0.0};
+}
+
+} // namespace
+
+TEST_CASE("unindexed and flat-shaded copies of real meshes simplify as far and as well as the indexed mesh", "[builder][seams][samples]") {
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        if (nm.name.find("fandisk") == std::string::npos && nm.name.find("cow") == std::string::npos) continue;
+        const tom::Mesh& indexed = nm.mesh;
+        const tom::TomMesh reference = tom::build(indexed);
+        // welded on import, an unindexed file is the indexed mesh again
+        tom::Mesh welded = unindexed(indexed, false);
+        const tom::CleanStats clean = tom::clean_mesh(welded);
+        CHECK(welded.vertex_count() == indexed.vertex_count());
+        CHECK(clean.welded_vertices == 3 * indexed.triangle_count() - indexed.vertex_count());
+        for (const bool flat : {false, true}) {
+            // kept as written (--no-weld, or flat normals a weld cannot merge): every vertex a copy
+            tom::Mesh copies = unindexed(indexed, flat);
+            tom::clean_mesh(copies, {false});
+            INFO(copies.name);
+            tom::BuildStats stats;
+            const tom::TomMesh built = tom::build(copies, {}, &stats);
+            CHECK(stats.seam_vertices == copies.vertex_count());
+            const uint32_t floor = tom::active_triangle_count(built.view(), built.min_vertex_count);
+            CHECK(floor <= std::max<uint32_t>(16, indexed.triangle_count() / 100));
+            for (const double share : {0.25, 0.1, 0.02}) {
+                const uint32_t target = uint32_t(share * indexed.triangle_count());
+                const Quality q = quality(indexed, built, target), r = quality(indexed, reference, target);
+                INFO(share * 100 << "%: " << q.triangles << " triangles, mean " << q.mean << " (indexed " << r.mean << "), folded edges " << q.folded
+                                 << " (indexed " << r.folded << ")");
+                CHECK(q.triangles >= 0.9 * target);
+                CHECK(q.mean <= 1.5 * r.mean);
+                CHECK(q.folded <= r.folded + 0.01);
+            }
+        }
+    }
+}
