@@ -2,6 +2,8 @@
 // chosen level), so other tools' outputs can be measured with the same yardstick; with the
 // attribute deviation (normals, texture coordinates) where both files have them.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 
@@ -11,12 +13,14 @@
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/io/import.h"
+#include "tom/scene.h"
 #include "tom/metrics/distance.h"
 #include "tool_common.h"
 
 namespace {
 
-// every triangle mesh of a file merged into one surface
+// every triangle mesh of a file merged into one surface, in world space: each placed by every
+// instance of the file's scene (node transforms applied), or as stored when the scene has none
 struct Loaded {
     std::vector<float> positions, normals, texcoords;  // normals / texcoords: empty unless every mesh has them
     std::vector<uint32_t> indices;
@@ -32,35 +36,83 @@ bool ends_with(const std::string& s, const std::string& suffix) {
     return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+// One mesh placed by a column-major object-to-world transform: positions by it, normals by its
+// cofactor matrix (the inverse transpose up to scale, then normalised), and the winding reversed
+// where it mirrors.
+struct Placement {
+    const float* m;
+    void point(const float* p, float* out) const {
+        for (int r = 0; r < 3; ++r) out[r] = m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r];
+    }
+    double det() const {
+        return double(m[0]) * (double(m[5]) * m[10] - double(m[9]) * m[6]) - double(m[4]) * (double(m[1]) * m[10] - double(m[9]) * m[2]) +
+               double(m[8]) * (double(m[1]) * m[6] - double(m[5]) * m[2]);
+    }
+    void normal(const float* n, float* out) const {
+        auto a = [&](int r, int c) { return double(m[4 * c + r]); };  // the 3x3 part, row r, column c
+        double cof[3][3];
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+                cof[r][c] = a((r + 1) % 3, (c + 1) % 3) * a((r + 2) % 3, (c + 2) % 3) - a((r + 1) % 3, (c + 2) % 3) * a((r + 2) % 3, (c + 1) % 3);
+        const double sign = det() < 0 ? -1.0 : 1.0;
+        double v[3], len = 0;
+        for (int r = 0; r < 3; ++r) v[r] = sign * (cof[r][0] * n[0] + cof[r][1] * n[1] + cof[r][2] * n[2]), len += v[r] * v[r];
+        len = std::sqrt(len);
+        for (int r = 0; r < 3; ++r) out[r] = len > 0 ? float(v[r] / len) : 0.0f;
+    }
+};
+
 Loaded load(const std::string& path, std::optional<double> fraction) {
     Loaded out;
-    auto append = [&](const float* pos, const float* nrm, const float* uv, uint32_t n, const uint32_t* idx, size_t tris) {
+    auto append = [&](const float* pos, const float* nrm, const float* uv, uint32_t n, const uint32_t* idx, size_t tris, const float* transform) {
         const uint32_t base = uint32_t(out.positions.size() / 3);
-        out.positions.insert(out.positions.end(), pos, pos + size_t(n) * 3);
+        const Placement place{transform};
+        for (uint32_t v = 0; v < n; ++v) {
+            float p[3];
+            if (transform) place.point(pos + 3 * size_t(v), p);
+            else std::copy_n(pos + 3 * size_t(v), 3, p);
+            out.positions.insert(out.positions.end(), p, p + 3);
+            if (!nrm) continue;
+            if (transform) place.normal(nrm + 3 * size_t(v), p);
+            else std::copy_n(nrm + 3 * size_t(v), 3, p);
+            out.normals.insert(out.normals.end(), p, p + 3);
+        }
         out.all_normals &= nrm != nullptr;
         out.all_texcoords &= uv != nullptr;
-        if (nrm) out.normals.insert(out.normals.end(), nrm, nrm + size_t(n) * 3);
         if (uv) out.texcoords.insert(out.texcoords.end(), uv, uv + size_t(n) * 2);
-        for (size_t i = 0; i < tris * 3; ++i) out.indices.push_back(idx[i] + base);
+        const bool mirrored = transform && place.det() < 0;
+        for (size_t t = 0; t < tris; ++t)
+            for (const size_t k : {size_t(0), mirrored ? size_t(2) : size_t(1), mirrored ? size_t(1) : size_t(2)}) out.indices.push_back(idx[3 * t + k] + base);
         ++out.meshes;
+    };
+    // f(mesh, transform or null) for each placement of the file's meshes
+    auto each_placement = [](const tom::Scene& scene, size_t mesh_count, auto&& f) {
+        if (scene.instances.empty()) {
+            for (size_t i = 0; i < mesh_count; ++i) f(i, nullptr);
+            return;
+        }
+        for (const tom::Instance& in : scene.instances)
+            if (in.mesh < mesh_count) f(in.mesh, in.transform);
     };
     if (ends_with(path, ".tom")) {
         const tom::File f = tom::File::open(path);
-        for (uint32_t i = 0; i < f.mesh_count(); ++i) {
-            const tom::MeshView& m = f.mesh(i);
+        each_placement(f.scene(), f.mesh_count(), [&](size_t i, const float* transform) {
+            const tom::MeshView& m = f.mesh(uint32_t(i));
             const uint32_t n = fraction ? tom::vertex_count_for_fraction(m, *fraction) : m.vertex_count;
             std::vector<uint32_t> idx(size_t(m.triangle_count) * 3);
             const tom::Extracted e = tom::extract(m, n, idx.data(), idx.size());
-            append(m.positions, m.normals, m.texcoords, e.vertex_count, idx.data(), e.triangle_count);
-        }
+            append(m.positions, m.normals, m.texcoords, e.vertex_count, idx.data(), e.triangle_count, transform);
+        });
+        if (out.indices.empty()) throw tom::ImportError(path + ": no triangles");
         return out;
     }
     tom::ImportResult r = tom::import_file(path);
-    for (tom::Mesh& m : r.meshes) {
-        tom::clean_mesh(m);
+    for (tom::Mesh& m : r.meshes) tom::clean_mesh(m);
+    each_placement(r.scene, r.meshes.size(), [&](size_t i, const float* transform) {
+        const tom::Mesh& m = r.meshes[i];
         append(m.positions.data(), m.normals.empty() ? nullptr : m.normals.data(), m.texcoords.empty() ? nullptr : m.texcoords.data(),
-               m.vertex_count(), m.indices.data(), m.triangle_count());
-    }
+               m.vertex_count(), m.indices.data(), m.triangle_count(), transform);
+    });
     if (out.indices.empty()) throw tom::ImportError(path + ": no triangles");
     return out;
 }
