@@ -224,10 +224,11 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 char line[512];
                 std::snprintf(line, sizeof line,
                               "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
-                              "%u border vertices, %u seam vertices, %u passes%s%s%s\n",
+                              "%u border vertices, %u seam vertices, %u passes%s%s%s%s\n",
                               t.name.c_str(), t.parts.empty() ? "" : (" (" + std::to_string(t.parts.size()) + " parts)").c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
                               tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices,
                               stats.border_vertices, stats.seam_vertices, stats.passes,
+                              stats.pruned_pieces ? (", " + std::to_string(stats.pruned_pieces) + " small pieces pruned").c_str() : "",
                               clean.welded_vertices ? (", " + std::to_string(clean.welded_vertices) + " identical vertices welded").c_str() : "",
                               clean.degenerate_triangles ? (", " + std::to_string(clean.degenerate_triangles) + " degenerate triangles dropped").c_str() : "",
                               clean.unreferenced_vertices ? (", " + std::to_string(clean.unreferenced_vertices) + " unused vertices dropped").c_str() : "");

@@ -253,6 +253,53 @@ void classify(Builder& b, BuildStats& stats, float tolerance, bool allow_groups,
     }
 }
 
+// The pieces that may be pruned: the connected parts of the mesh welded by position, but the one
+// with the most triangles (a mesh never vanishes), each removable whole at the cost of its box's
+// squared half-diagonal (meshoptimizer's meshopt_simplifyPrune removes such pieces too). A piece
+// goes when that is cheaper than what remains: specks early, a building's planks near the end,
+// instead of folding each into a sheet.
+void find_pieces(Builder& b) {
+    const uint32_t n = b.n;
+    FirstCopy piece(n);
+    for (uint32_t v = 0; v < n; ++v) piece.join(v, b.classes.wedge[v]);
+    for (size_t c = 0; c < b.topo.idx.size(); c += 3) {
+        piece.join(b.topo.idx[c], b.topo.idx[c + 1]);
+        piece.join(b.topo.idx[c], b.topo.idx[c + 2]);
+    }
+    std::vector<uint32_t> root(n), triangles(n, 0);
+    uint32_t count = 0;
+    for (uint32_t v = 0; v < n; ++v) count += (root[v] = piece.find(v)) == v;
+    if (count < 2) return;
+    for (size_t c = 0; c < b.topo.idx.size(); c += 3) ++triangles[root[b.topo.idx[c]]];
+    uint32_t largest = 0;
+    for (uint32_t v = 0; v < n; ++v)
+        if (root[v] == v && triangles[v] > triangles[largest]) largest = v;
+    // members by piece, pieces in the order of their first members
+    std::vector<uint32_t> index(n, kNone);
+    Pieces& p = b.pieces;
+    for (uint32_t v = 0; v < n; ++v)
+        if (root[v] == v && v != root[largest]) index[v] = uint32_t(p.cost.size()), p.cost.push_back(0.0f);
+    p.first.assign(p.count() + 1, 0);
+    for (uint32_t v = 0; v < n; ++v)
+        if (index[root[v]] != kNone) ++p.first[index[root[v]] + 1];
+    for (size_t k = 0; k < p.count(); ++k) p.first[k + 1] += p.first[k];
+    p.members.resize(p.first.back());
+    std::vector<uint32_t> next(p.first.begin(), p.first.end() - 1);
+    std::vector<float> lo(3 * p.count(), std::numeric_limits<float>::max()), hi(3 * p.count(), -std::numeric_limits<float>::max());
+    for (uint32_t v = 0; v < n; ++v) {
+        const uint32_t k = index[root[v]];
+        if (k == kNone) continue;
+        p.members[next[k]++] = v;
+        for (int a = 0; a < 3; ++a) lo[3 * k + a] = std::min(lo[3 * k + a], (&b.pos[v].x)[a]), hi[3 * k + a] = std::max(hi[3 * k + a], (&b.pos[v].x)[a]);
+    }
+    for (size_t k = 0; k < p.count(); ++k) {
+        double d2 = 0;
+        for (int a = 0; a < 3; ++a) d2 += double(hi[3 * k + a] - lo[3 * k + a]) * double(hi[3 * k + a] - lo[3 * k + a]);
+        p.cost[k] = float(d2 / 4);
+    }
+    p.gone.assign(p.count(), 0);
+}
+
 void init_quadrics(Builder& b, detail::Team& team) {
     detail::zero_on_team(team, b.quadric, b.n);
     detail::scatter_by_vertex_range(team, b.n, b.topo.idx.data(), b.m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
@@ -734,6 +781,8 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     classify(b, stats, params.pair_threshold > 0.0f ? 0.0f : copy_tolerance(local, params), params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders,
              team);
     if (b.predicate == Predicate::quadric) init_quadrics(b, team);
+    // (not with locked borders: a tile's pieces all meet its neighbours)
+    if (b.predicate == Predicate::quadric && params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f) && !params.lock_borders) find_pieces(b);
     b.attributes.init(local.mesh, params.attribute_weight, animation, b.predicate == Predicate::quadric, team);
     animation = {};
     find_pairs(b, params.pair_threshold, stats);

@@ -227,6 +227,7 @@ public:
         s_.alive_count = b.n;
         ahead_.touched.assign(b.n, 0);
         for (Scratch& h : helpers_) h.stamp.assign(b.n, 0);
+        for (size_t k = 0; k < b.pieces.count(); ++k) piece_heads_.push_back(b.pieces.members[b.pieces.first[k]]);
     }
 
     std::function<void(double)> progress;  // after each pass: the share of the vertices removed
@@ -265,11 +266,19 @@ private:
 
     // 2. The vertices with a best substitution; the cheapest 4 x quota are enough to fill a pass
     // (the cheapest 2 x quota sorted now, the others when the loop gets there).
+    // A piece's removal is a candidate too (v: its first member, u: kNone), in the same order.
     void collect_candidates() {
         c_.quota = std::max<size_t>(1, size_t(std::ceil(double(fraction_) * s_.alive_count)));
+        const size_t live = s_.live.size();
+        const Pieces& pieces = b_.pieces;
         c_.limit_keep = sort_cheapest(
-            s_.live.size(), [&](size_t i) { return s_.has[s_.live[i]] != 0; }, [&](size_t i) { return s_.best[s_.live[i]]; }, c_.quota * 2, c_.quota * 4,
-            c_.items, c_.front, team_);
+            live + pieces.count(), [&](size_t i) { return i < live ? s_.has[s_.live[i]] != 0 : !pieces.gone[i - live]; },
+            [&](size_t i) {
+                if (i < live) return s_.best[s_.live[i]];
+                const size_t k = i - live;
+                return Candidate{pieces.cost[k], pieces.members[pieces.first[k]], kNone};
+            },
+            c_.quota * 2, c_.quota * 4, c_.items, c_.front, team_);
         c_.executed = 0;
     }
 
@@ -305,6 +314,10 @@ private:
 
     void try_candidate(size_t ci) {
         const Candidate c = c_.items[ci];
+        if (c.u == kNone) {
+            prune(c.v);
+            return;
+        }
         if (s_.pass_mark[c.v] == s_.pass || s_.pass_mark[c.u] == s_.pass) return;  // not independent of this pass's earlier ones
         if (kCollapseRules[b_.classes.kind[c.v]].as_group)
             collapse_group(c);
@@ -338,6 +351,37 @@ private:
             s_.dirty[move.to[i]] = 1;
         }
         c_.executed += move.count;
+    }
+
+    // A piece removed whole: its live vertices but the first, each onto the first (which stays,
+    // without triangles), one group of the order, so no resolution shows it half gone.
+    void prune(uint32_t first_member) {
+        Pieces& pieces = b_.pieces;
+        const size_t k = size_t(std::lower_bound(piece_heads_.begin(), piece_heads_.end(), first_member) - piece_heads_.begin());
+        if (pieces.gone[k]) return;
+        uint32_t survivor = kNone;
+        std::vector<uint32_t>& leaving = leaving_;
+        leaving.clear();
+        for (uint32_t i = pieces.first[k]; i < pieces.first[k + 1]; ++i) {
+            const uint32_t v = pieces.members[i];
+            if (b_.removed[v]) continue;
+            if (s_.pass_mark[v] == s_.pass) return;  // a substitution of this pass changed it
+            if (survivor == kNone) survivor = v;
+            else leaving.push_back(v);
+        }
+        pieces.gone[k] = 1;
+        if (leaving.empty()) return;
+        for (const uint32_t v : leaving) touch(v);
+        touch(survivor);
+        b_.group_steps.push_back({uint32_t(b_.removed_order.size()), uint32_t(leaving.size())});
+        for (const uint32_t v : leaving) {
+            b_.substitute(v, survivor);
+            topo_.splice(v, survivor);
+            s_.pass_mark[v] = s_.pass;
+        }
+        s_.pass_mark[survivor] = s_.pass;
+        c_.executed += leaving.size();
+        ++stats_.pruned_pieces;
     }
 
     // A single substitution v -> u, when the oracle allows it.
@@ -504,7 +548,7 @@ private:
     void foresee(const Candidate& e, Foresight& f, Scratch& sc) const {
         f.verdict = kUnknown;
         f.ring = f.fan = kRingUnknown;
-        if (s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].as_group || b_.removed[e.u])
+        if (e.u == kNone || s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].as_group || b_.removed[e.u])
             return;
         f.verdict = b_.illegal(e.v, e.u, sc) ? kIllegal : kLegal;
         if (f.verdict == kIllegal || b_.predicate != Predicate::quadric) return;
@@ -537,14 +581,14 @@ private:
     // next one's triangles and ring all at once instead of down its corner list).
     void prefetch_ahead(size_t ci) const {
         const Candidate* sorted = c_.items.data();  // the part in its final order: [0, front)
-        if (ci + 4 < c_.front) {
+        if (ci + 4 < c_.front && sorted[ci + 4].u != kNone) {
             b_.prefetch(sorted[ci + 4].v);
             topo_.prefetch_splice(sorted[ci + 4].v, sorted[ci + 4].u);
         }
         if (ci + 2 >= c_.front) return;
         const Foresight* next = ahead_.on && ci + 2 < ahead_.chunk_end ? &ahead_.chunk_entries[ci + 2 - ahead_.chunk_begin] : nullptr;
         if (!next || next->fan == kRingUnknown) {
-            topo_.prefetch_fan(sorted[ci + 2].v);
+            topo_.prefetch_fan(sorted[ci + 2].v);  // (a piece's first member for a removal: harmless)
             return;
         }
         for (uint32_t i = 0; i < next->fan; ++i) {
@@ -577,6 +621,8 @@ private:
     std::vector<uint32_t> evaluate_, unused_;  // (unused_: split_in_order's second list, always empty here)
     std::vector<Scratch> helpers_;
     GroupMove group_;  // collapse_group()'s (2 KB)
+    std::vector<uint32_t> leaving_;      // prune()'s
+    std::vector<uint32_t> piece_heads_;  // each prunable piece's first member, ascending (pieces are in that order)
 };
 
 } // namespace

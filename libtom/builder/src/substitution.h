@@ -197,6 +197,17 @@ struct GroupMove {
     float cost = 0;
 };
 
+// The mesh's connected pieces (of the surface welded by position) that may vanish whole: each
+// small piece's vertices, and the cost of removing it, as the quadric predicate counts (the
+// squared half-diagonal of its box: the distance the surface it leaves is from what remains).
+struct Pieces {
+    std::vector<uint32_t> first;    // per prunable piece: its members in [first[k], first[k + 1])
+    std::vector<uint32_t> members;  // vertices, by piece, each piece's lowest first
+    std::vector<float> cost;
+    std::vector<uint8_t> gone;
+    size_t count() const { return cost.size(); }
+};
+
 // Shared state of one build: the mesh, the current triangles, the vertex classes, the costs'
 // quadrics and the record of substitutions.
 struct Builder {
@@ -217,6 +228,7 @@ struct Builder {
     std::vector<uint32_t> removed_order, removed_target;
     // group substitutions: (first step, copies); their steps are one move
     std::vector<std::pair<uint32_t, uint32_t>> group_steps;
+    Pieces pieces;  // with Strategy::passes and the quadric predicate; empty otherwise
     Scratch scratch;  // the calling thread's; workers bring their own
 
     // A border loop of three edges cannot lose a vertex (it would fold onto itself).

@@ -80,6 +80,7 @@ struct BuildStats {
     uint32_t passes = 0;             ///< passes (Strategy::passes) or 0
     uint32_t pair_candidates = 0;    ///< non-edge pairs offered by the oracle
     uint32_t foreseen_chunks = 0;    ///< chunks of candidates the foresight evaluated ahead (0 without it)
+    uint32_t pruned_pieces = 0;      ///< disconnected pieces removed whole (all but the largest may go, cheapest first)
 };
 
 /// A named binary value stored with a mesh (FORMAT.md, section META).
