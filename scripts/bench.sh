@@ -4,7 +4,8 @@
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
 # conversion and report times of tombuild, one extraction through the C++, C and Python APIs
 # (scripts/bench-bindings.py), and tomextract -c's bytes against the current gltfpack's.
-# Stamped with the commit, the date and the CPU.
+# Stamped with the commit, the date and the CPU. The section "Real assets against gltfpack" is
+# scripts/real-assets.sh's, kept as that script last wrote it.
 # Usage: scripts/bench.sh [--quick] [--walk] [--scale | --large-report] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
 #   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test;
@@ -187,6 +188,18 @@ L.append('')
 L.append(scale if scale else 'Not measured in this run (`scripts/bench.sh --scale`).')
 L.append('')
 walk = open(walk_table).read().strip()
+# the real-asset section is scripts/real-assets.sh's (minutes of gltfpack and tomerr runs): kept as it is
+try:
+    old = open(out).read()
+except OSError:
+    old = ''
+start = old.find('## Real assets against gltfpack')
+if start >= 0:
+    end = old.find('\n## ', start + 1)
+    L.extend(old[start:end if end >= 0 else len(old)].rstrip('\n').split('\n'))
+    L.append('')
+else:
+    L.extend(['## Real assets against gltfpack', '', 'Not measured in this run (`scripts/real-assets.sh`).', ''])
 L.append('## Walkthrough')
 L.append('')
 if walk:

@@ -1,0 +1,167 @@
+#!/usr/bin/env bash
+# The real-asset benchmark: every asset (the glTF2 and OBJ samples of Debian's assimp-testmodels
+# with more than 500 triangles, and meshes written here as exporters write them: a UV sphere with
+# its seam column and pole fans, and the cow unindexed and flat-shaded) simplified by tombuild and
+# by the current gltfpack (npm, 1.3: its default, -sv and -sa, with -noq so that quantization adds
+# no error) at 50%, 25% and 10% of the triangles, and each tool's floor (tomextract --fraction 0;
+# gltfpack -si 0 -sa). TOM's level is taken at gltfpack's count (tomextract --scene-budget: the
+# triangles drawn, instances counted), and both are measured by tomerr in world space (node
+# transforms applied) against the source: two-sided mean and Hausdorff distance (% of the
+# diagonal), normal and texture-coordinate deviation.
+# Writes the results as JSON lines (build/real-assets/results.jsonl) and the section "Real assets
+# against gltfpack" of docs/PERFORMANCE.md (scripts/bench.sh keeps it when it rewrites the file).
+# Usage: scripts/real-assets.sh [ASSET...]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+tools="$root/build/tools"
+pack="$root/.tools/node_modules/gltfpack-current/cli.js"
+[ -x "$tools/tombuild" ] || "$root/scripts/build.sh"
+[ -f "$root/data/meshes/bunny00.off" ] || "$root/scripts/fetch-samples.sh"
+[ -f "$pack" ] || "$root/scripts/install-deps.sh"
+work="$root/build/real-assets"
+rm -rf "$work"; mkdir -p "$work/generated"
+
+# the exporter-written meshes
+/usr/bin/python3 - "$root/data/meshes/cow.off" "$work/generated" <<'EOF'
+import math, sys
+off, out = sys.argv[1], sys.argv[2]
+tokens = open(off).read().split()
+nv, nf = int(tokens[1]), int(tokens[2])
+V = [tuple(float(x) for x in tokens[4 + 3 * i:7 + 3 * i]) for i in range(nv)]
+at = 4 + 3 * nv
+F = []
+for _ in range(nf):
+    F.append(tuple(int(x) for x in tokens[at + 1:at + 4])); at += 4
+def sub(a, b): return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+def cross(a, b): return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+with open(out + '/cow-unindexed.obj', 'w') as f:
+    for t in F:
+        for v in t: f.write('v %.7g %.7g %.7g\n' % V[v])
+    for j in range(len(F)): f.write('f %d %d %d\n' % (3 * j + 1, 3 * j + 2, 3 * j + 3))
+with open(out + '/cow-flat.obj', 'w') as f:
+    for t in F:
+        for v in t: f.write('v %.7g %.7g %.7g\n' % V[v])
+    for t in F:
+        n = cross(sub(V[t[1]], V[t[0]]), sub(V[t[2]], V[t[0]])); l = math.sqrt(sum(x * x for x in n)) or 1
+        f.write('vn %.6f %.6f %.6f\n' % tuple(x / l for x in n))
+    for j in range(len(F)): f.write('f %d//%d %d//%d %d//%d\n' % (3 * j + 1, j + 1, 3 * j + 2, j + 1, 3 * j + 3, j + 1))
+# a UV sphere of 48 x 96 quads as SphereGeometry writes it: columns 0..96 (the last a copy of the
+# first at u = 1, computed from 2 pi), each pole a fan of 96 copies
+rings, segs = 48, 96
+with open(out + '/uv-sphere.obj', 'w') as f:
+    index = {}
+    for i in range(rings + 1):
+        cols = segs if i in (0, rings) else segs + 1
+        for j in range(cols):
+            phi, theta = math.pi * i / rings, 2 * math.pi * j / segs
+            r = 0.0 if i in (0, rings) else math.sin(phi)
+            p = (r * math.cos(theta), r * math.sin(theta), math.cos(phi))
+            u = (j + 0.5) / segs if i in (0, rings) else j / segs
+            f.write('v %.9g %.9g %.9g\nvn %.9g %.9g %.9g\nvt %.9g %.9g\n' % (p + p + (u, 1 - i / rings)))
+            index[i, j] = len(index) + 1
+    def corner(k): return '%d/%d/%d' % (k, k, k)
+    for i in range(rings):
+        for j in range(segs):
+            a, d = index[i, j], index.get((i, j + 1))
+            b, c = index[i + 1, j], index.get((i + 1, j + 1))
+            if i == 0: f.write('f %s %s %s\n' % (corner(a), corner(b), corner(c)))
+            elif i + 1 == rings: f.write('f %s %s %s\n' % (corner(a), corner(b), corner(d)))
+            else: f.write('f %s %s %s\nf %s %s %s\n' % (corner(a), corner(b), corner(c), corner(a), corner(c), corner(d)))
+EOF
+
+assets=("$@")
+if [ ${#assets[@]} -eq 0 ]; then
+  a="$root/data/assimp"
+  assets=("$a/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb" "$a/glTF2/ClearCoat-glTF/ClearCoatTest.gltf"
+          "$a/OBJ/spider.obj" "$a/OBJ/WusonOBJ.obj" "$a/OBJ/regr01.obj"
+          "$work/generated/uv-sphere.obj" "$work/generated/cow-unindexed.obj" "$work/generated/cow-flat.obj")
+fi
+
+# one JSON line: a tool's level of an asset measured against the source
+measure() {  # asset tool mode ratio file
+  "$tools/tomerr" "$1" "$5" --json | /usr/bin/python3 -c "
+import json, sys
+d = json.load(sys.stdin); a = d['attributes']
+print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': sys.argv[3], 'ratio': float(sys.argv[4]), 'triangles': d['simplified_triangles'],
+                  'source_triangles': d['original_triangles'], 'mean': d['mean'], 'hausdorff': d['hausdorff'],
+                  'normal_degrees': a['normal_mean_degrees'], 'uv': a['uv_mean']}))" "$(basename "$1")" "$2" "$3" "$4" >> "$work/results.jsonl"
+}
+triangles_of() { "$tools/tomerr" "$1" "$1" --json --samples-per-face 0.01 | /usr/bin/python3 -c "import json,sys; print(json.load(sys.stdin)['original_triangles'])"; }
+
+for src in "${assets[@]}"; do
+  name="$(basename "${src%.*}")"
+  out="$work/$name"; mkdir -p "$out"
+  "$tools/tombuild" "$src" -o "$out" -q
+  tom="$out/$name.tom"
+  # floors
+  "$tools/tomextract" "$tom" --fraction 0 -o "$out/tom-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null
+  measure "$src" tom floor 0 "$out/tom-floor.glb"
+  if node "$pack" -i "$src" -o "$out/gltfpack-floor.glb" -noq -si 0 -sa >/dev/null 2>&1; then
+    measure "$src" gltfpack floor-sa 0 "$out/gltfpack-floor.glb"
+    "$tools/tomextract" "$tom" --scene-budget "$(triangles_of "$out/gltfpack-floor.glb")" -o "$out/tom-at-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+    measure "$src" tom at-floor-sa 0 "$out/tom-at-floor.glb"
+  fi
+  # levels: gltfpack's, and TOM's at the same drawn count
+  for ratio in 0.5 0.25 0.1; do
+    for mode in default sv sa; do
+      flag=(); [ "$mode" = default ] || flag=("-$mode")
+      g="$out/gltfpack-$mode-$ratio.glb"
+      node "$pack" -i "$src" -o "$g" -noq -si "$ratio" "${flag[@]}" >/dev/null 2>&1 || { echo "gltfpack failed on $src" >&2; continue; }
+      measure "$src" gltfpack "$mode" "$ratio" "$g"
+      count="$(triangles_of "$g")"
+      t="$out/tom-$mode-$ratio.glb"
+      "$tools/tomextract" "$tom" --scene-budget "$count" -o "$t" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+      measure "$src" tom "at-$mode" "$ratio" "$t"
+    done
+  done
+  echo "$name: measured" >&2
+done
+
+/usr/bin/python3 - "$work/results.jsonl" "$root/docs/PERFORMANCE.md" <<'EOF'
+import json, statistics, sys
+rows = [json.loads(l) for l in open(sys.argv[1])]
+doc = sys.argv[2]
+def find(asset, tool, mode, ratio):
+    for r in rows:
+        if r['asset'] == asset and r['tool'] == tool and r['mode'] == mode and r['ratio'] == ratio: return r
+def fmt(x, p=4): return '-' if x is None else ('%.' + str(p) + 'g') % x
+L = ['## Real assets against gltfpack', '',
+     '`scripts/real-assets.sh`: each asset built by tombuild (defaults) and simplified by the current gltfpack (npm) with `-noq`',
+     'at 50%, 25% and 10% (`-si`) in its default mode, `-sv` and `-sa`; TOM\'s level is extracted at the count gltfpack reached',
+     '(`tomextract --scene-budget`, triangles drawn), and both are measured by `tomerr` in world space against the source:',
+     'two-sided mean and Hausdorff distance in % of the diagonal, mean normal deviation in degrees, mean texture-coordinate',
+     'deviation. Floors: `tomextract --fraction 0` and `gltfpack -si 0 -sa`.', '',
+     '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack |',
+     '|---|---:|---|---:|---:|---:|---:|---:|']
+ratios = {}
+for asset in dict.fromkeys(r['asset'] for r in rows):
+    for ratio in (0.5, 0.25, 0.1):
+        for mode in ('default', 'sv', 'sa'):
+            g, t = find(asset, 'gltfpack', mode, ratio), find(asset, 'tom', 'at-' + mode, ratio)
+            if not g or not t: continue
+            ratios.setdefault((mode, ratio), []).append(t['mean'] / g['mean'] if g['mean'] > 0 else 1.0)
+            L.append('| %s | %d | %s %d%% | %d / %d | %s / %s | %s / %s | %s / %s | %s / %s |' % (
+                asset, g['source_triangles'], mode, ratio * 100, t['triangles'], g['triangles'], fmt(t['mean']), fmt(g['mean']),
+                fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3)))
+L += ['', 'Floors: the coarsest level each tool reaches, and TOM\'s level at gltfpack -sa\'s floor count.', '',
+      '| asset | triangles | TOM floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack |',
+      '|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+for asset in dict.fromkeys(r['asset'] for r in rows):
+    t, g, a = find(asset, 'tom', 'floor', 0), find(asset, 'gltfpack', 'floor-sa', 0), find(asset, 'tom', 'at-floor-sa', 0)
+    if t and g and a:
+        L.append('| %s | %d | %d | %s | %d | %s | %d | %s | %s / %s |' % (asset, t['source_triangles'], t['triangles'], fmt(t['mean']), g['triangles'], fmt(g['mean']),
+                                                                      a['triangles'], fmt(a['mean']), fmt(a['hausdorff']), fmt(g['hausdorff'])))
+L += ['', 'Median of TOM\'s mean error over gltfpack\'s, per mode and ratio: ' +
+      ', '.join('%s %d%%: %.2f' % (m, r * 100, statistics.median(v)) for (m, r), v in sorted(ratios.items(), key=lambda kv: (kv[0][0], -kv[0][1]))), '']
+section = '\n'.join(L)
+text = open(doc).read()
+start = text.find('## Real assets against gltfpack')
+if start < 0:
+    at = text.find('## Walkthrough')
+    text = text[:at] + section + '\n' + text[at:] if at >= 0 else text.rstrip('\n') + '\n\n' + section
+else:
+    end = text.find('\n## ', start + 1)
+    text = text[:start] + section + (text[end + 1:] if end >= 0 else '')
+open(doc, 'w').write(text)
+print(section)
+EOF
