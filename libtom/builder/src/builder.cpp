@@ -221,7 +221,7 @@ void classify_welded(Builder& b, bool allow_groups, detail::Team& team) {
     for (uint32_t v = 0; v < n; ++v) {
         const uint32_t r = cl.wedge[v];
         if (cl.next_copy[r] == r) {
-            cl.kind[v] = folded[r] ? kLocked : by_point.kind[r];
+            cl.kind[v] = folded[r] ? uint8_t(kLocked) : by_point.kind[r];
             continue;
         }
         uint32_t copies = 0;
