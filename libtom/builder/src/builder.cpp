@@ -103,6 +103,26 @@ void classify_by_edges(const Topology& topo, uint32_t n, VertexClasses& cl, deta
     });
 }
 
+// A uniform grid of cubes `size` wide, for near-neighbour queries. Cell coordinates are clamped
+// to 2^40 so that a far-away vertex or a tiny cell cannot overflow the conversion to integer:
+// clamped vertices share edge cells, which costs candidates, never correctness (callers check
+// every candidate by distance).
+struct Grid {
+    double size;
+    int64_t coord(float x) const {
+        constexpr double kLimit = double(int64_t(1) << 40);
+        const double c = std::floor(double(x) / size);
+        return int64_t(c > -kLimit ? (c < kLimit ? c : kLimit) : -kLimit);
+    }
+    // a cell's hash (wrapping in unsigned arithmetic), mixed so that its low bits index a table
+    static uint64_t hash(int64_t x, int64_t y, int64_t z) {
+        uint64_t h = (uint64_t(x) * 73856093ULL) ^ (uint64_t(y) * 19349663ULL) ^ (uint64_t(z) * 83492791ULL);
+        h ^= h >> 29;
+        h *= 0xbf58476d1ce4e5b9ULL;
+        return h ^ (h >> 32);
+    }
+};
+
 // Union-find over vertices whose root is a set's lowest vertex: the first copy names a class.
 struct FirstCopy {
     std::vector<uint32_t> parent;
@@ -128,18 +148,7 @@ struct FirstCopy {
 bool find_position_classes(Builder& b, float tolerance) {
     const uint32_t n = b.n;
     VertexClasses& cl = b.classes;
-    const double cell = tolerance > 0 ? 2.0 * double(tolerance) : 1.0;
-    auto coord = [&](float x) {
-        constexpr double kLimit = double(int64_t(1) << 40);
-        const double c = std::floor(double(x) / cell);
-        return int64_t(c > -kLimit ? (c < kLimit ? c : kLimit) : -kLimit);
-    };
-    auto cell_hash = [](int64_t x, int64_t y, int64_t z) {
-        uint64_t h = (uint64_t(x) * 73856093ULL) ^ (uint64_t(y) * 19349663ULL) ^ (uint64_t(z) * 83492791ULL);
-        h ^= h >> 29;
-        h *= 0xbf58476d1ce4e5b9ULL;
-        return h ^ (h >> 32);
-    };
+    const Grid grid{tolerance > 0 ? 2.0 * double(tolerance) : 1.0};
     size_t cap = 16;
     while (cap < size_t(n) * 2) cap *= 2;
     struct Slot {
@@ -149,7 +158,7 @@ bool find_position_classes(Builder& b, float tolerance) {
     std::vector<Slot> table(cap, Slot{0, 0, 0, kNone});
     std::vector<uint32_t> next_in_cell(n, kNone);
     auto slot_of = [&](int64_t x, int64_t y, int64_t z) -> Slot& {
-        for (size_t i = size_t(cell_hash(x, y, z)) & (cap - 1);; i = (i + 1) & (cap - 1))
+        for (size_t i = size_t(Grid::hash(x, y, z)) & (cap - 1);; i = (i + 1) & (cap - 1))
             if (table[i].head == kNone || (table[i].x == x && table[i].y == y && table[i].z == z)) return table[i];
     };
     FirstCopy classes(n);
@@ -157,10 +166,10 @@ bool find_position_classes(Builder& b, float tolerance) {
     bool any = false;
     for (uint32_t v = 0; v < n; ++v) {
         const Vec3 p = b.pos[v];
-        const int64_t c[3] = {coord(p.x), coord(p.y), coord(p.z)};
+        const int64_t c[3] = {grid.coord(p.x), grid.coord(p.y), grid.coord(p.z)};
         int64_t side[3];
         for (int k = 0; k < 3; ++k) {
-            const double f = double((&p.x)[k]) / cell - double(c[k]);
+            const double f = double((&p.x)[k]) / grid.size - double(c[k]);
             side[k] = f < 0.5 ? -1 : 1;
         }
         for (int corner = 0; corner < 8; ++corner) {
@@ -348,18 +357,9 @@ void find_pairs(Builder& b, float t, BuildStats& stats) {
         uint32_t v;
     };
     std::vector<Cell> cells(b.n);
-    // The hash wraps in unsigned arithmetic; cell coordinates are clamped so that a
-    // far-away or tiny-threshold vertex cannot overflow the conversion to integer.
-    // Clamped vertices share edge cells, which costs candidates, never correctness:
-    // every candidate is checked against t by distance.
-    auto cell_key = [&](int64_t x, int64_t y, int64_t z) {
-        return int64_t((uint64_t(x) * 73856093ULL) ^ (uint64_t(y) * 19349663ULL) ^ (uint64_t(z) * 83492791ULL));
-    };
-    auto coord = [&](float x) {
-        constexpr double kLimit = double(int64_t(1) << 40);
-        const double c = double(std::floor(x / t));
-        return int64_t(c > -kLimit ? (c < kLimit ? c : kLimit) : -kLimit);
-    };
+    const Grid grid{double(t)};
+    auto cell_key = [](int64_t x, int64_t y, int64_t z) { return int64_t(Grid::hash(x, y, z)); };
+    auto coord = [&](float x) { return grid.coord(x); };
     for (uint32_t v = 0; v < b.n; ++v)
         cells[v] = {cell_key(coord(b.pos[v].x), coord(b.pos[v].y), coord(b.pos[v].z)), v};
     std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& c) { return a.key < c.key || (a.key == c.key && a.v < c.v); });

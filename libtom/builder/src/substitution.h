@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <utility>
 #include <vector>
 
@@ -85,12 +84,22 @@ struct Candidate {
     uint32_t v, u;
 };
 
+// One group substitution: the copies of a point, each onto a copy of the target point.
+struct GroupMove {
+    static constexpr uint32_t kMaxCopies = 256;  // a point with more copies stays locked
+    uint32_t count = 0;
+    uint32_t from[kMaxCopies], to[kMaxCopies];
+    float cost = 0;
+};
+
 // What one thread needs to evaluate substitutions: visit stamps per vertex (deduplication in
 // O(1)) and the candidate targets of one vertex.
 struct Scratch {
     std::vector<uint32_t> stamp;  // per vertex: the visit that last saw it
     uint32_t visit = 0;
     std::vector<Candidate> targets;
+    std::vector<GroupMove> moves;  // best_group_target's, one per target
+    std::vector<uint32_t> order;   // best_group_target's targets, cheapest first
     uint32_t next_visit() {
         if (++visit == 0) {  // wrapped: clear and start again
             std::fill(stamp.begin(), stamp.end(), 0u);
@@ -189,14 +198,6 @@ struct VertexClasses {
     std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
 };
 
-// One group substitution: the copies of a point, each onto a copy of the target point.
-struct GroupMove {
-    static constexpr uint32_t kMaxCopies = 256;  // a point with more copies stays locked
-    uint32_t count = 0;
-    uint32_t from[kMaxCopies], to[kMaxCopies];
-    float cost = 0;
-};
-
 // The mesh's connected pieces (of the surface welded by position) that may vanish whole: each
 // small piece's vertices, and the cost of removing it, as the quadric predicate counts (the
 // squared half-diagonal of its box: the distance the surface it leaves is from what remains).
@@ -280,9 +281,12 @@ struct Builder {
             move.cost += c;
             p = classes.next_copy[p];
         } while (p != v);
-        if (check_legal)
-            for (uint32_t i = 0; i < move.count; ++i)
-                if (illegal(move.from[i], move.to[i], sc)) return false;
+        return !check_legal || group_legal(move, sc);
+    }
+    // The oracle on each copy's move; the link condition, a property of the two points, once.
+    bool group_legal(const GroupMove& move, Scratch& sc) const {
+        for (uint32_t i = 0; i < move.count; ++i)
+            if (illegal(move.from[i], move.to[i], sc, i == 0)) return false;
         return true;
     }
 
@@ -292,7 +296,9 @@ struct Builder {
     // - link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
     //   otherwise edges v-w and u-w merge into a non-manifold edge;
     // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
-    bool illegal(uint32_t v, uint32_t u, Scratch& sc) const {
+    // The last two concern the points (position classes) of v and u, the same for every copy:
+    // with `points` false only v's own fan is checked (a group's other copies).
+    bool illegal(uint32_t v, uint32_t u, Scratch& sc, bool points = true) const {
         std::vector<uint32_t>& stamp = sc.stamp;
         const Vec3 pv = pos[v], pu = pos[u];
         uint32_t opposite[8];
@@ -342,13 +348,13 @@ struct Builder {
             }
             link(a, c);
         });
-        for (uint32_t x = classes.next_copy[v]; x != v && !bad; x = classes.next_copy[x])
+        for (uint32_t x = classes.next_copy[v]; points && x != v && !bad; x = classes.next_copy[x])
             topo.each(x, [&](uint32_t t) {
                 uint32_t a, c;
                 topo.others(t, x, a, c);
                 link(a, c);
             });
-        if (bad) return true;
+        if (bad || !points) return bad;
         uint32_t y = u;
         do {
             topo.each(y, [&](uint32_t t) {
@@ -556,22 +562,22 @@ struct Builder {
             });
             p = classes.next_copy[p];
         } while (p != v);
-        GroupMove move;
+        // each target's move, costed once; then cheapest first through the oracle
+        if (sc.moves.size() < targets.size()) sc.moves.resize(targets.size());
         size_t kept = 0;
         for (const Candidate& c : targets)
-            if (group_move(v, c.u, false, move, sc)) targets[kept++] = {move.cost, v, c.u};
+            if (group_move(v, c.u, false, sc.moves[kept], sc)) targets[kept] = {sc.moves[kept].cost, v, c.u}, ++kept;
         targets.resize(kept);
         if (targets.empty()) return false;
-        std::sort(targets.begin(), targets.end(), [](const Candidate& a, const Candidate& b) {
+        sc.order.resize(kept);
+        for (uint32_t i = 0; i < kept; ++i) sc.order[i] = i;
+        std::sort(sc.order.begin(), sc.order.end(), [&](uint32_t i, uint32_t j) {
+            const Candidate &a = targets[i], &b = targets[j];
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
-        if (!check_legal) {
-            best = targets[0];
-            return true;
-        }
-        for (const Candidate& c : targets)
-            if (group_move(v, c.u, true, move, sc)) {
-                best = c;
+        for (const uint32_t i : sc.order)
+            if (!check_legal || group_legal(sc.moves[i], sc)) {
+                best = targets[i];
                 return true;
             }
         return false;
