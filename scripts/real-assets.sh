@@ -3,8 +3,9 @@
 # with more than 500 triangles, and meshes written here as exporters write them: a UV sphere with
 # its seam column and pole fans, and the cow unindexed and flat-shaded) simplified by tombuild and
 # by the current gltfpack (npm, 1.3: its default, -sv and -sa, with -noq so that quantization adds
-# no error) at 50%, 25% and 10% of the triangles, and each tool's floor (tomextract --fraction 0;
-# gltfpack -si 0 -sa). TOM's level is taken at gltfpack's count (tomextract --scene-budget: the
+# no error) at 50%, 25% and 10% of the triangles, and each tool's floor (tomextract --fraction 0
+# --below-floor; gltfpack -si 0 -sa) and TOM's usable floor (tomextract --fraction 0: where the
+# mean error leaves 1%). TOM's level is taken at gltfpack's count (tomextract --scene-budget --below-floor: the
 # triangles drawn, instances counted), and both are measured by tomerr in world space (node
 # transforms applied) against the source: two-sided mean and Hausdorff distance (% of the
 # diagonal), normal and texture-coordinate deviation.
@@ -96,11 +97,13 @@ for src in "${assets[@]}"; do
   "${TOM_TOMBUILD:-$tools/tombuild}" "$src" -o "$out" -q
   tom="$out/$name.tom"
   # floors
-  "$tools/tomextract" "$tom" --fraction 0 -o "$out/tom-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null
+  "$tools/tomextract" "$tom" --fraction 0 --below-floor -o "$out/tom-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null
   measure "$src" tom floor 0 "$out/tom-floor.glb"
+  "$tools/tomextract" "$tom" --fraction 0 -o "$out/tom-usable.glb" --texture-dir "$(dirname "$src")" >/dev/null
+  measure "$src" tom usable 0 "$out/tom-usable.glb"
   if node "$pack" -i "$src" -o "$out/gltfpack-floor.glb" -noq -si 0 -sa >/dev/null 2>&1; then
     measure "$src" gltfpack floor-sa 0 "$out/gltfpack-floor.glb"
-    "$tools/tomextract" "$tom" --scene-budget "$(triangles_of "$out/gltfpack-floor.glb")" -o "$out/tom-at-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+    "$tools/tomextract" "$tom" --below-floor --scene-budget "$(triangles_of "$out/gltfpack-floor.glb")" -o "$out/tom-at-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
     measure "$src" tom at-floor-sa 0 "$out/tom-at-floor.glb"
   fi
   # levels: gltfpack's, and TOM's at the same drawn count
@@ -112,7 +115,7 @@ for src in "${assets[@]}"; do
       measure "$src" gltfpack "$mode" "$ratio" "$g"
       count="$(triangles_of "$g")"
       t="$out/tom-$mode-$ratio.glb"
-      "$tools/tomextract" "$tom" --scene-budget "$count" -o "$t" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+      "$tools/tomextract" "$tom" --below-floor --scene-budget "$count" -o "$t" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
       measure "$src" tom "at-$mode" "$ratio" "$t"
     done
   done
@@ -130,9 +133,10 @@ def fmt(x, p=4): return '-' if x is None else ('%.' + str(p) + 'g') % x
 L = ['## Real assets against gltfpack', '',
      '`scripts/real-assets.sh`: each asset built by tombuild (defaults) and simplified by the current gltfpack (npm) with `-noq`',
      'at 50%, 25% and 10% (`-si`) in its default mode, `-sv` and `-sa`; TOM\'s level is extracted at the count gltfpack reached',
-     '(`tomextract --scene-budget`, triangles drawn), and both are measured by `tomerr` in world space against the source:',
+     '(`tomextract --scene-budget --below-floor`, triangles drawn), and both are measured by `tomerr` in world space against the source:',
      'two-sided mean and Hausdorff distance in % of the diagonal, mean normal deviation in degrees, mean texture-coordinate',
-     'deviation. Floors: `tomextract --fraction 0` and `gltfpack -si 0 -sa`.', '',
+     'deviation. Floors: `tomextract --fraction 0 --below-floor` and `gltfpack -si 0 -sa`; TOM\'s usable floor (where its',
+     'stored mean error leaves 1% of the diagonal, the level its selections stop at): `tomextract --fraction 0`.', '',
      '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack |',
      '|---|---:|---|---:|---:|---:|---:|---:|']
 ratios = {}
@@ -146,14 +150,16 @@ for asset in dict.fromkeys(r['asset'] for r in rows):
             L.append('| %s | %d | %s %d%% | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s |' % (
                 asset, g['source_triangles'], mode, ratio * 100, t['triangles'], '' if reached else ' (floor)', g['triangles'], fmt(t['mean']), fmt(g['mean']),
                 fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3)))
-L += ['', 'Floors: the coarsest level each tool reaches, and TOM\'s level at gltfpack -sa\'s floor count.', '',
-      '| asset | triangles | TOM floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack |',
-      '|---|---:|---:|---:|---:|---:|---:|---:|---:|']
+L += ['', 'Floors: the coarsest level each tool reaches, TOM\'s usable floor, and TOM\'s level at gltfpack -sa\'s floor count.', '',
+      '| asset | triangles | TOM floor | mean | TOM usable floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack |',
+      '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
 for asset in dict.fromkeys(r['asset'] for r in rows):
-    t, g, a = find(asset, 'tom', 'floor', 0), find(asset, 'gltfpack', 'floor-sa', 0), find(asset, 'tom', 'at-floor-sa', 0)
-    if t and g and a:
-        L.append('| %s | %d | %d | %s | %d | %s | %d | %s | %s / %s |' % (asset, t['source_triangles'], t['triangles'], fmt(t['mean']), g['triangles'], fmt(g['mean']),
-                                                                      a['triangles'], fmt(a['mean']), fmt(a['hausdorff']), fmt(g['hausdorff'])))
+    t, u, g, a = (find(asset, 'tom', 'floor', 0), find(asset, 'tom', 'usable', 0), find(asset, 'gltfpack', 'floor-sa', 0),
+                  find(asset, 'tom', 'at-floor-sa', 0))
+    if t and u and g and a:
+        L.append('| %s | %d | %d | %s | %d | %s | %d | %s | %d | %s | %s / %s |' % (
+            asset, t['source_triangles'], t['triangles'], fmt(t['mean']), u['triangles'], fmt(u['mean']), g['triangles'], fmt(g['mean']),
+            a['triangles'], fmt(a['mean']), fmt(a['hausdorff']), fmt(g['hausdorff'])))
 L += ['', 'Median of TOM\'s mean error over gltfpack\'s where TOM reached gltfpack\'s count (assets compared), per mode and ratio: ' +
       ', '.join('%s %d%%: %.2f (%d)' % (m, r * 100, statistics.median(v), len(v)) for (m, r), v in sorted(ratios.items(), key=lambda kv: (kv[0][0], -kv[0][1]))), '']
 section = '\n'.join(L)

@@ -51,6 +51,7 @@ struct Options {
     uint64_t seed = 1;
     bool no_error_curve = false;
     uint32_t curve_points = 16;
+    double floor_error_percent = 1.0;  // the usable floor's bound on the mean error; 0: none
     double timeout_seconds = 3600;  // per input
     double max_memory_mb = 0;       // per input; 0: three quarters of the machine's memory over the jobs
     bool isolate = true;            // each input in a worker process of its own
@@ -72,6 +73,7 @@ nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams
     j["error_curve"] = !opt.no_error_curve;
     if (!opt.no_error_curve) {
         j["curve_points"] = opt.curve_points;
+        j["floor_error"] = opt.floor_error_percent;
         j["samples_per_face"] = opt.samples_per_face;
         j["seed"] = opt.seed;
     }
@@ -109,8 +111,19 @@ tom::ReportParams report_params(const Options& opt, unsigned threads) {
     rp.distance.seed = opt.seed;
     rp.distance.threads = threads;
     rp.curve_points = opt.curve_points;
+    rp.floor_error = opt.floor_error_percent / 100.0;
     rp.error_curve = !opt.no_error_curve;
     return rp;
+}
+
+// The mesh's error curve and, with a bound, its usable floor, into its metadata; the floor's
+// vertex count (0: none stored).
+uint32_t store_curve(tom::TomMesh& t, const tom::ErrorCurve& curve, double floor_error) {
+    t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(curve)});
+    if (!(floor_error > 0)) return 0;
+    const tom::UsableFloor floor = tom::usable_floor_of(t.view(), curve, floor_error);
+    t.metadata.push_back({tom::usable_floor_key, tom::encode_usable_floor(floor)});
+    return floor.vertices;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -199,6 +212,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             tom::TomMesh& t = built.back();
             const bool measured = opt.report || !report_path.empty() || !opt.no_error_curve;
             const tom::Mesh mesh = measured ? tom::original_mesh(t) : tom::Mesh();  // the input again, exactly
+            uint32_t floor = 0;  // the usable floor stored (0: none)
             if (opt.report || !report_path.empty()) {
                 tools::ReportContext ctx;
                 ctx.file = job.input;
@@ -209,12 +223,12 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 const auto report_start = std::chrono::steady_clock::now();
                 const tom::MeshReport r = tom::make_report(mesh, t, rparams);
                 ctx.report_seconds = seconds_since(report_start);
-                if (!opt.no_error_curve) t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(r.curve)});
+                if (!opt.no_error_curve) floor = store_curve(t, r.curve, rparams.floor_error);
                 if (opt.report) tables += tools::report_table(r, ctx);
                 json_meshes.push_back(tools::report_json(r, ctx));
                 out.summary_csv += tools::summary_csv_row(json_meshes.back(), job.input);
             } else if (!opt.no_error_curve) {
-                t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(tom::measure_error_curve(mesh, t, rparams))});
+                floor = store_curve(t, tom::measure_error_curve(mesh, t, rparams), rparams.floor_error);
             }
             times.measure += seconds_since(measure_start);
             vertices += t.vertex_count();
@@ -224,10 +238,12 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 char line[512];
                 std::snprintf(line, sizeof line,
                               "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
-                              "%u border vertices, %u seam vertices, %u passes%s%s%s%s\n",
+                              "%u border vertices, %u seam vertices, %u passes%s%s%s%s%s\n",
                               t.name.c_str(), t.parts.empty() ? "" : (" (" + std::to_string(t.parts.size()) + " parts)").c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
                               tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices,
                               stats.border_vertices, stats.seam_vertices, stats.passes,
+                              floor ? (", usable floor " + std::to_string(floor) + " vertices / " + std::to_string(tom::active_triangle_count(t.view(), floor)) +
+                                       " triangles").c_str() : "",
                               stats.pruned_pieces ? (", " + std::to_string(stats.pruned_pieces) + " small pieces pruned").c_str() : "",
                               clean.welded_vertices ? (", " + std::to_string(clean.welded_vertices) + " identical vertices welded").c_str() : "",
                               clean.degenerate_triangles ? (", " + std::to_string(clean.degenerate_triangles) + " degenerate triangles dropped").c_str() : "",
@@ -491,6 +507,11 @@ int main(int argc, char** argv) {
     app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds and reports; the JSON report's error_curve is null)")->group("Output");
     app.add_option("--curve-points", opt.curve_points, "Error-curve points per mesh, log-spaced in vertex count (default 16)")
         ->check(CLI::Range(2u, 64u))
+        ->group("Output");
+    app.add_option("--floor-error", opt.floor_error_percent,
+                   "Store each mesh's usable floor: the coarsest level from which on the measured mean error stays within PERCENT of the diagonal "
+                   "(default 1; 0: none). tomextract, the runtime's vertex_count_for_* and libtcr pick no coarser level unless asked")
+        ->check(CLI::Range(0.0, 100.0))
         ->group("Output");
     app.add_flag("--report", opt.report, "Print a report per mesh: Metro-style error, chains and extraction time per level, memory, k/N fit")
         ->group("Reports");

@@ -21,13 +21,14 @@ namespace {
 // The meshes of `file` (or mesh `only`) as a scene budget shares among them: each weighted by
 // its instances' world-space sizes (the cube root of each transform's determinant, times the
 // mesh's diagonal) and costing its instance count in triangles drawn.
-std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<uint32_t> only, const std::string& path) {
+std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<uint32_t> only, tom::Floor floor, const std::string& path) {
     const std::vector<tom::Instance> draws = tom::draw_list(file.scene(), file.mesh_count());
     std::vector<tcr::BudgetMesh> out;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (only && *only != i) continue;
         tcr::BudgetMesh b;
         b.mesh = &file.mesh(i);
+        b.floor = floor;
         std::optional<tom::ErrorCurve> curve = tom::read_error_curve(*b.mesh);
         if (!curve) throw tom::ArgumentError(path + ": mesh '" + std::string(b.mesh->name) + "' has no stored error curve (it was built with --no-error-curve)");
         b.curve = std::move(*curve);
@@ -80,10 +81,10 @@ std::string source_folder(const std::string& tom_path, const tom::Scene& scene) 
 
 // The meshes' resolutions (file order; --mesh's alone) for `triangles` in total, shared in
 // proportion to their triangle counts: the largest common fraction whose levels, each the
-// largest resolution within its share (a mesh at its coarsest level keeps that), sum to at most
+// largest resolution within its share (a mesh at its floor keeps that), sum to at most
 // `triangles`. A mesh that cannot go lower takes more than its share, and the others give it up,
-// so the total exceeds `triangles` only when every mesh's coarsest level does.
-std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<uint32_t> only, uint64_t triangles) {
+// so the total exceeds `triangles` only when every mesh's floor does.
+std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<uint32_t> only, tom::Floor floor, uint64_t triangles) {
     std::vector<const tom::MeshView*> meshes;
     for (uint32_t i = 0; i < file.mesh_count(); ++i)
         if (!only || *only == i) meshes.push_back(&file.mesh(i));
@@ -92,7 +93,7 @@ std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<u
         out.clear();
         for (const tom::MeshView* m : meshes) {
             const uint32_t share = uint32_t(std::floor(fraction * m->triangle_count));
-            const uint32_t n = tom::vertex_count_within_triangles(*m, share);
+            const uint32_t n = tom::vertex_count_within_triangles(*m, share, floor);
             out.push_back(n);
             total += tom::active_triangle_count(*m, n);
         }
@@ -101,7 +102,7 @@ std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<u
     std::vector<uint32_t> levels, trial;
     if (at(1.0, levels) <= triangles) return levels;
     double lo = 0, hi = 1;
-    at(0.0, levels);  // every mesh at its coarsest: the answer when nothing fits
+    at(0.0, levels);  // every mesh at its floor: the answer when nothing fits
     for (int step = 0; step < 48; ++step) {
         const double mid = 0.5 * (lo + hi);
         if (at(mid, trial) <= triangles) {
@@ -126,7 +127,7 @@ int main(int argc, char** argv) {
     app.add_option("file", path, "A .tom file")->required();
     auto* f = app.add_option("-f,--fraction", fraction, "Fraction of each mesh's triangles, in [0,1]")->check(CLI::Range(0.0, 1.0));
     auto* t = app.add_option("-t,--triangles", triangles,
-                             "Triangle count (for several meshes: in total, shared in proportion; a mesh at its coarsest level keeps it and "
+                             "Triangle count (for several meshes: in total, shared in proportion; a mesh at its floor keeps it and "
                              "the others give up what it takes beyond its share)");
     auto* v = app.add_option("-n,--vertices", vertices, "Vertex count (per mesh, clamped to its range)");
     f->excludes(t)->excludes(v);
@@ -161,6 +162,10 @@ int main(int argc, char** argv) {
     sb->excludes(by_max_error)->excludes(le)->excludes(px);
     by_max_error->excludes(le)->excludes(px);
     le->excludes(px);
+    bool below_floor = false;
+    app.add_flag("--below-floor", below_floor,
+                 "Let --fraction, --triangles, --lods, the error bounds and --scene-budget go below each mesh's usable floor (tombuild --floor-error) "
+                 "to the coarsest level of its chain; --vertices always may");
     app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
     app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
     std::string texture_dir;
@@ -198,6 +203,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px, --lods-error or --scene-budget\n");
         return tools::exit_usage;
     }
+    const tom::Floor floor = below_floor ? tom::Floor::coarsest : tom::Floor::usable;
     // mesh m's resolution for bound k of error_bounds (or the pixel bound), from its stored curve
     auto level_for_error = [&](const tom::MeshView& m, size_t k) {
         const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m);
@@ -209,7 +215,7 @@ int main(int argc, char** argv) {
         } else {
             bound = error_bounds[k];
         }
-        return tom::vertex_count_for_error(m, *curve, bound, metric == "max");
+        return tom::vertex_count_for_error(m, *curve, bound, metric == "max", floor);
     };
     auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
     if (compress && !is_glb()) {
@@ -249,12 +255,12 @@ int main(int argc, char** argv) {
         // --scene-budget: each budget's share, a resolution per mesh (file order, --mesh's alone)
         std::vector<std::vector<uint32_t>> budget_levels;
         for (const double budget : scene_budgets) {
-            const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, mesh_index, path), budget);
+            const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, mesh_index, floor, path), budget);
             if (share.feasible)
                 std::printf("%s: scene budget %.0f triangles: %.0f drawn, summed error %.6g (weighted), certified within %.2f%% of the optimum\n",
                             path.c_str(), budget, share.drawn, share.error, 100.0 * share.gap);
             else
-                std::fprintf(stderr, "warning: %s: the meshes' coarsest levels draw %.0f triangles, more than the budget of %.0f; each is at its coarsest\n",
+                std::fprintf(stderr, "warning: %s: the meshes' floors draw %.0f triangles, more than the budget of %.0f; each is at its floor\n",
                              path.c_str(), share.drawn, budget);
             budget_levels.push_back(share.vertex_counts);
         }
@@ -262,12 +268,12 @@ int main(int argc, char** argv) {
         // --triangles: the proportional share
         std::vector<uint32_t> shared;
         if (triangles) {
-            shared = proportional_levels(file, mesh_index, *triangles);
+            shared = proportional_levels(file, mesh_index, floor, *triangles);
             uint64_t total = 0;
             for (size_t k = 0, i = 0; i < file.mesh_count(); ++i)
                 if (!mesh_index || *mesh_index == i) total += tom::active_triangle_count(file.mesh(uint32_t(i)), shared[k++]);
             if (total > *triangles)
-                std::fprintf(stderr, "warning: %s: the meshes' coarsest levels hold %llu triangles, more than the %llu asked for; each is at its coarsest\n",
+                std::fprintf(stderr, "warning: %s: the meshes' floors hold %llu triangles, more than the %llu asked for; each is at its floor\n",
                              path.c_str(), static_cast<unsigned long long>(total), static_cast<unsigned long long>(*triangles));
         }
         auto shared_level = [&](uint32_t i) { return shared[mesh_index ? 0 : i]; };
@@ -288,13 +294,13 @@ int main(int argc, char** argv) {
                 tom::GlbMesh g;
                 g.mesh = &m;
                 if (!lods.empty()) {
-                    for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0));
+                    for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0, floor));
                 } else if (by_error) {
                     for (size_t k = 0; k < std::max<size_t>(1, error_bounds.size()); ++k) g.vertex_counts.push_back(level_for_error(m, k));
                 } else if (!budget_levels.empty()) {
                     for (size_t k = 0; k < budget_levels.size(); ++k) g.vertex_counts.push_back(budget_level(i, k));
                 } else if (fraction) {
-                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction));
+                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction, floor));
                 } else if (triangles) {
                     g.vertex_counts.push_back(shared_level(i));
                 } else {
@@ -323,7 +329,7 @@ int main(int argc, char** argv) {
             else if (!budget_levels.empty())
                 n = budget_level(i, 0);
             else if (fraction)
-                n = tom::vertex_count_for_fraction(m, *fraction);
+                n = tom::vertex_count_for_fraction(m, *fraction, floor);
             else if (triangles)
                 n = shared_level(i);
             else

@@ -45,6 +45,12 @@ int main(int argc, char** argv) {
             mj["triangles"] = m.triangle_count;
             mj["min_vertices"] = m.min_vertex_count;
             mj["min_triangles"] = tom::active_triangle_count(m, m.min_vertex_count);
+            if (const std::optional<tom::UsableFloor> floor = tom::read_usable_floor(m)) {
+                const uint32_t n = tom::floor_vertex_count(m);
+                mj["usable_floor"] = {{"vertices", n}, {"triangles", tom::active_triangle_count(m, n)}, {"mean_bound_percent", 100.0 * floor->mean_bound}};
+            } else {
+                mj["usable_floor"] = nullptr;
+            }
             mj["index_bytes"] = m.index_size;
             if (m.coarse_corners)  // FORMAT.md, COAR: extraction at or below this resolution starts from them
                 mj["coarse_corners"] = {{"resolution", m.coarse_resolution}, {"triangles", m.coarse_triangle_count}};
@@ -144,8 +150,8 @@ int main(int argc, char** argv) {
         std::printf("%s: TOM %s, %s, %u mesh%s, %.1f%% of face-vertex (positions+normals, 32-bit indices)\n", path.c_str(),
                     j["version"].get<std::string>().c_str(), tools::human_bytes(file.file_bytes()).c_str(), file.mesh_count(),
                     file.mesh_count() == 1 ? "" : "es", j["percent_of_face_vertex"].get<double>());
-        std::printf("  %-4s %-32s %10s %10s %10s %10s %5s %8s %8s %8s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris", "index",
-                    "coarse", "k_mean", "k_max", "attributes");
+        std::printf("  %-4s %-32s %10s %10s %10s %10s %10s %5s %8s %8s %8s  %s\n", "#", "name", "vertices", "triangles", "min verts", "min tris",
+                    "floor tris", "index", "coarse", "k_mean", "k_max", "attributes");
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const auto& mj = j["meshes"][i];
             std::string attrs;
@@ -153,8 +159,10 @@ int main(int argc, char** argv) {
             for (const auto& a : mj["carried_streams"]) attrs += "," + a.get<std::string>();
             const bool has_curve = !mj["error_curve"].is_null();
             const bool has_coarse = !mj["coarse_corners"].is_null();
-            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %4ub %8s %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
+            const bool has_floor = !mj["usable_floor"].is_null();
+            std::printf("  %-4u %-32.32s %10u %10u %10u %10u %10s %4ub %8s %8s %8s  %s\n", i, mj["name"].get<std::string>().c_str(), mj["vertices"].get<uint32_t>(),
                         mj["triangles"].get<uint32_t>(), mj["min_vertices"].get<uint32_t>(), mj["min_triangles"].get<uint32_t>(),
+                        has_floor ? std::to_string(mj["usable_floor"]["triangles"].get<uint32_t>()).c_str() : "-",
                         8 * mj["index_bytes"].get<uint32_t>(),
                         has_coarse ? std::to_string(mj["coarse_corners"]["resolution"].get<uint32_t>()).c_str() : "-",
                         has_curve ? std::to_string(mj["error_curve"]["k_mean"].get<double>()).substr(0, 7).c_str() : "-",

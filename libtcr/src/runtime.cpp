@@ -131,14 +131,15 @@ void depth_mesh(const float view[16], const float projection[16], const float* d
 
 Runtime::Runtime(const CostModel& model, SelectorKind selector) : model_(model), selector_(selector) {}
 
-uint32_t Runtime::add_object(const tom::MeshView& mesh, const float transform[16], float weight) {
+uint32_t Runtime::add_object(const tom::MeshView& mesh, const float transform[16], float weight, tom::Floor floor) {
     Object o;
     o.mesh = &mesh;
+    o.min_vertices = tom::floor_vertex_count(mesh, floor);
     std::copy(transform, transform + 16, o.transform);
     o.weight = weight;
     for (int k = 0; k < 3; ++k) o.box.min[k] = mesh.bounds_min[k], o.box.max[k] = mesh.bounds_max[k];
     o.triangles = mesh.triangle_count;
-    o.min_triangles = std::max<uint32_t>(1, tom::active_triangle_count(mesh, mesh.min_vertex_count));
+    o.min_triangles = std::max<uint32_t>(1, tom::active_triangle_count(mesh, o.min_vertices));
     o.vertices_per_triangle = mesh.triangle_count ? double(mesh.vertex_count) / double(mesh.triangle_count) : 0.5;
     double d2 = 0;
     for (int k = 0; k < 3; ++k) d2 += double(o.box.max[k] - o.box.min[k]) * (o.box.max[k] - o.box.min[k]);
@@ -233,11 +234,11 @@ double Runtime::triangles_for_error(uint32_t id, double max_error_px) const noex
 }
 
 uint32_t Runtime::resolution_for(const Object& o, double triangles) const noexcept {
-    // the finest resolution with at most `triangles` active triangles (never below the coarsest)
+    // the finest resolution with at most `triangles` active triangles (never below the floor)
     const tom::MeshView& m = *o.mesh;
     const uint32_t target = uint32_t(std::max(0.0, std::floor(triangles + 1e-9)));
-    uint32_t v = tom::vertex_count_for_triangles(m, target);
-    if (v > m.min_vertex_count && tom::active_triangle_count(m, v) > target) --v;
+    uint32_t v = std::max(o.min_vertices, tom::vertex_count_for_triangles(m, target, tom::Floor::coarsest));
+    if (v > o.min_vertices && tom::active_triangle_count(m, v) > target) --v;
     return v;
 }
 

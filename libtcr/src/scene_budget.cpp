@@ -61,9 +61,10 @@ double error_at(const std::vector<Segment>& model, double n) {
     return model.back().a * std::pow(model.back().hi, -model.back().m);
 }
 
-// The triangle range of a mesh: its coarsest level's triangles (at least 1) to all of them.
-std::pair<double, double> triangle_range(const tom::MeshView& m) {
-    const double lo = std::max<uint32_t>(1, tom::active_triangle_count(m, m.min_vertex_count));
+// The triangle range of a mesh: its floor's triangles (at least 1) to all of them.
+std::pair<double, double> triangle_range(const BudgetMesh& b) {
+    const tom::MeshView& m = *b.mesh;
+    const double lo = std::max<uint32_t>(1, tom::active_triangle_count(m, tom::floor_vertex_count(m, b.floor)));
     return {lo, std::max<double>(lo, m.triangle_count)};
 }
 
@@ -75,9 +76,10 @@ void check(const std::vector<BudgetMesh>& meshes) {
     }
 }
 
-// The largest resolution of `m` with at most `triangles` triangles (its coarsest at least).
-uint32_t resolution_within(const tom::MeshView& m, double triangles) {
-    return tom::vertex_count_within_triangles(m, uint32_t(std::min<double>(m.triangle_count, std::floor(triangles + 1e-9))));
+// The largest resolution of the mesh with at most `triangles` triangles (its floor at least).
+uint32_t resolution_within(const BudgetMesh& b, double triangles) {
+    const tom::MeshView& m = *b.mesh;
+    return tom::vertex_count_within_triangles(m, uint32_t(std::min<double>(m.triangle_count, std::floor(triangles + 1e-9))), b.floor);
 }
 
 // The share's state while it is polished: per mesh its resolution, triangles and model.
@@ -128,9 +130,9 @@ Problem budget_problem(const std::vector<BudgetMesh>& meshes, double budget, boo
     p.way_begin.assign(1, 0);
     for (size_t i = 0; i < meshes.size(); ++i) {
         const BudgetMesh& b = meshes[i];
-        const auto [lo, hi] = triangle_range(*b.mesh);
+        const auto [lo, hi] = triangle_range(b);
         const std::vector<Segment> model = segments(b.curve, use_max, lo, hi);
-        // way 0: the coarsest level alone (the exponent p.m = 1 is then immaterial)
+        // way 0: the floor's level alone (the exponent p.m = 1 is then immaterial)
         const double at_lo = b.weight * error_at(model, lo);
         p.importance[i] = at_lo;
         p.error[i] = at_lo * lo;
@@ -157,10 +159,10 @@ BudgetShare share_budget(const std::vector<BudgetMesh>& meshes, double budget, b
     double drawn = 0;
     for (size_t i = 0; i < meshes.size(); ++i) {
         const BudgetMesh& b = meshes[i];
-        const auto [lo, hi] = triangle_range(*b.mesh);
+        const auto [lo, hi] = triangle_range(b);
         polish.models.push_back(segments(b.curve, use_max, lo, hi));
         polish.lo.push_back(lo);
-        polish.n.push_back(resolution_within(*b.mesh, plan.triangles[i]));
+        polish.n.push_back(resolution_within(b, plan.triangles[i]));
         polish.t.push_back(tom::active_triangle_count(*b.mesh, polish.n.back()));
         drawn += b.instances * polish.t.back();
     }

@@ -102,16 +102,19 @@ std::shared_ptr<tom::Mesh> make_mesh(const py::object& positions, const py::obje
 
 // The resolution the keywords ask for: one of a fraction of the triangles, a vertex count or a
 // triangle count; none gives the full mesh.
-uint32_t resolution(const tom::MeshView& v, const py::object& fraction, const py::object& vertices, const py::object& triangles) {
+// A fraction or a triangle count goes no lower than `floor` (tom::floor_vertex_count); a vertex
+// count is taken as asked.
+uint32_t resolution(const tom::MeshView& v, const py::object& fraction, const py::object& vertices, const py::object& triangles,
+                    tom::Floor floor = tom::Floor::usable) {
     const int given = int(!fraction.is_none()) + int(!vertices.is_none()) + int(!triangles.is_none());
     if (given > 1) throw tom::ArgumentError("extract: give one of fraction, vertices and triangles");
     if (!fraction.is_none()) {
         const double f = fraction.cast<double>();
         if (!(f >= 0.0 && f <= 1.0)) throw tom::ArgumentError("extract: fraction " + std::to_string(f) + " is outside [0, 1]");
-        return tom::vertex_count_for_fraction(v, f);
+        return tom::vertex_count_for_fraction(v, f, floor);
     }
     if (!vertices.is_none()) return vertices.cast<uint32_t>();
-    if (!triangles.is_none()) return tom::vertex_count_for_triangles(v, triangles.cast<uint32_t>());
+    if (!triangles.is_none()) return tom::vertex_count_for_triangles(v, triangles.cast<uint32_t>(), floor);
     return v.vertex_count;
 }
 
@@ -247,9 +250,13 @@ void mesh_properties(Class& c, ViewOf view_of) {
                                "(t, 3) uint16 or uint32, read-only, in death order (the original corners).")
         .def_property_readonly("substitute", [view_of](py::object self) { const tom::MeshView& v = view_of(self); return index_array(v.substitute, v.index_size, v.vertex_count, 1, self).attr("reshape")(-1); },
                                "(n,) each vertex's substitute: substitute[i] < i for i >= min_vertex_count.")
-        .def("vertex_count_for", [view_of](py::object self, py::object fraction, py::object triangles) {
-                 return resolution(view_of(self), fraction, py::none(), triangles);
-             }, py::arg("fraction") = py::none(), py::arg("triangles") = py::none(), "The resolution for a fraction of the triangles, or for at least a triangle count.")
+        .def_property_readonly("usable_floor", [view_of](py::object self) { return tom::floor_vertex_count(view_of(self)); },
+                               "The coarsest resolution a fraction or triangle count picks: the usable floor tombuild stored (--floor-error), "
+                               "or min_vertex_count.")
+        .def("vertex_count_for", [view_of](py::object self, py::object fraction, py::object triangles, bool below_floor) {
+                 return resolution(view_of(self), fraction, py::none(), triangles, below_floor ? tom::Floor::coarsest : tom::Floor::usable);
+             }, py::arg("fraction") = py::none(), py::arg("triangles") = py::none(), py::arg("below_floor") = false,
+             "The resolution for a fraction of the triangles, or for at least a triangle count; not below usable_floor unless below_floor.")
         .def("active_triangles", [view_of](py::object self, uint32_t n) { return tom::active_triangle_count(view_of(self), n); }, py::arg("vertices"),
              "Triangles alive at a resolution.")
         .def_property_readonly("carried_streams", [view_of](py::object self) {

@@ -17,6 +17,7 @@ class _MeshView:
     vertex_count: int
     triangle_count: int
     min_vertex_count: int
+    usable_floor: int
     material: int
     positions: npt.NDArray[np.float32]
     normals: Optional[npt.NDArray[np.float32]]
@@ -25,7 +26,7 @@ class _MeshView:
     triangles: Union[npt.NDArray[np.uint16], npt.NDArray[np.uint32]]
     substitute: Union[npt.NDArray[np.uint16], npt.NDArray[np.uint32]]
     carried_streams: dict[str, npt.NDArray[Any]]
-    def vertex_count_for(self, fraction: Optional[float] = ..., triangles: Optional[int] = ...) -> int: ...
+    def vertex_count_for(self, fraction: Optional[float] = ..., triangles: Optional[int] = ..., below_floor: bool = ...) -> int: ...
     def active_triangles(self, vertices: int) -> int: ...
     parts: List[Tuple[int, int, int]]
     def draws(self, *, fraction: Optional[float] = ..., vertices: Optional[int] = ..., triangles: Optional[int] = ...) -> List[Tuple[int, int, int]]: ...

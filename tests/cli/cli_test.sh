@@ -107,6 +107,12 @@ check "the OBJ has 10% of the triangles" test "$(grep -c '^f ' "$work/f10.obj")"
 check "tomextract by triangle count to PLY" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --triangles 500 -o "$work/c.ply"
 check "the PLY header declares the faces" grep -a -q "element face 50[0-9]" "$work/c.ply"
 check "the extracted PLY converts back" expect_exit 0 "$tools/tombuild" "$work/c.ply" -o "$work/o5"
+# the usable floor: spider's coarsest levels go far past 1% mean error; tombuild stores where
+check "tombuild -v names each mesh's usable floor" bash -c "'$tools/tombuild' -v '$work/in/sub/spider.obj' -o '$work/floor' | grep -q 'usable floor [0-9]* vertices / [0-9]* triangles'"
+check "tominfo --json shows it, above the chain's floor" bash -c "'$tools/tominfo' --json '$work/floor/spider.tom' > '$work/floor.json' && python3 -c \"import json; m=json.load(open('$work/floor.json'))['meshes'][0]; f=m['usable_floor']; assert abs(f['mean_bound_percent'] - 1) < 1e-6 and m['min_triangles'] < f['triangles'] < m['triangles'] // 2, m\""
+check "tomextract --fraction 0 stops at the usable floor" bash -c "'$tools/tomextract' '$work/floor/spider.tom' --fraction 0 -o '$work/floor0.obj' && python3 -c \"import json; f=json.load(open('$work/floor.json'))['meshes'][0]['usable_floor']; assert open('$work/floor0.obj').read().count('\\nf ')==f['triangles']\""
+check "and --below-floor goes to the chain's last level" bash -c "'$tools/tomextract' '$work/floor/spider.tom' --fraction 0 --below-floor -o '$work/floor-below.obj' && python3 -c \"import json; m=json.load(open('$work/floor.json'))['meshes'][0]; assert open('$work/floor-below.obj').read().count('\\nf ')==m['min_triangles']\""
+check "--floor-error 0 stores none" bash -c "'$tools/tombuild' -q '$work/in/sub/spider.obj' -o '$work/nofloor' --floor-error 0 && '$tools/tominfo' --json '$work/nofloor/spider.tom' | python3 -c \"import json,sys; assert json.load(sys.stdin)['meshes'][0]['usable_floor'] is None\""
 check "tomextract without a resolution exits 2" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" -o "$work/x.obj"
 check "tomextract to an unknown type exits 1" expect_exit 1 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.5 -o "$work/x.xyz"
 
@@ -142,7 +148,7 @@ for l in lines:
     budget, drawn, gap = (float(x) for x in re.search(r'scene budget (\\d+) triangles: (\\d+) drawn, .* certified within ([0-9.]+)%', l).groups())
     assert drawn <= budget and drawn > 0.95 * budget and gap < 1, l
 "
-check "--scene-budget below the coarsest levels warns and writes them" bash -c "'$tools/tomextract' '$work/engine/2CylinderEngine.tom' --scene-budget 100 -o '$work/engine-floor.obj' 2>'$work/floor.err' && grep -q 'more than the budget of 100; each is at its coarsest' '$work/floor.err'"
+check "--scene-budget below the floors warns and writes them" bash -c "'$tools/tomextract' '$work/engine/2CylinderEngine.tom' --scene-budget 100 -o '$work/engine-floor.obj' 2>'$work/floor.err' && grep -q 'more than the budget of 100; each is at its floor' '$work/floor.err'"
 check "OBJ out: a usemtl group per part and the .mtl beside it" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --fraction 0.25 -o "$work/engine25.obj"
 check "with every material the groups use" bash -c "test \$(grep -c '^usemtl ' '$work/engine25.obj') -eq 34 && grep -q '^mtllib engine25.mtl' '$work/engine25.obj' && test \$(grep -c '^newmtl ' '$work/engine25.mtl') -eq 34"
 check "the OBJ converts back with its parts" expect_exit 0 "$tools/tombuild" "$work/engine25.obj" -o "$work/obj-back" -q

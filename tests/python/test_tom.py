@@ -75,6 +75,18 @@ def test_levels_are_tomextracts_index_for_index(bunny, tmp_path, fraction):
     assert indices.max() < n and len(indices) == mesh.active_triangles(n)
 
 
+def test_selections_stop_at_the_usable_floor_unless_asked(bunny, tmp_path):
+    """tombuild stores where the mean error leaves 1% of the diagonal; a fraction or a triangle
+    count stops there, as tomextract does, and goes on to the chain's last level when asked."""
+    mesh = tom.open(str(bunny)).meshes[0]
+    assert mesh.min_vertex_count < mesh.usable_floor < mesh.vertex_count // 100
+    assert mesh.vertex_count_for(fraction=0.0) == mesh.usable_floor == mesh.vertex_count_for(triangles=1)
+    assert mesh.vertex_count_for(fraction=0.0, below_floor=True) == mesh.min_vertex_count
+    assert mesh.extract(fraction=0.0)[1] == mesh.usable_floor
+    assert len(tomextract_faces(bunny, 0.0, tmp_path)) == mesh.active_triangles(mesh.usable_floor)
+    assert mesh.extract(vertices=mesh.min_vertex_count)[1] == mesh.min_vertex_count  # an explicit count is taken as asked
+
+
 def test_extract_into_out_allocates_nothing_and_checks_its_arguments(bunny):
     mesh = tom.open(str(bunny)).meshes[0]
     out32 = np.zeros(3 * mesh.triangle_count, np.uint32)

@@ -584,3 +584,42 @@ TEST_CASE("menus: a textured object's capture is costed texture-mapped", "[tcr][
     CHECK(refreshed[0] > 5);
     CHECK(refreshed[1] > 5);
 }
+
+TEST_CASE("the coarsest choice is each object's usable floor, or below it when the object was added so", "[tcr][runtime][floor]") {
+    // the bunny with its curve and the usable floor tombuild stores (mean error within 1%)
+    const test::NamedMesh bunny = test::real_meshes()[0];
+    tom::TomMesh t = tom::build(bunny.mesh);
+    const tom::ErrorCurve curve = tom::measure_error_curve(bunny.mesh, t);
+    t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(curve)});
+    t.metadata.push_back({tom::usable_floor_key, tom::encode_usable_floor(tom::usable_floor_of(t.view(), curve, 0.01))});
+    const std::vector<uint8_t> bytes = tom::serialize({t});
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size());
+    const uint32_t floor = tom::floor_vertex_count(file.mesh(0));
+    REQUIRE(floor > file.mesh(0).min_vertex_count);
+    for (const tom::Floor way : {tom::Floor::usable, tom::Floor::coarsest}) {
+        tcr::Runtime rt(model(), tcr::SelectorKind::exact);
+        for (int i = 0; i < 50; ++i) {
+            float m[16];
+            tcr::translation_scale(float(i % 10 - 5) * 0.4f, float(i / 10 - 2) * 0.4f, 0, 1.5f, m);
+            rt.add_object(file.mesh(0), m, 1.0f, way);
+        }
+        tcr::FrameParams f;
+        f.camera = camera_at(6.0f);
+        f.error_bounded = true;  // each object at the coarsest level within the bound: here, any level
+        f.max_error_px = 1e6;
+        f.budget_ms = 1e9;
+        const tcr::FrameReport& r = rt.plan_frame(f);
+        REQUIRE(r.drawn == r.visible);
+        REQUIRE(r.drawn > 0);
+        uint32_t lowest = file.mesh(0).vertex_count, highest = 0;
+        for (uint32_t id = 0; id < rt.object_count(); ++id)
+            if (rt.object(id).drawn) lowest = std::min(lowest, rt.object(id).vertices), highest = std::max(highest, rt.object(id).vertices);
+        INFO("lowest level drawn " << lowest << ", floor " << floor);
+        if (way == tom::Floor::usable) {
+            CHECK(lowest == floor);
+            CHECK(highest == floor);
+        } else {
+            CHECK(highest < floor);
+        }
+    }
+}

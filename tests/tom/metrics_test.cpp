@@ -1026,3 +1026,72 @@ TEST_CASE("vertex_count_for_error takes the coarsest level from which every meas
     mesh.min_vertex_count = 25;  // points below the coarsest resolution are not levels of this mesh
     CHECK(tom::vertex_count_for_error(mesh, curve, 1.0) == 30);
 }
+
+TEST_CASE("the usable floor: where a real asset's measured mean error leaves the bound, bracketed narrowly, respected unless asked", "[metrics][curve][floor]") {
+    // Wuson's last steps before its chain's floor take the mean error from about 1% to 11% of the
+    // diagonal (between 108 and 77 triangles): the chain goes on where the asset stops being usable
+    const test::NamedMesh wuson = test::real_meshes()[4];
+    REQUIRE(wuson.name.find("Wuson") != std::string::npos);
+    tom::TomMesh t = tom::build(wuson.mesh);
+    tom::ReportParams params;
+    params.floor_error = 0.01;
+    const tom::ErrorCurve curve = tom::measure_error_curve(wuson.mesh, t, params);
+    const tom::UsableFloor floor = tom::usable_floor_of(t.view(), curve, params.floor_error);
+    INFO("floor " << floor.vertices << " of " << t.vertex_count() << " vertices, chain's floor " << t.min_vertex_count);
+    REQUIRE(floor.vertices > t.min_vertex_count);
+    REQUIRE(floor.vertices < t.vertex_count() / 4);
+    // every measured point from the floor on is within the bound; the one below it is not, and
+    // lies within 2% of the floor (the bisection; the log-spaced points alone are 22% apart)
+    size_t at = 0;
+    while (curve.points[at].vertices < floor.vertices) ++at;
+    REQUIRE(at > 0);
+    for (size_t i = at; i < curve.points.size(); ++i) CHECK(curve.points[i].mean <= params.floor_error);
+    const tom::ErrorCurvePoint& below = curve.points[at - 1];
+    CHECK(below.mean > params.floor_error);
+    CHECK(double(floor.vertices) <= 1.02 * double(below.vertices) + 2);
+    // Metro's dense figures agree: the floor's level within the bound (up to sampling), the chain's
+    // coarsest level far beyond it
+    tom::ReportParams dense;
+    dense.levels = {double(tom::active_triangle_count(t.view(), floor.vertices)) / t.triangle_count(), 0.0};
+    dense.error_curve = false;
+    const tom::MeshReport report = tom::make_report(wuson.mesh, t, dense);
+    REQUIRE(report.levels[0].vertices == floor.vertices);
+    const auto relative_mean = [](const tom::LevelReport& l) { return std::max(l.error.forward.mean, l.error.backward.mean) / l.error.diagonal; };
+    CHECK(relative_mean(report.levels[0]) <= 1.25 * params.floor_error);
+    CHECK(relative_mean(report.levels[1]) > 4 * params.floor_error);
+
+    // stored, every selection by count, fraction or error stops there unless asked
+    t.metadata.push_back({tom::error_curve_key, tom::encode_error_curve(curve)});
+    t.metadata.push_back({tom::usable_floor_key, tom::encode_usable_floor(floor)});
+    const std::vector<uint8_t> bytes = tom::serialize({t});
+    const tom::File file = tom::File::from_bytes(bytes.data(), bytes.size());
+    const tom::MeshView& m = file.mesh(0);
+    REQUIRE(tom::read_usable_floor(m).has_value());
+    CHECK(tom::read_usable_floor(m)->mean_bound == float(params.floor_error));
+    const uint32_t n = tom::floor_vertex_count(m);
+    CHECK(n == m.whole_groups_above(floor.vertices));
+    CHECK(tom::floor_vertex_count(m, tom::Floor::coarsest) == m.min_vertex_count);
+    CHECK(tom::vertex_count_for_fraction(m, 0.0) == n);
+    CHECK(tom::vertex_count_for_fraction(m, 0.001) == n);
+    CHECK(tom::vertex_count_for_fraction(m, 0.0, tom::Floor::coarsest) == m.min_vertex_count);
+    CHECK(tom::vertex_count_for_triangles(m, 1) == n);
+    CHECK(tom::vertex_count_within_triangles(m, 1) == n);
+    CHECK(tom::vertex_count_within_triangles(m, 1, tom::Floor::coarsest) == m.min_vertex_count);
+    CHECK(tom::vertex_count_for_error(m, curve, 1.0, false) == n);
+    CHECK(tom::vertex_count_for_error(m, curve, 1.0, false, tom::Floor::coarsest) < n);
+    // above the floor nothing changes
+    const uint32_t half = tom::vertex_count_for_fraction(m, 0.5);
+    CHECK(half == tom::vertex_count_for_fraction(m, 0.5, tom::Floor::coarsest));
+    CHECK(half > n);
+
+    // a malformed value, or a floor outside the mesh's range, reads as absent
+    for (const std::vector<uint8_t>& value : {std::vector<uint8_t>{1, 0, 0, 0, 5, 0, 0, 0}, tom::encode_usable_floor({t.vertex_count() + 1, 0.01f}),
+                                              tom::encode_usable_floor({t.min_vertex_count - 1, 0.01f}), tom::encode_usable_floor({floor.vertices, -1.0f})}) {
+        tom::TomMesh bad = t;
+        bad.metadata.back().second = value;
+        const std::vector<uint8_t> bad_bytes = tom::serialize({bad});
+        const tom::File bad_file = tom::File::from_bytes(bad_bytes.data(), bad_bytes.size());
+        CHECK(!tom::read_usable_floor(bad_file.mesh(0)).has_value());
+        CHECK(tom::vertex_count_for_fraction(bad_file.mesh(0), 0.0) == bad_file.mesh(0).min_vertex_count);
+    }
+}

@@ -165,9 +165,10 @@ class Runtime {
 public:
     Runtime(const CostModel& model, SelectorKind selector);
 
-    /// Adds an object. `mesh` (and the File it comes from) must outlive the runtime.
+    /// Adds an object. `mesh` (and the File it comes from) must outlive the runtime. Its levels
+    /// go down to the mesh's usable floor, or with Floor::coarsest to its chain's last level.
     /// \return its id, 0, 1, 2, ... in order of addition.
-    uint32_t add_object(const tom::MeshView& mesh, const float transform[16], float weight = 1.0f);
+    uint32_t add_object(const tom::MeshView& mesh, const float transform[16], float weight = 1.0f, tom::Floor floor = tom::Floor::usable);
     void set_transform(uint32_t id, const float transform[16]) noexcept;
     void set_weight(uint32_t id, float weight) noexcept;
     /// Whether object `id` has a texture to be drawn with (its mesh's texture coordinates and a
@@ -208,6 +209,7 @@ private:
         float weight;
         bool textured = false;
         Box box;
+        uint32_t min_vertices;  // its floor (tom::floor_vertex_count)
         double triangles, min_triangles, vertices_per_triangle;
         bool has_curve;
         std::vector<double> curve_tris, curve_error;  // the stored curve (relative error), for error-bounded mode

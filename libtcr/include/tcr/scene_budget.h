@@ -15,6 +15,7 @@
 
 #include "tcr/select.h"
 #include "tom/error_curve.h"
+#include "tom/extract.h"
 #include "tom/view.h"
 
 namespace tcr {
@@ -25,6 +26,7 @@ struct BudgetMesh {
     tom::ErrorCurve curve;   ///< its stored error curve (tom::read_error_curve)
     double weight = 1;       ///< w_i > 0: instances x world-space diagonal, say
     double instances = 1;    ///< c_i >= 1: a level of n triangles draws instances x n
+    tom::Floor floor = tom::Floor::usable;  ///< how low it may go (tom::floor_vertex_count)
 };
 
 /// The share: each mesh's resolution and what the scene draws at it.
@@ -37,7 +39,7 @@ struct BudgetShare {
     /// continuous problem, which every share's resolutions lie in).
     double lower_bound = 0;
     double gap = 0;         ///< (error - lower_bound) / error: 0 proves the share optimal
-    bool feasible = true;   ///< false when every mesh at its coarsest already exceeds the budget: then all are there
+    bool feasible = true;   ///< false when every mesh at its floor already exceeds the budget: then all are there
 };
 
 /// The menu problem of `meshes` under `budget` triangles (see above): object i's ways are the
@@ -48,7 +50,7 @@ Problem budget_problem(const std::vector<BudgetMesh>& meshes, double budget, boo
 
 /// Shares `budget` triangles among `meshes` (exact selector on budget_problem), each mesh's
 /// triangle count rounded down to a resolution of it, so the share never draws more than the
-/// budget when every mesh's coarsest level fits. Deterministic.
+/// budget when every mesh's floor fits. Deterministic.
 BudgetShare share_budget(const std::vector<BudgetMesh>& meshes, double budget, bool use_max = false);
 
 } // namespace tcr

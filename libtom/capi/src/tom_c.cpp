@@ -249,6 +249,7 @@ tom_status tom_file_mesh(const tom_file* file, uint32_t index, tom_mesh_view* ou
     c.vertex_count = v.vertex_count;
     c.triangle_count = v.triangle_count;
     c.min_vertex_count = v.min_vertex_count;
+    c.usable_floor = tom::floor_vertex_count(v);
     c.index_size = v.index_size;
     c.material = v.material;
     c.positions = v.positions;

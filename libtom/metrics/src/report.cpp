@@ -131,6 +131,27 @@ void check(const Mesh& original, const TomMesh& built) {
     if (original.triangle_count() == 0) throw ArgumentError("report: the mesh has no triangle");
 }
 
+// The log-spaced points bracket the usable floor (tom::usable_floor_of at `bound`) within a
+// factor of (vertices / lowest)^(1/15); this bisects the bracket, adding each point measured, so
+// that the floor lies within 1/64 of it. measure(n, point, diagonal) measures resolution n.
+template <class Measure>
+void refine_floor(ErrorCurve& c, double bound, Measure&& measure) {
+    auto within = [&](const ErrorCurvePoint& p) { return p.triangles > 0 && double(p.mean) <= bound; };
+    size_t i = c.points.size();  // the first point from which on every point is within the bound
+    while (i > 0 && within(c.points[i - 1])) --i;
+    if (i == 0 || i == c.points.size()) return;  // within from the coarsest point on, or never
+    uint32_t lo = c.points[i - 1].vertices, hi = c.points[i].vertices;
+    for (int step = 0; step < 6 && hi - lo > 1; ++step) {
+        ErrorCurvePoint p;
+        float diagonal = 0;
+        measure(lo + (hi - lo) / 2, p, diagonal);
+        c.points.insert(std::upper_bound(c.points.begin(), c.points.end(), p.vertices,
+                                         [](uint32_t n, const ErrorCurvePoint& q) { return n < q.vertices; }),
+                        p);
+        (within(p) ? hi : lo) = p.vertices;
+    }
+}
+
 // `workers`: threads for the points, 0 for one per core
 ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const MetroReference& reference, unsigned workers) {
     ErrorCurve c;
@@ -163,14 +184,8 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
         std::lock_guard<std::mutex> hold(progress_lock);
         params.progress(double(++measured) / double(ns.size()));
     };
-    detail::parallel_blocks(ns.size(), 1, workers, [&](unsigned, size_t i, size_t) {
-        struct Done {
-            const decltype(point_done)& done;
-            ~Done() { done(); }
-        } done{point_done};
-        const uint32_t n = ns[i];
+    auto measure = [&](uint32_t n, ErrorCurvePoint& p, float& diagonal) {
         const Level l = extract_level(built, n);
-        ErrorCurvePoint& p = points[i];
         p.vertices = n;
         p.triangles = l.e.triangle_count;
         if (n == hi || l.e.triangle_count == 0) return;  // full resolution is the original itself: error 0
@@ -179,7 +194,14 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
         const Distance d = hinted ? reference.compare(level, level_hints(built, l, sorted_of, around)) : reference.compare(level);
         p.mean = float(std::max(d.forward.mean, d.backward.mean) / d.diagonal);
         p.max = float(d.hausdorff / d.diagonal);
-        diagonals[i] = float(d.diagonal);
+        diagonal = float(d.diagonal);
+    };
+    detail::parallel_blocks(ns.size(), 1, workers, [&](unsigned, size_t i, size_t) {
+        struct Done {
+            const decltype(point_done)& done;
+            ~Done() { done(); }
+        } done{point_done};
+        measure(ns[i], points[i], diagonals[i]);
     });
     std::vector<double> tris, means, maxes;
     for (size_t i = 0; i < ns.size(); ++i) {
@@ -194,6 +216,7 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
     }
     c.k_mean = float(fit_k_over_n(tris, means).k);
     c.k_max = float(fit_k_over_n(tris, maxes).k);
+    if (params.floor_error > 0) refine_floor(c, params.floor_error, measure);
     return c;
 }
 

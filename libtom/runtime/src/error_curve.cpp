@@ -13,6 +13,8 @@ namespace {
 
 constexpr uint32_t kCurveFormat = 1;
 constexpr size_t kHeaderBytes = 20, kPointBytes = 16;
+constexpr uint32_t kFloorFormat = 1;
+constexpr size_t kFloorBytes = 12;
 
 void put32(std::vector<uint8_t>& out, uint32_t v) {
     for (int k = 0; k < 4; ++k) out.push_back(uint8_t(v >> (8 * k)));
@@ -93,11 +95,40 @@ double estimate_error(const ErrorCurve& c, double triangles, bool use_max) noexc
     return k / triangles;
 }
 
-uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max) noexcept {
+std::vector<uint8_t> encode_usable_floor(const UsableFloor& floor) {
+    std::vector<uint8_t> out;
+    put32(out, kFloorFormat);
+    put32(out, floor.vertices);
+    putf(out, floor.mean_bound);
+    return out;
+}
+
+std::optional<UsableFloor> read_usable_floor(const MeshView& mesh) noexcept {
+    const MetadataValue v = find_metadata(mesh, usable_floor_key);
+    if (!v.found() || v.bytes != kFloorBytes || get32(v.data) != kFloorFormat) return std::nullopt;
+    const UsableFloor f{get32(v.data + 4), getf(v.data + 8)};
+    if (f.vertices < mesh.min_vertex_count || f.vertices > mesh.vertex_count || !std::isfinite(f.mean_bound) || f.mean_bound < 0) return std::nullopt;
+    return f;
+}
+
+UsableFloor usable_floor_of(const MeshView& mesh, const ErrorCurve& curve, double mean_bound) noexcept {
+    UsableFloor f{mesh.vertex_count, float(mean_bound)};
+    // from the finest point down, while every point so far is within the bound (an empty level
+    // measures 0 but is no floor)
+    for (auto p = curve.points.rbegin(); p != curve.points.rend(); ++p) {
+        if (p->vertices > mesh.vertex_count || p->vertices < mesh.min_vertex_count) continue;
+        if (p->triangles == 0 || double(p->mean) > mean_bound) break;
+        f.vertices = p->vertices;
+    }
+    return f;
+}
+
+uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max, Floor floor) noexcept {
+    const uint32_t lowest = floor_vertex_count(mesh, floor);
     uint32_t n = mesh.vertex_count;
     // from the finest point down, while every point so far is within the bound
     for (auto p = curve.points.rbegin(); p != curve.points.rend(); ++p) {
-        if (p->vertices > mesh.vertex_count || p->vertices < mesh.min_vertex_count) continue;
+        if (p->vertices > mesh.vertex_count || p->vertices < lowest) continue;
         if (double(use_max ? p->max : p->mean) > max_error) break;
         n = p->vertices;
     }

@@ -5,6 +5,7 @@
 // already < n, so the loop copies blocks and only walks the few corners that need it.
 
 #include "tom/extract.h"
+#include "tom/error_curve.h"
 
 #include "coarse.h"
 #include "format_layout.h"
@@ -351,9 +352,15 @@ uint32_t active_triangle_count(const MeshView& m, uint32_t vertex_count) noexcep
     return total;
 }
 
-uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) noexcept {
+uint32_t floor_vertex_count(const MeshView& m, Floor floor) noexcept {
+    if (floor == Floor::coarsest) return m.min_vertex_count;
+    const std::optional<UsableFloor> f = read_usable_floor(m);
+    return f ? m.whole_groups_above(f->vertices) : m.min_vertex_count;
+}
+
+uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count, Floor floor) noexcept {
     if (triangle_count >= m.triangle_count) return m.vertex_count;
-    uint32_t lo = m.min_vertex_count, hi = m.vertex_count;  // smallest n with active(n) >= triangle_count
+    uint32_t lo = floor_vertex_count(m, floor), hi = m.vertex_count;  // smallest n with active(n) >= triangle_count
     while (lo < hi) {
         const uint32_t mid = lo + (hi - lo) / 2;
         if (active_triangle_count(m, mid) >= triangle_count)
@@ -364,17 +371,18 @@ uint32_t vertex_count_for_triangles(const MeshView& m, uint32_t triangle_count) 
     return m.whole_groups_above(lo);  // a resolution that keeps every group of copies whole
 }
 
-uint32_t vertex_count_within_triangles(const MeshView& m, uint32_t triangle_count) noexcept {
-    uint32_t n = vertex_count_for_triangles(m, triangle_count);
-    while (n > m.min_vertex_count && active_triangle_count(m, n) > triangle_count) --n;
+uint32_t vertex_count_within_triangles(const MeshView& m, uint32_t triangle_count, Floor floor) noexcept {
+    const uint32_t lowest = floor_vertex_count(m, floor);
+    uint32_t n = vertex_count_for_triangles(m, triangle_count, floor);
+    while (n > lowest && active_triangle_count(m, n) > triangle_count) --n;
     return n;
 }
 
-uint32_t vertex_count_for_fraction(const MeshView& m, double fraction) noexcept {
-    if (!(fraction > 0.0)) return m.min_vertex_count;
+uint32_t vertex_count_for_fraction(const MeshView& m, double fraction, Floor floor) noexcept {
+    if (!(fraction > 0.0)) return floor_vertex_count(m, floor);
     if (fraction >= 1.0) return m.vertex_count;
     const double t = fraction * double(m.triangle_count) + 0.5;
-    return vertex_count_for_triangles(m, uint32_t(t));
+    return vertex_count_for_triangles(m, uint32_t(t), floor);
 }
 
 Extracted extract(const MeshView& m, uint32_t vertex_count, uint32_t* dst, size_t capacity) noexcept {

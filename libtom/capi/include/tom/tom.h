@@ -77,7 +77,8 @@ typedef struct tom_mesh_view {
     uint32_t min_vertex_count; /* the coarsest resolution */
     uint32_t index_size;       /* bytes per stored index: 2 or 4 */
     int32_t material;          /* index into the file's materials, or -1 */
-    uint32_t reserved0;
+    uint32_t usable_floor;     /* the coarsest resolution the selections below pick: tombuild's
+                                  stored usable floor (--floor-error), else min_vertex_count */
     const float* positions;  /* xyz per vertex */
     const float* normals;    /* xyz per vertex, or NULL */
     const float* texcoords;  /* uv per vertex (TEXCOORD_0), or NULL */
@@ -97,7 +98,8 @@ tom_status tom_file_mesh(const tom_file* file, uint32_t index, tom_mesh_view* ou
 /* ---- resolutions and extraction ------------------------------------------------------- */
 
 /* The resolution (vertex count) whose triangle count is the given fraction in [0, 1] of the
- * mesh's, or at least the given number of triangles; and the triangles alive at a resolution.
+ * mesh's, or at least the given number of triangles, never below the usable floor (extract at an
+ * explicit vertex count to go lower); and the triangles alive at a resolution.
  * A NULL or unfilled view gives 0. */
 uint32_t tom_vertex_count_for_fraction(const tom_mesh_view* mesh, double fraction);
 uint32_t tom_vertex_count_for_triangles(const tom_mesh_view* mesh, uint32_t triangle_count);

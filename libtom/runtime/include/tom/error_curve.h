@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "tom/extract.h"
 #include "tom/view.h"
 
 namespace tom {
@@ -46,7 +47,32 @@ double estimate_error(const ErrorCurve& curve, double triangles, bool use_max = 
 /// a stored point from which on every stored point, measured, is within the bound; the full
 /// resolution (error 0) when none is. Measured points only, never the interpolation, so what
 /// tomerr measures at that level is within the bound (up to its sampling).
-uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max = true) noexcept;
+/// Never below the usable floor unless `floor` is Floor::coarsest.
+uint32_t vertex_count_for_error(const MeshView& mesh, const ErrorCurve& curve, double max_error, bool use_max = true,
+                                Floor floor = Floor::usable) noexcept;
+
+/// The usable floor (metadata key "usable_floor", layout in docs/FORMAT.md): the coarsest
+/// resolution a selection picks unless asked to go lower (tom::Floor), where the stored curve
+/// says the mean error stays within `mean_bound` (a fraction of the diagonal) from there on.
+/// tombuild stores it beside the curve (--floor-error); below it the chain may fold and tear.
+struct UsableFloor {
+    uint32_t vertices = 0;
+    float mean_bound = 0;
+};
+
+constexpr const char* usable_floor_key = "usable_floor";
+
+/// The metadata value for `floor`.
+std::vector<uint8_t> encode_usable_floor(const UsableFloor& floor);
+
+/// The usable floor stored with `mesh`, if any. A malformed value (or a count outside
+/// [min_vertex_count, vertex_count]) reads as absent.
+std::optional<UsableFloor> read_usable_floor(const MeshView& mesh) noexcept;
+
+/// The usable floor for `curve` at `mean_bound`: the coarsest measured point from which on every
+/// point's mean error is within the bound and whose level has triangles (the full resolution
+/// when the finest measured point is already beyond it).
+UsableFloor usable_floor_of(const MeshView& mesh, const ErrorCurve& curve, double mean_bound) noexcept;
 
 /// Least-squares fit of D = k / N through (N, D) pairs, in log space: k is the geometric mean of
 /// D * N. Also the free slope b of log D = a + b log N (b = -1 is Pasman's law) and the RMS of

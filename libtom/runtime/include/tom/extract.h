@@ -16,21 +16,31 @@ struct Extracted {
     uint32_t triangle_count = 0;  ///< triangles written (3 indices each)
 };
 
+/// How low a selection by count, fraction or error may go: to the usable floor tombuild stored
+/// with the mesh (error_curve.h, UsableFloor; below it the error of the chain's last steps grows
+/// out of proportion), or, when asked, to the chain's coarsest level, min_vertex_count.
+enum class Floor : uint8_t { usable, coarsest };
+
+/// The lowest resolution a selection with `floor` picks: the stored usable floor (raised to keep
+/// groups of copies whole) or min_vertex_count when none is stored or with Floor::coarsest.
+uint32_t floor_vertex_count(const MeshView& mesh, Floor floor = Floor::usable) noexcept;
+
 /// Number of triangles alive at resolution `vertex_count` (clamped to
 /// [min_vertex_count, vertex_count], and lowered to keep every group of copies whole: see
 /// MeshView::whole_groups_below), over all parts. O(P log T) chain walks; allocates nothing.
 uint32_t active_triangle_count(const MeshView& mesh, uint32_t vertex_count) noexcept;
 
-/// Smallest resolution n whose active triangle count is >= `triangle_count`
-/// (the full vertex count if `triangle_count` exceeds the mesh's).
-uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_count) noexcept;
+/// Smallest resolution n, at or above floor_vertex_count(mesh, floor), whose active triangle
+/// count is >= `triangle_count` (the full vertex count if `triangle_count` exceeds the mesh's).
+uint32_t vertex_count_for_triangles(const MeshView& mesh, uint32_t triangle_count, Floor floor = Floor::usable) noexcept;
 
-/// Largest resolution n whose active triangle count is <= `triangle_count` (the coarsest,
-/// min_vertex_count, when even that has more): for budgets that must not be exceeded.
-uint32_t vertex_count_within_triangles(const MeshView& mesh, uint32_t triangle_count) noexcept;
+/// Largest resolution n whose active triangle count is <= `triangle_count` (the floor when even
+/// that has more): for budgets that must not be exceeded.
+uint32_t vertex_count_within_triangles(const MeshView& mesh, uint32_t triangle_count, Floor floor = Floor::usable) noexcept;
 
-/// Resolution for a fraction in [0, 1] of the mesh's triangles (see vertex_count_for_triangles).
-uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction) noexcept;
+/// Resolution for a fraction in [0, 1] of the mesh's triangles (see vertex_count_for_triangles);
+/// 0 gives the floor.
+uint32_t vertex_count_for_fraction(const MeshView& mesh, double triangle_fraction, Floor floor = Floor::usable) noexcept;
 
 /// Writes the index buffer at resolution `vertex_count` (clamped as above) into `destination`.
 /// At or below a file's coarse resolution (MeshView::coarse_resolution, FORMAT.md section COAR)

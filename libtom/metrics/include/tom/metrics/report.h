@@ -21,6 +21,9 @@ struct ReportParams {
     DistanceParams distance;                 ///< Metro's defaults: 10 samples per face, seed 1
     bool error_curve = true;                 ///< make_report also measures the error curve (MeshReport::curve)
     uint32_t curve_points = 16;              ///< error-curve points, log-spaced in vertex count (2..64)
+    /// The usable floor's bound (tom::UsableFloor, a fraction of the diagonal; 0: none): the
+    /// curve gains up to 6 points bisecting the bracket where its mean error crosses it
+    double floor_error = 0.01;
     /// Error-curve sampling, per direction and curve point: area-uniform face samples,
     /// curve_samples_per_triangle x the mesh's triangles within [curve_min_samples,
     /// curve_samples], and at most curve_samples_per_level_face x the faces of the level sampled
