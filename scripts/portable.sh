@@ -14,15 +14,17 @@ tools="${TOM_TOOLS:-$root/build/tools}"
 which="${1:-both}"
 [ -x "$tools/tombuild" ] || { echo "portable.sh: $tools/tombuild is missing: run scripts/build.sh first" >&2; exit 1; }
 
-# the real meshes the tests load (tests/support.cpp), as .tom files
+# the real meshes the tests load (tests/support.cpp), as .tom files: one incremental batch, so a
+# tombuild whose output changes (its options, its version) converts them again
 real="$out/real"
 mkdir -p "$real"
+inputs=()
 for f in meshes/bunny00.off meshes/fandisk.off meshes/cow.off meshes/elephant.off assimp/OBJ/WusonOBJ.obj assimp/OBJ/spider.obj \
          assimp/STL/Spider_binary.stl assimp/PLY/cube_binary.ply assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb; do
   [ -f "$root/data/$f" ] || { echo "portable.sh: data/$f is missing: run scripts/fetch-samples.sh" >&2; exit 1; }
-  name="$(basename "${f%.*}").tom"
-  [ -s "$real/$name" ] || "$tools/tombuild" "$root/data/$f" -o "$real" -q
+  inputs+=("$root/data/$f")
 done
+"$tools/tombuild" "${inputs[@]}" -o "$real" -q
 
 build_and_test() {  # build_and_test FOLDER CMAKE_OPTIONS...
   local dir="$out/$1"; shift
