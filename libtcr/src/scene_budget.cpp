@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "tom/errors.h"
 #include "tom/extract.h"
 
 namespace tcr {
@@ -72,7 +73,7 @@ void check(const std::vector<BudgetMesh>& meshes) {
     for (size_t i = 0; i < meshes.size(); ++i) {
         const BudgetMesh& b = meshes[i];
         if (!b.mesh || b.mesh->triangle_count == 0 || !(b.weight > 0) || !(b.instances >= 1))
-            throw std::invalid_argument("tcr::share_budget: mesh " + std::to_string(i) + " needs a view with triangles, weight > 0 and instances >= 1");
+            throw tom::ArgumentError("tcr::share_budget: mesh " + std::to_string(i) + " needs a view with triangles, weight > 0 and instances >= 1");
     }
 }
 

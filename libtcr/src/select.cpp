@@ -11,6 +11,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "tom/errors.h"
+
 #include "solver.h"
 
 namespace tcr {
@@ -63,13 +65,13 @@ double Problem::cost(size_t i, uint32_t j, double n) const noexcept {
 void Problem::check_menu() const {
     if (!has_menu()) return;
     if (way_begin.size() != size() + 1 || way_begin.front() != 0 || way_begin.back() != ways.size())
-        throw std::invalid_argument("tcr::Problem: way_begin needs size() + 1 entries from 0 to ways.size()");
+        throw tom::ArgumentError("tcr::Problem: way_begin needs size() + 1 entries from 0 to ways.size()");
     for (size_t i = 0; i < size(); ++i)
-        if (way_begin[i + 1] < way_begin[i]) throw std::invalid_argument("tcr::Problem: way_begin decreases at object " + std::to_string(i));
+        if (way_begin[i + 1] < way_begin[i]) throw tom::ArgumentError("tcr::Problem: way_begin decreases at object " + std::to_string(i));
     for (size_t k = 0; k < ways.size(); ++k) {
         const Way& w = ways[k];
         if (!(w.per_tri_ms > 0) || !(w.setup_ms >= 0) || !(w.error >= 0) || !(w.m > 0) || !(w.lo >= 1) || !(w.hi >= w.lo))
-            throw std::invalid_argument("tcr::Problem: way " + std::to_string(k) + " needs per_tri_ms > 0, setup_ms >= 0, error >= 0, m > 0, 1 <= lo <= hi");
+            throw tom::ArgumentError("tcr::Problem: way " + std::to_string(k) + " needs per_tri_ms > 0, setup_ms >= 0, error >= 0, m > 0, 1 <= lo <= hi");
     }
 }
 

@@ -45,7 +45,7 @@ struct BudgetShare {
 /// The menu problem of `meshes` under `budget` triangles (see above): object i's ways are the
 /// segments of its curve, benefit I_i - w_i e_i(n) with I_i = w_i e_i(lo_i). Exposed for checks.
 /// `use_max`: the curves' Hausdorff errors instead of their means.
-/// \throw std::invalid_argument for a mesh without a view, triangles, or a positive weight.
+/// \throw tom::ArgumentError for a mesh without a view, triangles, or a positive weight.
 Problem budget_problem(const std::vector<BudgetMesh>& meshes, double budget, bool use_max = false);
 
 /// Shares `budget` triangles among `meshes` (exact selector on budget_problem), each mesh's

@@ -81,7 +81,7 @@ struct Problem {
     Way way(size_t i, uint32_t j) const noexcept;                     ///< way j of object i (0: its own fields)
     double benefit(size_t i, uint32_t j, double n) const noexcept;    ///< b_ij(n)
     double cost(size_t i, uint32_t j, double n) const noexcept;       ///< c_ij(n)
-    /// \throw std::invalid_argument when the menu's arrays do not fit together
+    /// \throw tom::ArgumentError when the menu's arrays do not fit together
     void check_menu() const;
 };
 

@@ -18,6 +18,7 @@
 //   last removed to the first; triangles by the resolution at which they die.
 
 #include "tom/builder/builder.h"
+#include "tom/errors.h"
 
 #include "format_layout.h"
 #include "morton.h"
@@ -755,7 +756,7 @@ const char* to_string(Strategy s) noexcept { return s == Strategy::passes ? "pas
 static void check_order(const TomMesh& out) {
     for (uint32_t i = out.min_vertex_count; i < out.vertex_count(); ++i)
         if (out.substitute[i] >= i)
-            throw std::logic_error("tom::build: mesh '" + out.name + "': vertex " + std::to_string(i) + " has substitute " + std::to_string(out.substitute[i]) +
+            throw InternalError("tom::build: mesh '" + out.name + "': vertex " + std::to_string(i) + " has substitute " + std::to_string(out.substitute[i]) +
                                    ", not an earlier vertex (a defect of the builder)");
 }
 
@@ -834,9 +835,9 @@ TomMesh build(Mesh&& input, const BuildParams& params, BuildStats* stats_out) {
 Mesh original_mesh(const TomMesh& tom) {
     const uint32_t n = tom.vertex_count(), m = tom.triangle_count();
     if (tom.original_index.size() != n || tom.original_triangle.size() != m)
-        throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "' has no map to its input (only a TomMesh from build() has one)");
+        throw ArgumentError("tom::original_mesh: mesh '" + tom.name + "' has no map to its input (only a TomMesh from build() has one)");
     for (const uint32_t v : tom.original_index)
-        if (v >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_index is not a permutation");
+        if (v >= n) throw ArgumentError("tom::original_mesh: mesh '" + tom.name + "': original_index is not a permutation");
     Mesh mesh;
     mesh.name = tom.name;
     mesh.material = tom.material;
@@ -847,10 +848,10 @@ Mesh original_mesh(const TomMesh& tom) {
     mesh.indices.resize(size_t(m) * 3);
     for (uint32_t slot = 0; slot < m; ++slot) {
         const uint32_t t = tom.original_triangle[slot];
-        if (t >= m) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': original_triangle is not a permutation");
+        if (t >= m) throw ArgumentError("tom::original_mesh: mesh '" + tom.name + "': original_triangle is not a permutation");
         for (size_t k = 0; k < 3; ++k) {
             const uint32_t c = tom.triangles[3 * size_t(slot) + k];
-            if (c >= n) throw std::invalid_argument("tom::original_mesh: mesh '" + tom.name + "': a triangle's corner is past the vertices");
+            if (c >= n) throw ArgumentError("tom::original_mesh: mesh '" + tom.name + "': a triangle's corner is past the vertices");
             mesh.indices[3 * size_t(t) + k] = tom.original_index[c];
         }
     }

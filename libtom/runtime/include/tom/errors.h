@@ -63,4 +63,11 @@ public:
     using Error::Error;
 };
 
+/// A broken internal invariant (a built order that is not one): a bug in the library, never the
+/// caller's data; the message says what broke. Please report it.
+class InternalError : public Error {
+public:
+    using Error::Error;
+};
+
 } // namespace tom

@@ -129,7 +129,7 @@ TomMesh build(Mesh&& mesh, const BuildParams& params = {}, BuildStats* stats = n
 /// The mesh `tom` was built from, exactly (after clean_mesh()): every stream in the input's
 /// vertex order, the triangles in its order with their corners and winding, its parts and
 /// material. Only the parts' `attributes` can differ: they keep just the streams the input had.
-/// \throw std::invalid_argument when `tom` has no map to its input (a TomMesh not made by
+/// \throw tom::ArgumentError when `tom` has no map to its input (a TomMesh not made by
 ///        build(), such as one read from a file).
 Mesh original_mesh(const TomMesh& tom);
 
