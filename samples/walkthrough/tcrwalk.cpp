@@ -25,6 +25,7 @@
 #include "images.h"
 #include "renderer.h"
 #include "scene.h"
+#include "tcr/governor.h"
 #include "tcr/model.h"
 #include "tcr/runtime.h"
 #include "tcr/view.h"
@@ -40,21 +41,7 @@ namespace {
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-// The relative variation of times from one to the next: the median of the successive
-// differences' sizes, scaled to a standard deviation (1.048 = 1 / (0.6745 sqrt 2) for normal
-// noise), over the mean. Unlike the standard deviation, a slow spell of the machine, which the
-// runtime's correction from the previous frame follows, barely adds to it (one calibration's
-// frames stepped from 230 to 310 ms: 13.5% standard deviation, where frame to frame they
-// varied by a few percent), and the median keeps a burst of a few noisy frames out.
-double frame_to_frame(const std::vector<double>& times) {
-    if (times.size() < 2) return 0.0;
-    double mean = 0;
-    for (double t : times) mean += t / double(times.size());
-    std::vector<double> steps;
-    for (size_t k = 1; k < times.size(); ++k) steps.push_back(std::abs(times[k] - times[k - 1]));
-    std::nth_element(steps.begin(), steps.begin() + ptrdiff_t(steps.size() / 2), steps.end());
-    return mean > 0 ? 1.048 * steps[steps.size() / 2] / mean : 0.0;
-}
+using tcr::frame_to_frame;
 
 // The scene with its meshes mapped and each instance's transform.
 struct World {
@@ -410,32 +397,30 @@ struct PathRun {
     const bool none;           // full detail, no budget
     const bool levels_only;    // "SELECTOR-levels": TOM levels smooth-shaded, whatever --representations says
     const uint32_t slots;      // its imposters' first texture slot in the shared renderer
-    tcr::CostModel model;
     tcr::Runtime rt;
+    tcr::FrameGovernor governor;  // the planning reserve, the feedback, the noise allowance, extraction in t_tri
     std::vector<uint32_t> indices;
     std::vector<walk::Renderer::Draw> draws;
     std::vector<walk::Renderer::Capture> captures;
-    std::mt19937_64 noise_rng;
-    std::normal_distribution<double> noise;  // clamped where drawn
-    double overhead_ms = 0;         // the planning time reserved for the next frame
-    double previous_render_ms = 0;  // what the runtime predicts (extraction and rendering), fed back
-    std::array<double, 8> recent_cpu{};
-    const double calibrated_safety_ms;  // the allowance's floor: the calibration's (the empty frame's spread)
-    std::vector<double> recent_ratios;  // measured / predicted, the last kNoiseFrames rendered frames
-    static constexpr size_t kNoiseFrames = 31;
+    tcr::SimulatedRenderer simulated;  // without a renderer (--simulate): the calibrated noise, --noise times
 
     PathRun(const World& world, const std::string& selector, const Options& options, const tcr::CostModel& calibrated, walk::Renderer* r,
             const std::vector<uint32_t>& handles, uint32_t first_slot)
         : w(world), o(options), renderer(r), mesh_handles(handles), none(selector == "none"), levels_only(ends_with_levels(selector)), slots(first_slot),
-          model(allowance(calibrated, options)),
-          rt(model, kind_of(selector)), noise_rng(options.seed), noise(0.0, options.noise), calibrated_safety_ms(calibrated.safety_ms) {
+          rt(calibrated, kind_of(selector)), governor(rt, calibrated, governor_params(options, none, r != nullptr)),
+          simulated(options.noise * std::max(calibrated.noise_rel, 0.01), 1.0, options.seed) {
         add_objects(rt, w);
     }
 
-    // the allowance for the renderer's noise at this budget: `safety_sigma` standard deviations
-    static tcr::CostModel allowance(tcr::CostModel m, const Options& o) {
-        m.safety_ms = std::max(m.safety_ms, o.safety_sigma * m.noise_rel * o.budget_ms);
-        return m;
+    // "none" draws full detail: a budget no frame reaches. A simulated renderer's noise is the
+    // calibration's: the allowance stays the calibrated one.
+    static tcr::GovernorParams governor_params(const Options& o, bool none, bool rendered) {
+        tcr::GovernorParams g;
+        g.budget_ms = none ? 1e12 : o.budget_ms;
+        g.safety_sigma = o.safety_sigma;
+        g.follow_noise = rendered && !none;
+        g.optimize_share = o.optimize_share;
+        return g;
     }
     static tcr::SelectorKind kind_of(const std::string& selector) {
         tcr::SelectorKind kind = tcr::SelectorKind::exact;
@@ -443,39 +428,33 @@ struct PathRun {
         return kind;
     }
 
-    // Four generous frames at the path's start, not counted: the planning time, and the
-    // extraction cost per triangle, which joins the model's per-triangle cost (the CPU's share of
-    // a triangle).
+    // The governor's warm-up frames at the path's start, not counted: the planning time, and the
+    // extraction cost per triangle, which joins the model's per-triangle cost.
     void warm_up() {
         const tcr::Camera cam = camera_for(0, o.frames, o.width, o.height);
-        double extract_per_triangle = 0;
-        for (size_t k = 0; k < 4; ++k) {
-            tcr::FrameParams fp;
-            fp.camera = cam;
-            fp.budget_ms = none ? 1e12 : 4 * o.budget_ms;  // many triangles to time
-            const tcr::FrameReport& r = rt.plan_frame(fp);
-            recent_cpu[k] = r.cull_ms + r.optimize_ms;
+        while (governor.warming_up()) {
+            const tcr::FrameReport& r = governor.plan_frame(frame_params(cam));
             ensure(indices, size_t(r.triangles) * 3);  // outside the timing
             const auto extract_start = Clock::now();
             const size_t at = extract_frame(w, rt, mesh_handles, kGrey, indices, draws, captures, slots);
-            if (k > 0 && r.triangles > 0) extract_per_triangle = std::max(extract_per_triangle, ms_since(extract_start) / double(r.triangles));
-            if (renderer) renderer->render(cam.view, cam.projection, draws, indices, at, captures);
+            const double extract_ms = ms_since(extract_start);
+            double render_ms = 0;
+            if (renderer) {
+                const auto render_start = Clock::now();
+                renderer->render(cam.view, cam.projection, draws, indices, at, captures);
+                render_ms = ms_since(render_start);
+            } else {
+                render_ms = simulated.frame_ms(r, governor.model());
+            }
+            governor.frame_done({extract_ms, render_ms});
         }
-        if (!none) {
-            model.t_tri_ms += 1.25 * extract_per_triangle;
-            rt.set_cost_model(model);
-        }
-        note_planning_time();
     }
 
-    // The frame's request to the runtime: the budget less the planning time reserved (for
-    // "none": every visible object at full detail).
-    tcr::FrameParams frame_params(const tcr::Camera& cam, double planning_reserve_ms) const {
+    // The frame's request to the runtime (the governor sets its budget, feedback and deadline;
+    // for "none": every visible object at full detail, its best way).
+    tcr::FrameParams frame_params(const tcr::Camera& cam) const {
         tcr::FrameParams fp;
         fp.camera = cam;
-        fp.budget_ms = o.budget_ms - planning_reserve_ms;  // the renderer's share
-        fp.previous_frame_ms = previous_render_ms;
-        fp.deadline_ms = o.optimize_share * o.budget_ms;
         fp.hysteresis = o.hysteresis;
         fp.menu.flat = fp.menu.imposters = (o.representations == "all" || o.representations == "simple") && !levels_only;
         fp.menu.meshed = o.representations == "all" && !levels_only;
@@ -485,53 +464,22 @@ struct PathRun {
         fp.menu.imposter_max_px = o.imposter_max_px;
         fp.menu.imposter_error_factor = o.imposter_error_factor;
         fp.menu.refresh_share = o.refresh_share;
-        if (none) {  // full detail, each object its best way: texture-mapped where it has a texture
+        if (none) {
             fp.menu = tcr::Menu();
             fp.menu.textured = true;
-            fp.budget_ms = 1e12;
             fp.max_error_px = 0;
         }
         return fp;
     }
 
-    // Simulated: the calibrated model's time (without the runtime's correction, which, fed its
-    // own output, would drift) plus the calibrated relative noise, bounded by the safety
-    // allowance, so a frame may exceed its prediction and the runtime's correction follows noise
-    // as it does on a real renderer.
-    double simulated_render_ms(const tcr::FrameReport& r) {
-        const double fixed = model.t_init_ms + model.t_final_ms;
-        const double expected = fixed + (r.predicted_ms - model.frame_fixed_ms()) / std::max(1e-9, r.correction);
-        const double e = std::max(-2.0, std::min(2.0, noise(noise_rng))) * std::max(model.noise_rel, 0.01);
-        return std::max(0.0, expected + std::max(-model.safety_ms, std::min(model.safety_ms, expected * e)));
-    }
-
-    // The next frame's culling and optimisation is estimated by twice the largest of the last
-    // eight (planning times jitter), and at least 2% of the budget; extraction is in the model's
-    // per-triangle cost.
-    void note_planning_time() { overhead_ms = std::max(0.02 * o.budget_ms, 2.0 * *std::max_element(recent_cpu.begin(), recent_cpu.end())); }
-
-    // The safety allowance follows the renderer's noise as this run meets it: `safety_sigma`
-    // times the frame-to-frame variation of measured over predicted over the last 31 frames,
-    // times the budget (from 11 frames on; the calibration's noise_rel before). A calibration
-    // measures the noise once, for seconds, and this machine's varies by the minute: three
-    // calibrations in a row measured 1.6%, 7.4% and 7.8%, and one at 11.5% set aside 4.6 ms
-    // of 40 for a whole run whose noise test then measured 4.0%.
-    void follow_noise(double ratio) {
-        if (recent_ratios.size() == kNoiseFrames) recent_ratios.erase(recent_ratios.begin());
-        recent_ratios.push_back(ratio);
-        if (recent_ratios.size() < 11) return;
-        model.safety_ms = std::max(calibrated_safety_ms, o.safety_sigma * frame_to_frame(recent_ratios) * o.budget_ms);
-        rt.set_cost_model(model);
-    }
-
     // One frame: plan, extract, render (or simulate), and what the runtime is fed back.
-    Row frame(uint32_t f, size_t slot, size_t& index_count) {
+    Row frame(uint32_t f, size_t& index_count) {
         const tcr::Camera cam = camera_for(f, o.frames, o.width, o.height);
         const auto frame_start = Clock::now();
         Row row{};
         row.frame = f;
-        const double planning_reserve_ms = std::min(overhead_ms, 0.9 * o.budget_ms);
-        const tcr::FrameReport& r = rt.plan_frame(frame_params(cam, planning_reserve_ms));
+        const double planning_reserve_ms = governor.planning_reserve_ms();
+        const tcr::FrameReport& r = governor.plan_frame(frame_params(cam));
         row.cull_ms = r.cull_ms;
         row.optimize_ms = r.optimize_ms;
         row.visible_objects = r.visible;
@@ -548,27 +496,21 @@ struct PathRun {
         const auto extract_start = Clock::now();
         index_count = extract_frame(w, rt, mesh_handles, kSand, indices, draws, captures, slots);
         row.extract_ms = ms_since(extract_start);
-        double render_ms;
+        tcr::FrameTimes times;
         if (renderer) {
             const auto render_start = Clock::now();
             renderer->render(cam.view, cam.projection, draws, indices, index_count, captures);
-            render_ms = ms_since(render_start);
+            times = {row.extract_ms, ms_since(render_start), ms_since(frame_start)};
         } else {
-            render_ms = simulated_render_ms(r);
+            // simulated: extraction is in the simulated time, and the frame is the planning time
+            // reserved plus it (the real cull and optimise times, which a busy machine can
+            // stretch, stay in the compute columns)
+            times = {0.0, simulated.frame_ms(r, governor.model()), -1.0};
         }
-        // measured: everything but the renderer. Simulated: the planning time reserved for this
-        // frame (the real cull and optimise times, which a busy machine can stretch, stay in the
-        // compute columns); extraction is in the simulated render time
-        const double cpu_ms = renderer ? ms_since(frame_start) - render_ms : planning_reserve_ms;
-        row.render_ms = render_ms;
-        row.measured_ms = cpu_ms + render_ms;
-        // the runtime's prediction covers extraction and rendering; the frame adds cull and
-        // optimise. The safety allowance is a margin, not part of the prediction.
-        row.predicted_ms = r.predicted_ms - model.safety_ms + r.cull_ms + r.optimize_ms;
-        recent_cpu[slot % recent_cpu.size()] = r.cull_ms + r.optimize_ms;
-        note_planning_time();
-        if (renderer && !none) follow_noise(row.measured_ms / std::max(1e-9, row.predicted_ms));
-        previous_render_ms = renderer ? render_ms + row.extract_ms : render_ms;
+        row.render_ms = times.render_ms;
+        row.measured_ms = times.frame_ms >= 0 ? times.frame_ms : planning_reserve_ms + times.render_ms;
+        row.predicted_ms = governor.predicted_ms();
+        governor.frame_done(times);
         return row;
     }
 
@@ -627,7 +569,7 @@ std::vector<Summary> run_paths(const World& w, const Options& o, const tcr::Cost
         if (path.none && step < 0) return;
         const uint32_t f = uint32_t(std::max<int64_t>(step, 0));
         size_t index_count = 0;
-        const Row row = path.frame(f, size_t(step + settle), index_count);
+        const Row row = path.frame(f, index_count);
         if (step < 0) return;
         rows[k].push_back(row);
         const std::string& selector = o.selectors[k];

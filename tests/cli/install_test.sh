@@ -50,4 +50,13 @@ done
 pipeline="$("$work/consumer/tom_pipeline" "$data/meshes/fandisk.off" "$work/pipeline.tom")"
 echo "$pipeline"
 echo "$pipeline" | grep -Eq "^fandisk: 6475 vertices, 12946 triangles; at 10%: [0-9]+ vertices, 129[0-9] triangles, Hausdorff 0\.[0-9]+% of the diagonal; a 1 ms budget draws [0-9]+ \+ [0-9]+ triangles"
-echo "5 passed, 0 failed"
+# the time-critical loop on tom::tcr: the governor holds 10 ms under a renderer 1.3x slower than calibrated
+governed="$("$work/consumer/tom_governed" "$work/out/fandisk.tom" 10)"
+echo "$governed"
+echo "$governed" | /usr/bin/python3 -c "
+import re, sys
+line = sys.stdin.read()
+objects, frames, over, mean, triangles = re.match(r'(\d+) objects, (\d+) frames at 10.0 ms: (\d+) over 1.1x the budget, mean ([0-9.]+) ms, (\d+) triangles a frame', line).groups()
+assert int(objects) == 64 and int(frames) > 200 and int(over) <= 0.05 * int(frames) and 7.5 < float(mean) < 10.5 and int(triangles) > 10000, line
+"
+echo "6 passed, 0 failed"

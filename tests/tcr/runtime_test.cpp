@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 
 #include "support.h"
+#include "tcr/governor.h"
 #include "tcr/imposters.h"
 #include "tcr/runtime.h"
 #include "tcr/view.h"
@@ -622,4 +623,105 @@ TEST_CASE("the coarsest choice is each object's usable floor, or below it when t
             CHECK(highest < floor);
         }
     }
+}
+
+// ---- the frame governor: the bunny's copies on the simulated renderer: the budget held under a
+// renderer slower than calibrated, the allowance following the noise, extraction folded into
+// t_tri, the planning reserve
+
+namespace {
+
+// the runtime tests' model, with a smaller allowance and a measured noise
+tcr::CostModel calibrated() {
+    tcr::CostModel m = model();
+    m.safety_ms = 0.2;
+    m.noise_rel = 0.05;
+    return m;
+}
+
+tcr::FrameParams request() {
+    tcr::FrameParams f;
+    f.camera = camera_at(4.0f);
+    return f;
+}
+
+void add_objects(tcr::Runtime& rt, const tom::File& file) {
+    for (int i = 0; i < 60; ++i) {
+        float m[16];
+        tcr::translation_scale(float(i % 10 - 5) * 0.4f, float(i / 10 - 3) * 0.4f, -float(i % 3), 1.5f, m);
+        rt.add_object(file.mesh(0), m);
+    }
+}
+
+// The engine's loop for `frames` frames: plan, "extract" (extract_ms_per_triangle, during the
+// warm-up; after it the simulated time holds it, as the model does), render; each frame's time.
+std::vector<double> run(tcr::FrameGovernor& governor, tcr::SimulatedRenderer& renderer, int frames, double extract_ms_per_triangle) {
+    std::vector<double> times;
+    for (int k = 0; k < frames; ++k) {
+        const bool warm = governor.warming_up();
+        const double reserve = governor.planning_reserve_ms();
+        const tcr::FrameReport& r = governor.plan_frame(request());
+        const double extract_ms = warm ? extract_ms_per_triangle * double(r.triangles) : 0.0;
+        const double render_ms = renderer.frame_ms(r, governor.model());
+        governor.frame_done({extract_ms, render_ms});
+        if (!warm) times.push_back(reserve + render_ms);
+    }
+    return times;
+}
+
+} // namespace
+
+TEST_CASE("frame to frame variation: the median step over the mean, blind to a slow step", "[tcr][governor]") {
+    CHECK(tcr::frame_to_frame({10, 11, 10, 11, 10}) == Approx(1.048 * 1.0 / 10.4));
+    std::vector<double> step(20, 10.0);
+    std::fill(step.begin() + 10, step.end(), 13.0);  // a slow spell: one step, no frame-to-frame noise
+    CHECK(tcr::frame_to_frame(step) == 0.0);
+    CHECK(tcr::frame_to_frame({5.0}) == 0.0);
+}
+
+TEST_CASE("the governor holds the budget under a renderer 1.4x slower than calibrated, and uses it", "[tcr][governor]") {
+    SceneFixture scene;
+    tcr::Runtime rt(calibrated(), tcr::SelectorKind::exact);
+    add_objects(rt, scene.file);
+    tcr::GovernorParams params;
+    params.budget_ms = 12.0;
+    tcr::FrameGovernor governor(rt, calibrated(), params);
+    tcr::SimulatedRenderer slow(0.03, 1.4);
+    const std::vector<double> times = run(governor, slow, 4 + 150, 0.0);
+    REQUIRE(times.size() == 150);
+    // after the correction settles (20 frames): frames over 1.1x the budget are rare, and the
+    // frames spend most of it
+    size_t over = 0;
+    double mean = 0;
+    for (size_t k = 20; k < times.size(); ++k) over += times[k] > 1.1 * params.budget_ms, mean += times[k] / double(times.size() - 20);
+    INFO("mean " << mean << " ms, " << over << " frames over 1.1x");
+    CHECK(over <= 6);
+    CHECK(mean > 0.75 * params.budget_ms);
+    CHECK(mean < 1.05 * params.budget_ms);
+    // the planning reserve: at least 2% of the budget and twice the last planning time
+    CHECK(governor.planning_reserve_ms() >= 0.02 * params.budget_ms);
+    CHECK(governor.planning_reserve_ms() >= 2 * (rt.last_frame().cull_ms + rt.last_frame().optimize_ms) - 1e-12);
+}
+
+TEST_CASE("the safety allowance follows the noise the frames meet, and the warm-up folds extraction into t_tri", "[tcr][governor]") {
+    SceneFixture scene;
+    double safety[2] = {0, 0};
+    for (int noisy = 0; noisy < 2; ++noisy) {
+        tcr::Runtime rt(calibrated(), tcr::SelectorKind::exact);
+        add_objects(rt, scene.file);
+        tcr::GovernorParams params;
+        params.budget_ms = 12.0;
+        tcr::FrameGovernor governor(rt, calibrated(), params);
+        // before any frame: the calibration's allowance at this budget, 0.75 x 5% x 12 ms
+        CHECK(governor.model().safety_ms == Approx(0.75 * 0.05 * 12.0));
+        tcr::SimulatedRenderer renderer(noisy ? 0.15 : 0.0, 1.0, 1, false);
+        run(governor, renderer, 4 + 60, 2e-5);
+        // extraction per triangle (2e-5 ms), with the margin, joined t_tri after the warm-up
+        CHECK(governor.model().t_tri_ms == Approx(calibrated().t_tri_ms + 1.25 * 2e-5));
+        CHECK(rt.cost_model().t_tri_ms == governor.model().t_tri_ms);
+        safety[noisy] = governor.model().safety_ms;
+    }
+    INFO("allowance " << safety[0] << " ms without noise, " << safety[1] << " ms with 15%");
+    CHECK(safety[0] == Approx(calibrated().safety_ms));  // quiet frames: the calibrated floor
+    CHECK(safety[1] > 0.75 * 0.10 * 12.0);               // about 0.75 x 15% x 12 ms
 }
