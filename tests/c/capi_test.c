@@ -2,13 +2,14 @@
  * from strided arrays through a counting allocator, opens the image in place and from a file,
  * extracts every level the report uses with both index widths, and checks the failures' statuses
  * and messages. With a .tom path argument (a real mesh built by tombuild), runs the extraction
- * checks on each of its meshes too.
+ * checks on each of its meshes too, and drives libtcr (tom/tcr.h) over copies of its first mesh.
  * Usage: capi_test WORK_DIR [FILE.tom] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "tom/tcr.h"
 #include "tom/tom.h"
 
 static int failures = 0, checks = 0;
@@ -184,6 +185,114 @@ static void check_real_file(const char* path) {
     tom_file_close(file);
 }
 
+/* libtcr through tom/tcr.h: 24 copies of the file's first mesh, a governor holding 8 ms over a
+ * renderer whose frames take 1.2x the prediction; each drawn object's level extracts as reported;
+ * the warm-up folds extraction into t_tri; bad calls fail with their status and message. */
+static void check_tcr(const char* path, const char* work) {
+    tom_file* file = NULL;
+    tom_mesh_view mesh;
+    tcr_cost_model model;
+    tcr_runtime* rt = NULL;
+    tcr_governor* governor = NULL;
+    tcr_governor_params gp;
+    tcr_frame_params fp;
+    tcr_frame_report report;
+    tcr_object_result object;
+    tom_extracted e;
+    uint32_t i, id = 0, drawn_frames = 0;
+    uint32_t* buffer;
+    char model_path[4096];
+    FILE* bad;
+    CHECK(tom_file_open(path, &file) == TOM_OK);
+    if (!file) return;
+    CHECK(tom_file_mesh(file, 0, &mesh) == TOM_OK);
+    buffer = malloc(sizeof(uint32_t) * 3 * (size_t)mesh.triangle_count);
+    memset(&model, 0, sizeof model);
+    model.t_init_ms = model.t_final_ms = 0.5;
+    model.t_setup_ms = 0.02;
+    model.t_tri_ms = 2e-5;
+    model.t_vert_ms = 1e-5;
+    model.t_pix_ms = 1e-6;
+    model.safety_ms = 0.2;
+    CHECK(tcr_runtime_create(&model, TCR_SELECTOR_EXACT, &rt) == TOM_OK);
+    for (i = 0; i < 24; ++i) {
+        float t[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -3, 1};
+        t[12] = 0.3f * (float)(i % 6) - 0.75f;
+        t[13] = 0.3f * (float)(i / 6) - 0.45f;
+        CHECK(tcr_runtime_add_object(rt, &mesh, t, 1.0f, &id) == TOM_OK && id == i);
+    }
+    CHECK(tcr_runtime_object_count(rt) == 24);
+    tcr_governor_params_default(&gp);
+    gp.budget_ms = 8.0;
+    CHECK(tcr_governor_create(rt, &model, &gp, &governor) == TOM_OK);
+    tcr_frame_params_default(&fp);
+    fp.camera.projection[0] = fp.camera.projection[5] = 1.5f; /* a perspective, eye at the origin looking down -z */
+    fp.camera.projection[10] = -1.0f;
+    fp.camera.projection[11] = -1.0f;
+    fp.camera.projection[14] = -0.2f;
+    fp.camera.projection[15] = 0.0f;
+    fp.camera.viewport_width = 800;
+    fp.camera.viewport_height = 600;
+    for (i = 0; i < 40; ++i) {
+        uint32_t k, triangles = 0, in_range = 1;
+        CHECK(tcr_governor_plan_frame(governor, &fp, &report) == TOM_OK);
+        for (k = 0; k < tcr_runtime_object_count(rt); ++k) {
+            size_t c;
+            CHECK(tcr_runtime_object(rt, k, &object) == TOM_OK);
+            if (!object.drawn) continue;
+            CHECK(tcr_runtime_indices_u32(rt, k, buffer, 3 * (size_t)mesh.triangle_count, &e) == TOM_OK);
+            CHECK(e.triangle_count == object.triangles && e.vertex_count == object.vertices);
+            for (c = 0; c < 3 * (size_t)e.triangle_count; ++c) in_range &= buffer[c] < e.vertex_count;
+            triangles += e.triangle_count;
+        }
+        CHECK(in_range);
+        CHECK(triangles == report.triangles);
+        drawn_frames += report.drawn > 0;
+        /* extraction 1e-6 ms a triangle; the renderer 1.2x slower than predicted */
+        CHECK(tcr_governor_frame_done(governor, 1e-6 * triangles, 1.2 * report.predicted_ms, -1.0) == TOM_OK);
+    }
+    CHECK(drawn_frames == 40);
+    CHECK(!tcr_governor_warming_up(governor));
+    CHECK(tcr_governor_planning_reserve_ms(governor) >= 0.02 * gp.budget_ms);
+    {
+        tcr_cost_model now;
+        CHECK(tcr_governor_model(governor, &now) == TOM_OK);
+        CHECK(fabs(now.t_tri_ms - (model.t_tri_ms + 1.25e-6)) < 1e-12);
+    }
+    CHECK(report.predicted_ms <= gp.budget_ms * 1.01);
+
+    /* failures: their status and message */
+    CHECK(tcr_runtime_object(rt, 24, &object) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "object 24") != NULL);
+    {
+        const float identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+        CHECK(tcr_runtime_add_object(NULL, &mesh, identity, 1.0f, &id) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "runtime is NULL") != NULL);
+        CHECK(tcr_runtime_add_object(rt, &mesh, identity, 0.0f, &id) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "weight") != NULL);
+    }
+    CHECK(tcr_runtime_create(&model, (tcr_selector)9, &rt) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "selector 9") != NULL);
+    for (i = 0; i < 24; ++i) { /* a buffer of 2 indices holds no drawn object's level */
+        CHECK(tcr_runtime_object(rt, i, &object) == TOM_OK);
+        if (object.drawn) {
+            CHECK(tcr_runtime_indices_u32(rt, i, buffer, 2, &e) == TOM_ERROR_CAPACITY && strstr(tom_last_error(), "the buffer holds 2") != NULL);
+            break;
+        }
+    }
+    snprintf(model_path, sizeof model_path, "%s/no-such-calibration.txt", work);
+    CHECK(tcr_read_cost_model(model_path, &model) == TOM_ERROR_IO && strstr(tom_last_error(), "no-such-calibration.txt") != NULL);
+    snprintf(model_path, sizeof model_path, "%s/bad-calibration.txt", work);
+    bad = fopen(model_path, "w");
+    if (bad) {
+        fputs("t_init_ms 0.5\nt_tri_ms lots\n", bad);
+        fclose(bad);
+    }
+    CHECK(tcr_read_cost_model(model_path, &model) == TOM_ERROR_PARSE && strstr(tom_last_error(), "bad-calibration.txt") != NULL);
+    CHECK(strcmp(tom_status_name(TOM_ERROR_PARSE), "TOM_ERROR_PARSE") == 0);
+
+    tcr_governor_destroy(governor);
+    tcr_runtime_destroy(rt);
+    free(buffer);
+    tom_file_close(file);
+}
+
 int main(int argc, char** argv) {
     char path[4096];
     grid g = make_grid(40);
@@ -328,6 +437,7 @@ int main(int argc, char** argv) {
     CHECK(tom_file_open(NULL, &mapped) == TOM_ERROR_ARGUMENT);
 
     if (argc > 2) check_real_file(argv[2]);
+    if (argc > 2) check_tcr(argv[2], argv[1]);
     if (argc > 3) { /* a file with multi-part meshes (2CylinderEngine: four meshes of several primitives) */
         tom_file* parts_file = NULL;
         uint32_t i, multi = 0;

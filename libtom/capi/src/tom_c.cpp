@@ -3,6 +3,8 @@
 
 #include "tom/tom.h"
 
+#include "capi_common.h"
+
 #include <cstdlib>
 #include <cstring>
 #include <new>
@@ -29,7 +31,7 @@ struct tom_file {
     std::vector<tom::Instance> draw;                 // tom::draw_list
 };
 
-namespace {
+namespace tom::capi {
 
 thread_local std::string last_error;
 
@@ -38,33 +40,15 @@ tom_status fail(tom_status status, const std::string& message) {
     return status;
 }
 
-// Runs `body`, which returns a tom_status, turning each exception into its status.
-template <class Body>
-tom_status guarded(Body&& body) noexcept {
-    try {
-        return body();
-    } catch (const tom::FormatError& e) {
-        return fail(TOM_ERROR_FORMAT, e.what());
-    } catch (const tom::IoError& e) {
-        return fail(TOM_ERROR_IO, e.what());
-    } catch (const tom::ImportError& e) {
-        return fail(TOM_ERROR_MESH, e.what());
-    } catch (const tom::ArgumentError& e) {
-        return fail(TOM_ERROR_ARGUMENT, e.what());
-    } catch (const std::bad_alloc&) {
-        return fail(TOM_ERROR_MEMORY, "out of memory");
-    } catch (const std::exception& e) {
-        return fail(TOM_ERROR_INTERNAL, e.what());
-    } catch (...) {
-        return fail(TOM_ERROR_INTERNAL, "unknown error");
-    }
-}
-
 tom_status null_argument(const char* function, const char* argument) {
     return fail(TOM_ERROR_ARGUMENT, std::string(function) + ": " + argument + " is NULL");
 }
 
-const tom::MeshView* view_of(const tom_mesh_view* mesh) { return mesh ? static_cast<const tom::MeshView*>(mesh->internal) : nullptr; }
+} // namespace tom::capi
+
+namespace {
+
+using namespace tom::capi;
 
 tom_file* make_file(tom::File f) {
     auto* out = new tom_file(std::move(f));
@@ -189,7 +173,7 @@ tom_status build_image(const tom_build_mesh* meshes, uint32_t mesh_count, const 
 
 extern "C" {
 
-const char* tom_last_error(void) { return last_error.c_str(); }
+const char* tom_last_error(void) { return tom::capi::last_error.c_str(); }
 
 const char* tom_status_name(tom_status status) {
     switch (status) {
@@ -201,6 +185,7 @@ const char* tom_status_name(tom_status status) {
     case TOM_ERROR_CAPACITY: return "TOM_ERROR_CAPACITY";
     case TOM_ERROR_MEMORY: return "TOM_ERROR_MEMORY";
     case TOM_ERROR_INTERNAL: return "TOM_ERROR_INTERNAL";
+    case TOM_ERROR_PARSE: return "TOM_ERROR_PARSE";
     }
     return "TOM_ERROR_UNKNOWN";
 }

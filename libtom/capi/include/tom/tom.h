@@ -34,7 +34,8 @@ typedef enum tom_status {
     TOM_ERROR_MESH = 4,     /* a mesh handed to the builder cannot be used (index past its vertices, non-finite position) */
     TOM_ERROR_CAPACITY = 5, /* the caller's buffer is smaller than the result */
     TOM_ERROR_MEMORY = 6,   /* an allocation failed */
-    TOM_ERROR_INTERNAL = 7  /* anything else; the message says what */
+    TOM_ERROR_INTERNAL = 7, /* anything else; the message says what */
+    TOM_ERROR_PARSE = 8     /* a text file does not parse (a libtcr calibration file, tom/tcr.h) */
 } tom_status;
 
 /* The message of this thread's last failure, or "" when there was none. Valid until this
