@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "holders.h"
 #include "report_output.h"
 #include "tom/builder/builder.h"
 #include "tom/builder/mesh.h"
@@ -29,18 +30,8 @@ namespace {
 
 // ---- what the Python objects hold ---------------------------------------------------------
 
-// A mapped file, or one that borrows a Python buffer (kept alive by `owner`).
-struct FileHolder {
-    tom::File file;
-    py::object owner;
-};
-
-// One mesh of a file: its arrays keep the file alive through `file_object`.
-struct FileMesh {
-    std::shared_ptr<FileHolder> holder;
-    uint32_t index = 0;
-    const tom::MeshView& view() const { return holder->file.mesh(index); }
-};
+using tom_python::FileHolder;
+using tom_python::FileMesh;
 
 // A source mesh (imported, or made from arrays).
 struct SourceMesh {
@@ -316,6 +307,7 @@ PYBIND11_MODULE(_tom, m) {
     static py::exception<tom::ImportError> import_error(m, "MeshFileError", error.ptr());
     static py::exception<tom::IoError> io_error(m, "IoError", error.ptr());
     static py::exception<tom::ArgumentError> argument_error(m, "ArgumentError", error.ptr());
+    static py::exception<tom::ParseError> parse_error(m, "ParseError", error.ptr());
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
@@ -327,6 +319,8 @@ PYBIND11_MODULE(_tom, m) {
             io_error(e.what());
         } catch (const tom::ArgumentError& e) {
             argument_error(e.what());
+        } catch (const tom::ParseError& e) {
+            parse_error(e.what());
         } catch (const tom::Error& e) {
             error(e.what());
         }
@@ -488,4 +482,6 @@ PYBIND11_MODULE(_tom, m) {
     });
 
     m.attr("format_version") = py::make_tuple(tom::format_version_major, tom::format_version_minor);
+    py::module_ tcr = m.def_submodule("tcr", "Time-critical rendering (libtcr): each frame, every object's resolution within a time budget.");
+    tom_python::add_tcr(tcr);
 }

@@ -21,6 +21,7 @@ from ._tom import (
     IoError,
     Mesh,
     MeshFileError,
+    ParseError,
     build,
     format_version,
     import_file,
@@ -30,8 +31,9 @@ from ._tom import (
     serialize,
     write,
 )
+from ._tom import tcr
 
 __all__ = [
-    "ArgumentError", "BuiltMesh", "Error", "File", "FileMesh", "FormatError", "IoError", "Mesh", "MeshFileError",
-    "build", "format_version", "import_file", "open", "open_bytes", "report", "serialize", "write",
+    "ArgumentError", "BuiltMesh", "Error", "File", "FileMesh", "FormatError", "IoError", "Mesh", "MeshFileError", "ParseError",
+    "build", "format_version", "import_file", "open", "open_bytes", "report", "serialize", "tcr", "write",
 ]

@@ -294,3 +294,52 @@ def test_carried_streams_are_views_of_the_sources_values(tmp_path):
     assert np.allclose(weights.sum(axis=1), 1.0) and joints.max() <= 1  # the sample's two joints, weights summing to one
     with pytest.raises(ValueError):
         weights[0, 0] = 0.5
+
+
+def test_tcr_governs_a_scene_of_the_bunny_within_its_budget(bunny, tmp_path):
+    """tom.tcr: 24 copies of the bunny under the frame governor on a renderer 1.3x slower than
+    calibrated; every drawn object's level extracts as reported; bad input raises tom errors."""
+    model = tom.tcr.CostModel()
+    model.t_init_ms = model.t_final_ms = 0.5
+    model.t_setup_ms, model.t_tri_ms, model.t_vert_ms, model.t_pix_ms = 0.02, 2e-5, 1e-5, 1e-6
+    model.safety_ms, model.noise_rel = 0.2, 0.03
+    f = tom.open(str(bunny))
+    rt = tom.tcr.Runtime(model, "exact")
+    for i in range(24):
+        t = np.eye(4, dtype=np.float32)
+        t[0, 3], t[1, 3], t[2, 3] = 0.3 * (i % 6) - 0.75, 0.3 * (i // 6) - 0.45, -3.0
+        assert rt.add_object(f.meshes[0], t) == i
+    governor = tom.tcr.FrameGovernor(rt, model, budget_ms=8.0)
+    renderer = tom.tcr.SimulatedRenderer(0.03, slowdown=1.3)
+    view = tom.tcr.look_at([0, 0, 0], [0, 0, -1], [0, 1, 0])
+    projection = tom.tcr.perspective(1.0, 4 / 3, 0.1, 100.0)
+    times = []
+    for frame in range(80):
+        warm = governor.warming_up
+        reserve = governor.planning_reserve_ms
+        report = governor.plan_frame(view, projection, 800, 600)
+        drawn = 0
+        for i in range(len(rt)):
+            o = rt.object(i)
+            indices, n = rt.indices(i)
+            assert len(indices) == (o["triangles"] if o["drawn"] else 0)
+            if o["drawn"]:
+                assert n == o["vertices"] and indices.max() < n
+                drawn += len(indices)
+        assert drawn == report["triangles"]
+        render_ms = renderer.frame_ms(report, governor.model)
+        governor.frame_done(0.0, render_ms)
+        if not warm and frame >= 24:
+            times.append(reserve + render_ms)
+    times = np.array(times)
+    assert np.mean(times > 1.1 * 8.0) <= 0.05 and 0.75 * 8.0 < times.mean() < 1.05 * 8.0, times
+    with pytest.raises(tom.ArgumentError, match="selector 'fastest'"):
+        tom.tcr.Runtime(model, "fastest")
+    with pytest.raises(tom.ArgumentError, match="4x4"):
+        rt.add_object(f.meshes[0], np.eye(3))
+    with pytest.raises(tom.ArgumentError, match="object 99"):
+        rt.object(99)
+    bad = tmp_path / "calibration.txt"
+    bad.write_text("t_init_ms 0.5\nt_tri_ms lots\n")
+    with pytest.raises(tom.ParseError, match="calibration.txt"):
+        tom.tcr.read_cost_model(str(bad))
