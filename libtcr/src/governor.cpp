@@ -35,7 +35,7 @@ void FrameGovernor::set_budget(double budget_ms) {
     // the allowance for the renderer's noise at this budget, until the frames measure their own
     model_.safety_ms = std::max(calibrated_safety_ms_, params_.safety_sigma * model_.noise_rel * budget_ms);
     rt_.set_cost_model(model_);
-    note_planning(planning_ms_);
+    note_planning();
 }
 
 double FrameGovernor::planning_reserve_ms() const noexcept { return std::min(reserve_ms_, params_.max_planning_share * params_.budget_ms); }
@@ -64,17 +64,23 @@ void FrameGovernor::frame_done(const FrameTimes& times) {
         follow_noise(frame_ms / std::max(1e-9, predicted_ms_));
     }
     recent_planning_[frames_ % kPlanningFrames] = planning_ms_;
-    note_planning(planning_ms_);
+    note_planning();
     previous_frame_ms_ = times.extract_ms + times.render_ms;
     ++frames_;
 }
 
-// The next frame's culling and optimisation: twice the longest of the last eight (planning times
-// jitter), and at least min_planning_share of the budget; extraction is in the model's t_tri.
-void FrameGovernor::note_planning(double planning_ms) {
-    double longest = planning_ms;
-    for (double t : recent_planning_) longest = std::max(longest, t);
-    reserve_ms_ = std::max(params_.min_planning_share * params_.budget_ms, 2.0 * longest);
+// The next frame's culling and optimisation: twice the second longest of the last eight
+// (planning times jitter; a single stall of the machine, an optimiser 5x over its deadline once,
+// would otherwise take 90% of the budget for eight frames, the correction would learn those
+// nearly empty frames, and the frame after them overshoot), and at least min_planning_share of
+// the budget; extraction is in the model's t_tri.
+void FrameGovernor::note_planning() {
+    double longest = 0, second = 0;
+    for (double t : recent_planning_) {
+        if (t > longest) second = longest, longest = t;
+        else second = std::max(second, t);
+    }
+    reserve_ms_ = std::max(params_.min_planning_share * params_.budget_ms, 2.0 * second);
 }
 
 void FrameGovernor::fold_extraction() {

@@ -33,8 +33,9 @@ struct GovernorParams {
     double safety_sigma = 0.75;
     bool follow_noise = true;         ///< false: the calibration's allowance throughout (simulated renderers)
     double optimize_share = 0.1;      ///< the optimiser's deadline, a share of the budget
-    /// The planning reserve: twice the longest of the last 8 frames' culling and optimisation,
-    /// within [min_planning_share, max_planning_share] of the budget.
+    /// The planning reserve: twice the second longest of the last 8 frames' culling and
+    /// optimisation (one stall is not the norm), within [min_planning_share, max_planning_share]
+    /// of the budget.
     double min_planning_share = 0.02;
     double max_planning_share = 0.9;
     uint32_t warm_up_frames = 4;      ///< frames planned at warm_up_budget_factor x the budget, timing extraction
@@ -105,7 +106,7 @@ public:
     void set_budget(double budget_ms);
 
 private:
-    void note_planning(double planning_ms);
+    void note_planning();
     void fold_extraction();
     void follow_noise(double measured_over_predicted);
 
