@@ -182,11 +182,11 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
         provenance.dropped = out.dropped = imported.dropped;
         out.digest = provenance.input_digest;
         if (imported.meshes.empty())
-            throw tom::ImportError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
+            throw tom::MeshError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
         std::vector<tom::CleanStats> cleans;
         for (tom::Mesh& mesh : imported.meshes) {
             cleans.push_back(tom::clean_mesh(mesh, settings.clean));
-            if (mesh.indices.empty()) throw tom::ImportError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
+            if (mesh.indices.empty()) throw tom::MeshError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
         }
         const double import_seconds = seconds_since(start);
         struct {

@@ -103,7 +103,7 @@ Loaded load(const std::string& path, std::optional<double> fraction) {
             const tom::Extracted e = tom::extract(m, n, idx.data(), idx.size());
             append(m.positions, m.normals, m.texcoords, e.vertex_count, idx.data(), e.triangle_count, transform);
         });
-        if (out.indices.empty()) throw tom::ImportError(path + ": no triangles");
+        if (out.indices.empty()) throw tom::MeshError(path + ": no triangles");
         return out;
     }
     tom::ImportResult r = tom::import_file(path);
@@ -113,7 +113,7 @@ Loaded load(const std::string& path, std::optional<double> fraction) {
         append(m.positions.data(), m.normals.empty() ? nullptr : m.normals.data(), m.texcoords.empty() ? nullptr : m.texcoords.data(),
                m.vertex_count(), m.indices.data(), m.triangle_count(), transform);
     });
-    if (out.indices.empty()) throw tom::ImportError(path + ": no triangles");
+    if (out.indices.empty()) throw tom::MeshError(path + ": no triangles");
     return out;
 }
 

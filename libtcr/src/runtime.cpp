@@ -9,6 +9,7 @@
 #include "tcr/runtime.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -171,11 +172,15 @@ uint32_t Runtime::add_object(const tom::MeshView& mesh, const float transform[16
 }
 
 void Runtime::set_transform(uint32_t id, const float transform[16]) noexcept {
+    assert(id < objects_.size() && "Runtime::set_transform: \\pre id < object_count()");
     Object& o = objects_[id];
     if (!std::equal(transform, transform + 16, o.transform)) o.imposter.valid = false;  // a capture of where it was
     std::copy(transform, transform + 16, o.transform);
 }
-void Runtime::set_weight(uint32_t id, float weight) noexcept { objects_[id].weight = weight; }
+void Runtime::set_weight(uint32_t id, float weight) noexcept {
+    assert(id < objects_.size() && "Runtime::set_weight: \\pre id < object_count()");
+    objects_[id].weight = weight;
+}
 
 void Runtime::clear_imposters() noexcept {
     for (Object& o : objects_) o.imposter = ImposterState();

@@ -304,7 +304,7 @@ PYBIND11_MODULE(_tom, m) {
     // errors: tom.Error and one subclass per kind the library throws, with its message
     static py::exception<tom::Error> error(m, "Error");
     static py::exception<tom::FormatError> format_error(m, "FormatError", error.ptr());
-    static py::exception<tom::ImportError> import_error(m, "MeshFileError", error.ptr());
+    static py::exception<tom::MeshError> import_error(m, "MeshError", error.ptr());
     static py::exception<tom::IoError> io_error(m, "IoError", error.ptr());
     static py::exception<tom::ArgumentError> argument_error(m, "ArgumentError", error.ptr());
     static py::exception<tom::ParseError> parse_error(m, "ParseError", error.ptr());
@@ -313,7 +313,7 @@ PYBIND11_MODULE(_tom, m) {
             if (p) std::rethrow_exception(p);
         } catch (const tom::FormatError& e) {
             format_error(e.what());
-        } catch (const tom::ImportError& e) {
+        } catch (const tom::MeshError& e) {
             import_error(e.what());
         } catch (const tom::IoError& e) {
             io_error(e.what());
@@ -413,7 +413,7 @@ PYBIND11_MODULE(_tom, m) {
         std::vector<SourceMesh> out;
         for (tom::Mesh& mesh : meshes) out.push_back({std::make_shared<tom::Mesh>(std::move(mesh))});
         return out;
-    }, py::arg("path"), "Reads OBJ, PLY, OFF, STL, glTF or GLB (Draco and meshopt included) as tombuild does: one Mesh per primitive. Raises tom.MeshFileError.");
+    }, py::arg("path"), "Reads OBJ, PLY, OFF, STL, glTF or GLB (Draco and meshopt included) as tombuild does: one Mesh per primitive. Raises tom.MeshError.");
 
     m.def("build", [](py::object positions, py::object triangles, py::object normals, py::object uv, const std::string& name, const std::string& predicate,
                       const std::string& strategy, float pair_threshold, float attribute_weight, float max_rotation_degrees, unsigned threads, bool foresight,

@@ -20,7 +20,7 @@ from ._tom import (
     FormatError,
     IoError,
     Mesh,
-    MeshFileError,
+    MeshError,
     ParseError,
     build,
     format_version,
@@ -33,7 +33,9 @@ from ._tom import (
 )
 from ._tom import tcr
 
+MeshFileError = MeshError  # its former name
+
 __all__ = [
-    "ArgumentError", "BuiltMesh", "Error", "File", "FileMesh", "FormatError", "IoError", "Mesh", "MeshFileError", "ParseError",
+    "ArgumentError", "BuiltMesh", "Error", "File", "FileMesh", "FormatError", "IoError", "Mesh", "MeshError", "MeshFileError", "ParseError",
     "build", "format_version", "import_file", "open", "open_bytes", "report", "serialize", "tcr", "write",
 ]

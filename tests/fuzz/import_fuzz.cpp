@@ -1,6 +1,6 @@
 // One mesh importer on hostile bytes (compiled once per format: TOM_FUZZ_EXTENSION names it):
 // the bytes as a file of that extension, imported, then cleaned as tombuild does. A bad file
-// must give an ImportError, never a crash, a hang or an allocation the input cannot justify.
+// must give an MeshError, never a crash, a hang or an allocation the input cannot justify.
 // An OBJ input may carry its material library: the bytes after a line "@mtl" are the file
 // input.mtl beside it (which `mtllib input.mtl` names).
 

@@ -155,7 +155,7 @@ TEST_CASE("glTF: a meshopt stream that does not decode is an error naming the bu
     try {
         tom::import_file(broken.string());
         FAIL("no error");
-    } catch (const tom::ImportError& e) {
+    } catch (const tom::MeshError& e) {
         const std::string what = e.what();
         INFO(what);
         CHECK(what.find(broken.string()) == 0);

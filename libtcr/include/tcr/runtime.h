@@ -169,6 +169,7 @@ public:
     /// go down to the mesh's usable floor, or with Floor::coarsest to its chain's last level.
     /// \return its id, 0, 1, 2, ... in order of addition.
     uint32_t add_object(const tom::MeshView& mesh, const float transform[16], float weight = 1.0f, tom::Floor floor = tom::Floor::usable);
+    /// \pre id < object_count() (asserted), as for every call taking an object's id.
     void set_transform(uint32_t id, const float transform[16]) noexcept;
     void set_weight(uint32_t id, float weight) noexcept;
     /// Whether object `id` has a texture to be drawn with (its mesh's texture coordinates and a

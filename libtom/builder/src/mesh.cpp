@@ -15,7 +15,7 @@ namespace {
 
 void check_stream(const Mesh& mesh, const std::vector<float>& stream, size_t width, const char* what) {
     if (!stream.empty() && stream.size() != size_t(mesh.vertex_count()) * width)
-        throw ImportError("mesh '" + mesh.name + "': " + what + " stream has " + std::to_string(stream.size() / width) +
+        throw MeshError("mesh '" + mesh.name + "': " + what + " stream has " + std::to_string(stream.size() / width) +
                           " elements for " + std::to_string(mesh.vertex_count()) + " vertices");
 }
 
@@ -25,11 +25,11 @@ void check_extra_streams(const Mesh& mesh) {
         const VertexStream& x = mesh.extra_streams[k];
         const std::string what = "mesh '" + mesh.name + "': carried stream '" + x.name + "'";
         if (x.element_bytes() == 0 || x.components > 4)
-            throw ImportError(what + " has component type " + std::to_string(x.component_type) + " and " + std::to_string(x.components) + " components");
+            throw MeshError(what + " has component type " + std::to_string(x.component_type) + " and " + std::to_string(x.components) + " components");
         if (x.data.size() != size_t(mesh.vertex_count()) * x.element_bytes())
-            throw ImportError(what + " has " + std::to_string(x.data.size()) + " bytes for " + std::to_string(mesh.vertex_count()) + " vertices");
+            throw MeshError(what + " has " + std::to_string(x.data.size()) + " bytes for " + std::to_string(mesh.vertex_count()) + " vertices");
         for (size_t j = 0; j < k; ++j)
-            if (mesh.extra_streams[j].name == x.name) throw ImportError(what + " appears twice");
+            if (mesh.extra_streams[j].name == x.name) throw MeshError(what + " appears twice");
     }
 }
 
@@ -38,9 +38,9 @@ void check_extra_streams(const Mesh& mesh) {
 void check_skin(const Mesh& mesh) {
     const std::string what = "mesh '" + mesh.name + "': ";
     if (mesh.joint_positions.size() % 3 != 0)
-        throw ImportError(what + "joint position stream length " + std::to_string(mesh.joint_positions.size()) + " is not a multiple of 3");
+        throw MeshError(what + "joint position stream length " + std::to_string(mesh.joint_positions.size()) + " is not a multiple of 3");
     for (size_t i = 0; i < mesh.joint_positions.size(); ++i)
-        if (!std::isfinite(mesh.joint_positions[i])) throw ImportError(what + "joint " + std::to_string(i / 3) + " has a non-finite position");
+        if (!std::isfinite(mesh.joint_positions[i])) throw MeshError(what + "joint " + std::to_string(i / 3) + " has a non-finite position");
     const size_t joints = mesh.joint_positions.size() / 3;
     for (const VertexStream& x : mesh.extra_streams) {
         const bool weights = x.name.rfind("WEIGHTS_", 0) == 0, indices = x.name.rfind("JOINTS_", 0) == 0 && joints > 0;
@@ -49,9 +49,9 @@ void check_skin(const Mesh& mesh) {
         for (size_t i = 0; i < x.data.size() / size; ++i) {
             const double value = component_value(x.component_type, x.normalized, &x.data[i * size]);
             const std::string at = what + x.name + " of vertex " + std::to_string(i / x.components) + " is ";
-            if (weights && !(value >= 0 && std::isfinite(value))) throw ImportError(at + std::to_string(value) + ": a weight must be finite and non-negative");
+            if (weights && !(value >= 0 && std::isfinite(value))) throw MeshError(at + std::to_string(value) + ": a weight must be finite and non-negative");
             if (indices && !(value < double(joints)))
-                throw ImportError(at + std::to_string(uint64_t(value)) + ", past the skin's " + std::to_string(joints) + " joints");
+                throw MeshError(at + std::to_string(uint64_t(value)) + ", past the skin's " + std::to_string(joints) + " joints");
         }
     }
 }
@@ -86,12 +86,12 @@ void check_parts(const Mesh& mesh) {
     uint64_t next = 0;
     for (size_t k = 0; k < mesh.parts.size(); ++k) {
         if (mesh.parts[k].first_triangle != next)
-            throw ImportError("mesh '" + mesh.name + "': part " + std::to_string(k) + " starts at triangle " + std::to_string(mesh.parts[k].first_triangle) +
+            throw MeshError("mesh '" + mesh.name + "': part " + std::to_string(k) + " starts at triangle " + std::to_string(mesh.parts[k].first_triangle) +
                               ", not where the previous part ends (" + std::to_string(next) + ")");
         next += mesh.parts[k].triangle_count;
     }
     if (!mesh.parts.empty() && next != mesh.triangle_count())
-        throw ImportError("mesh '" + mesh.name + "': the parts cover " + std::to_string(next) + " of " + std::to_string(mesh.triangle_count()) + " triangles");
+        throw MeshError("mesh '" + mesh.name + "': the parts cover " + std::to_string(next) + " of " + std::to_string(mesh.triangle_count()) + " triangles");
 }
 
 // Identical vertices (CleanOptions::weld) merged into the first of them: an open-addressing table
@@ -276,21 +276,21 @@ void compute_normals(Mesh& mesh) {
 CleanStats clean_mesh(Mesh& mesh, const CleanOptions& options) {
     CleanStats stats;
     if (mesh.positions.size() % 3 != 0)
-        throw ImportError("mesh '" + mesh.name + "': position stream length " + std::to_string(mesh.positions.size()) + " is not a multiple of 3");
+        throw MeshError("mesh '" + mesh.name + "': position stream length " + std::to_string(mesh.positions.size()) + " is not a multiple of 3");
     if (mesh.indices.size() % 3 != 0)
-        throw ImportError("mesh '" + mesh.name + "': index count " + std::to_string(mesh.indices.size()) + " is not a multiple of 3");
+        throw MeshError("mesh '" + mesh.name + "': index count " + std::to_string(mesh.indices.size()) + " is not a multiple of 3");
     if (mesh.positions.size() / 3 > size_t(UINT32_MAX) - 1 || mesh.indices.size() / 3 > size_t(UINT32_MAX) - 1)
-        throw ImportError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
+        throw MeshError("mesh '" + mesh.name + "': more than 2^32-2 vertices or triangles");
     for_each_attribute_stream(mesh, [&](std::vector<float>& stream, size_t width, const char* what) { check_stream(mesh, stream, width, what); });
     check_extra_streams(mesh);
     check_skin(mesh);
     const uint32_t n = mesh.vertex_count();
     for (size_t i = 0; i < mesh.positions.size(); ++i)
         if (!std::isfinite(mesh.positions[i]))
-            throw ImportError("mesh '" + mesh.name + "': vertex " + std::to_string(i / 3) + " has a non-finite position");
+            throw MeshError("mesh '" + mesh.name + "': vertex " + std::to_string(i / 3) + " has a non-finite position");
     for (size_t i = 0; i < mesh.indices.size(); ++i)
         if (mesh.indices[i] >= n)
-            throw ImportError("mesh '" + mesh.name + "': triangle " + std::to_string(i / 3) + " uses vertex " +
+            throw MeshError("mesh '" + mesh.name + "': triangle " + std::to_string(i / 3) + " uses vertex " +
                               std::to_string(mesh.indices[i]) + " but the mesh has " + std::to_string(n) + " vertices");
     check_parts(mesh);
     for (float& x : mesh.normals)

@@ -26,7 +26,7 @@ tom_status guarded(Body&& body) noexcept {
         return fail(TOM_ERROR_FORMAT, e.what());
     } catch (const tom::IoError& e) {
         return fail(TOM_ERROR_IO, e.what());
-    } catch (const tom::ImportError& e) {
+    } catch (const tom::MeshError& e) {
         return fail(TOM_ERROR_MESH, e.what());
     } catch (const tom::ArgumentError& e) {
         return fail(TOM_ERROR_ARGUMENT, e.what());

@@ -133,7 +133,7 @@ tom_status to_mesh(const tom_build_mesh& in, uint32_t which, const tom::CleanOpt
     for (uint32_t p = 0; p < in.part_count; ++p)
         m.parts.push_back({in.parts[p].first_triangle, in.parts[p].triangle_count, in.parts[p].material, in.parts[p].attributes & tom::attribute_bits(m)});
     if (m.parts.size() == 1) m.material = m.parts[0].material, m.parts.clear();
-    tom::clean_mesh(m, clean);  // throws ImportError naming the mesh for an index past its vertices or parts that do not tile
+    tom::clean_mesh(m, clean);  // throws MeshError naming the mesh for an index past its vertices or parts that do not tile
     return TOM_OK;
 }
 

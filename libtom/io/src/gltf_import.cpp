@@ -69,7 +69,7 @@ public:
     PrimitiveReader(const tinygltf::Model& model, std::string where, bool quantized)
         : model_(model), where_(std::move(where)), quantized_(quantized) {}
 
-    [[noreturn]] void fail(const std::string& what) const { throw ImportError(where_ + ": " + what); }
+    [[noreturn]] void fail(const std::string& what) const { throw MeshError(where_ + ": " + what); }
 
     // Validates accessor `index` and returns a pointer to element 0 plus the stride. A sparse
     // accessor is made dense first (`expect`: the element count it must have, 0 for any; one
@@ -374,7 +374,7 @@ void read_joint_positions(const tinygltf::Model& model, const std::vector<std::v
         const tinygltf::Node& node = model.nodes[ni];
         if (node.mesh < 0 || size_t(node.mesh) >= mesh_parts.size() || node.skin < 0) continue;
         const std::string where = path + ": node " + std::to_string(ni);
-        if (size_t(node.skin) >= model.skins.size()) throw ImportError(where + " refers to skin " + std::to_string(node.skin) + ", which does not exist");
+        if (size_t(node.skin) >= model.skins.size()) throw MeshError(where + " refers to skin " + std::to_string(node.skin) + ", which does not exist");
         for (const uint32_t mi : mesh_parts[size_t(node.mesh)])
             if (meshes[mi].joint_positions.empty()) meshes[mi].joint_positions = PrimitiveReader(model, where, quantized).joint_positions(node.skin);
     }
@@ -405,17 +405,17 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             const std::string users = primitives_using_accessor(doc, accessor);
             const bool draco = bytes.size() > 0 && std::string(bytes.begin(), bytes.end()).find("KHR_draco_mesh_compression") != std::string::npos;
             if (!users.empty())
-                throw ImportError(path + ": " + users + ": accessor " + std::to_string(accessor) + " has no data" +
+                throw MeshError(path + ": " + users + ": accessor " + std::to_string(accessor) + " has no data" +
                                   (draco ? " (its KHR_draco_mesh_compression data did not decode)" : "") + " [tinygltf: " + reason + "]");
         }
-        throw ImportError(path + ": cannot read glTF: " + reason);
+        throw MeshError(path + ": cannot read glTF: " + reason);
     }
     ImportResult result;
     if (!warn.empty()) result.warnings.push_back(one_line(warn));
     for (const tinygltf::Buffer& b : model.buffers)  // external buffers (images are not read)
         if (!b.uri.empty() && !tinygltf::IsDataURI(b.uri)) result.sources.push_back(b.uri);
     for (const std::string& ext : model.extensionsRequired)
-        if (!can_read_required(ext)) throw ImportError(path + ": requires extension " + ext + ", which this reader does not decode");
+        if (!can_read_required(ext)) throw MeshError(path + ": requires extension " + ext + ", which this reader does not decode");
     if (meshopt) decode_meshopt(model, doc, path);
     const bool quantized = std::find(model.extensionsUsed.begin(), model.extensionsUsed.end(), "KHR_mesh_quantization") != model.extensionsUsed.end();
 
@@ -499,7 +499,7 @@ ImportResult import_gltf(const std::string& path, bool binary) {
     result.scene = gltf_scene(model, doc, mesh_parts, embedded, path, textures);
     result.scene.gltf = source_gltf(model, doc, mesh_parts, textures);
     result.dropped = gltf_dropped(doc, !result.scene.gltf.empty(), std::move(result.dropped));
-    if (result.meshes.empty() && result.skipped.empty()) throw ImportError(path + ": the glTF file has no meshes");
+    if (result.meshes.empty() && result.skipped.empty()) throw MeshError(path + ": the glTF file has no meshes");
     return result;
 }
 

@@ -42,7 +42,7 @@ bool prepare_meshopt(json& doc, std::vector<uint8_t>& bytes, bool binary, const 
         if (binary && i == 0) continue;
         const uint64_t n = b.value("byteLength", uint64_t(0));
         if (n > (uint64_t(1) << 30))
-            throw ImportError(path + ": EXT_meshopt_compression fallback buffer " + std::to_string(i) + " declares " + std::to_string(n) +
+            throw MeshError(path + ": EXT_meshopt_compression fallback buffer " + std::to_string(i) + " declares " + std::to_string(n) +
                               " bytes, more than this reader accepts (1 GiB)");
         b["uri"] = zero_data_uri(n);
     }
@@ -67,24 +67,24 @@ void decode_meshopt(tinygltf::Model& model, const json& doc, const std::string& 
         const json& ext = views[vi]["extensions"][kExt];
         const std::string where = path + ": buffer view " + std::to_string(vi) + " (EXT_meshopt_compression)";
         auto number = [&](const char* key) -> uint64_t {
-            if (!ext.contains(key) || !ext[key].is_number_unsigned()) throw ImportError(where + ": '" + key + "' is missing or not a non-negative integer");
+            if (!ext.contains(key) || !ext[key].is_number_unsigned()) throw MeshError(where + ": '" + key + "' is missing or not a non-negative integer");
             return ext[key].get<uint64_t>();
         };
         const uint64_t source = number("buffer"), offset = ext.value("byteOffset", uint64_t(0)), length = number("byteLength");
         const uint64_t stride = number("byteStride"), count = number("count");
         const std::string mode = ext.value("mode", std::string());
         const std::string filter = ext.value("filter", std::string("NONE"));
-        if (source >= model.buffers.size()) throw ImportError(where + ": source buffer " + std::to_string(source) + " does not exist");
+        if (source >= model.buffers.size()) throw MeshError(where + ": source buffer " + std::to_string(source) + " does not exist");
         const std::vector<unsigned char>& src = model.buffers[size_t(source)].data;
         if (offset > src.size() || length > src.size() - offset)
-            throw ImportError(where + ": " + std::to_string(length) + " compressed bytes at " + std::to_string(offset) + " lie outside buffer " +
+            throw MeshError(where + ": " + std::to_string(length) + " compressed bytes at " + std::to_string(offset) + " lie outside buffer " +
                               std::to_string(source) + " (" + std::to_string(src.size()) + " bytes)");
         tinygltf::BufferView& view = model.bufferViews[vi];
-        if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size()) throw ImportError(where + ": its buffer does not exist");
+        if (view.buffer < 0 || size_t(view.buffer) >= model.buffers.size()) throw MeshError(where + ": its buffer does not exist");
         std::vector<unsigned char>& dst = model.buffers[size_t(view.buffer)].data;
         if (stride == 0 || count > (uint64_t(1) << 32) || stride * count > view.byteLength || view.byteOffset > dst.size() ||
             view.byteLength > dst.size() - view.byteOffset)
-            throw ImportError(where + ": " + std::to_string(count) + " elements of " + std::to_string(stride) + " bytes do not fit the view (" +
+            throw MeshError(where + ": " + std::to_string(count) + " elements of " + std::to_string(stride) + " bytes do not fit the view (" +
                               std::to_string(view.byteLength) + " bytes at " + std::to_string(view.byteOffset) + " of a " + std::to_string(dst.size()) +
                               "-byte buffer)");
         // decoded apart and copied, so a view whose fallback is its own source buffer decodes too
@@ -93,28 +93,28 @@ void decode_meshopt(tinygltf::Model& model, const json& doc, const std::string& 
         const unsigned char* in = src.data() + offset;
         int rc;
         if (mode == "ATTRIBUTES") {
-            if (stride % 4 != 0 || stride > 256) throw ImportError(where + ": ATTRIBUTES need a byte stride that is a multiple of 4 up to 256, not " + std::to_string(stride));
+            if (stride % 4 != 0 || stride > 256) throw MeshError(where + ": ATTRIBUTES need a byte stride that is a multiple of 4 up to 256, not " + std::to_string(stride));
             rc = meshopt_decodeVertexBuffer(out, size_t(count), size_t(stride), in, size_t(length));
         } else if (mode == "TRIANGLES" || mode == "INDICES") {
-            if (stride != 2 && stride != 4) throw ImportError(where + ": " + mode + " need a byte stride of 2 or 4, not " + std::to_string(stride));
-            if (mode == "TRIANGLES" && count % 3 != 0) throw ImportError(where + ": TRIANGLES need a multiple of 3 indices, not " + std::to_string(count));
+            if (stride != 2 && stride != 4) throw MeshError(where + ": " + mode + " need a byte stride of 2 or 4, not " + std::to_string(stride));
+            if (mode == "TRIANGLES" && count % 3 != 0) throw MeshError(where + ": TRIANGLES need a multiple of 3 indices, not " + std::to_string(count));
             rc = mode == "TRIANGLES" ? meshopt_decodeIndexBuffer(out, size_t(count), size_t(stride), in, size_t(length))
                                      : meshopt_decodeIndexSequence(out, size_t(count), size_t(stride), in, size_t(length));
         } else {
-            throw ImportError(where + ": unknown mode '" + mode + "'");
+            throw MeshError(where + ": unknown mode '" + mode + "'");
         }
-        if (rc != 0) throw ImportError(where + ": the " + mode + " data does not decode (meshoptimizer error " + std::to_string(rc) + ")");
+        if (rc != 0) throw MeshError(where + ": the " + mode + " data does not decode (meshoptimizer error " + std::to_string(rc) + ")");
         if (filter == "OCTAHEDRAL") {
-            if (mode != "ATTRIBUTES" || (stride != 4 && stride != 8)) throw ImportError(where + ": the OCTAHEDRAL filter needs ATTRIBUTES of stride 4 or 8");
+            if (mode != "ATTRIBUTES" || (stride != 4 && stride != 8)) throw MeshError(where + ": the OCTAHEDRAL filter needs ATTRIBUTES of stride 4 or 8");
             meshopt_decodeFilterOct(out, size_t(count), size_t(stride));
         } else if (filter == "QUATERNION") {
-            if (mode != "ATTRIBUTES" || stride != 8) throw ImportError(where + ": the QUATERNION filter needs ATTRIBUTES of stride 8");
+            if (mode != "ATTRIBUTES" || stride != 8) throw MeshError(where + ": the QUATERNION filter needs ATTRIBUTES of stride 8");
             meshopt_decodeFilterQuat(out, size_t(count), size_t(stride));
         } else if (filter == "EXPONENTIAL") {
-            if (mode != "ATTRIBUTES" || stride % 4 != 0) throw ImportError(where + ": the EXPONENTIAL filter needs ATTRIBUTES of a stride that is a multiple of 4");
+            if (mode != "ATTRIBUTES" || stride % 4 != 0) throw MeshError(where + ": the EXPONENTIAL filter needs ATTRIBUTES of a stride that is a multiple of 4");
             meshopt_decodeFilterExp(out, size_t(count), size_t(stride));
         } else if (filter != "NONE") {
-            throw ImportError(where + ": unknown filter '" + filter + "'");
+            throw MeshError(where + ": unknown filter '" + filter + "'");
         }
         if (!decoded.empty()) std::memcpy(dst.data() + view.byteOffset, decoded.data(), decoded.size());
     }

@@ -19,12 +19,12 @@ namespace tom::detail {
 
 /// True when the document uses EXT_meshopt_compression; then its fallback buffers without a
 /// URI get a data URI of zeros of their byteLength, and `bytes` (the .gltf text or the whole
-/// .glb) is rewritten with the changed JSON. \throw ImportError naming `path` for a fallback
+/// .glb) is rewritten with the changed JSON. \throw MeshError naming `path` for a fallback
 /// buffer larger than 1 GiB.
 bool prepare_meshopt(nlohmann::json& doc, std::vector<uint8_t>& bytes, bool binary, const std::string& path);
 
 /// Decodes every compressed buffer view of `doc` into `model`'s buffers (filters applied).
-/// \throw ImportError naming `path` and the buffer view when a range is outside its buffer, the
+/// \throw MeshError naming `path` and the buffer view when a range is outside its buffer, the
 /// mode, stride or filter is invalid, or the data does not decode.
 void decode_meshopt(tinygltf::Model& model, const nlohmann::json& doc, const std::string& path);
 

@@ -39,7 +39,7 @@ struct TextureSources {
 };
 
 /// `textures` receives the above for the materials of `doc` (the document `model` decoded).
-/// \throw ImportError naming `path` and the node for a cycle or a node tree that would give
+/// \throw MeshError naming `path` and the node for a cycle or a node tree that would give
 /// more than 1,000,000 instances.
 Scene gltf_scene(const tinygltf::Model& model, const nlohmann::json& doc, const std::vector<std::vector<uint32_t>>& mesh_parts,
                  const EmbeddedImages& embedded, const std::string& path, TextureSources& textures);

@@ -35,7 +35,7 @@ void check_index(const json& doc, const json& value, const char* list, const std
     const size_t n = count_of(doc, list);
     if (i < 0 || uint64_t(i) >= n) {
         const std::string one = std::strcmp(list, "meshes") == 0 ? "mesh" : std::string(list, std::strlen(list) - 1);
-        throw ImportError(file + ": " + where + ": names " + one + " " + std::to_string(i) + ", the file has " + std::to_string(n));
+        throw MeshError(file + ": " + where + ": names " + one + " " + std::to_string(i) + ", the file has " + std::to_string(n));
     }
 }
 
@@ -80,10 +80,10 @@ std::vector<uint8_t> buffer_bytes(const json& doc, size_t b, const std::vector<u
 void check_draco(const json& doc, const json& prim, const json& ext, const std::string& where, const std::vector<std::vector<uint8_t>>& buffers,
                  const std::string& file) {
     if (!ext.contains("bufferView") || !ext["bufferView"].is_number_integer())
-        throw ImportError(file + ": " + where + ": KHR_draco_mesh_compression has no bufferView");
+        throw MeshError(file + ": " + where + ": KHR_draco_mesh_compression has no bufferView");
     check_index(doc, ext["bufferView"], "bufferViews", where + ".extensions.KHR_draco_mesh_compression.bufferView", file);
     if (!ext.contains("attributes") || !ext["attributes"].is_object())
-        throw ImportError(file + ": " + where + ": KHR_draco_mesh_compression has no attributes object");
+        throw MeshError(file + ": " + where + ": KHR_draco_mesh_compression has no attributes object");
     const json& view = doc["bufferViews"][ext["bufferView"].get<size_t>()];
     const size_t b = view.value("buffer", size_t(0));
     const uint64_t offset = view.value("byteOffset", uint64_t(0)), length = view.value("byteLength", uint64_t(0));
@@ -93,16 +93,16 @@ void check_draco(const json& doc, const json& prim, const json& ext, const std::
     draco::Decoder decoder;
     auto decoded = decoder.DecodeMeshFromBuffer(&in);
     if (!decoded.ok())
-        throw ImportError(file + ": " + where + ": its KHR_draco_mesh_compression data does not decode (" + decoded.status().error_msg_string() + ")");
+        throw MeshError(file + ": " + where + ": its KHR_draco_mesh_compression data does not decode (" + decoded.status().error_msg_string() + ")");
     const draco::Mesh& mesh = *decoded.value();
     for (auto it = ext["attributes"].begin(); it != ext["attributes"].end(); ++it) {
         const std::string at = where + ".extensions.KHR_draco_mesh_compression.attributes." + it.key();
-        if (!it.value().is_number_integer()) throw ImportError(file + ": " + at + ": expected an integer attribute id");
+        if (!it.value().is_number_integer()) throw MeshError(file + ": " + at + ": expected an integer attribute id");
         if (!prim.contains("attributes") || !prim["attributes"].contains(it.key()))
-            throw ImportError(file + ": " + at + ": the primitive has no " + it.key() + " accessor for it");
+            throw MeshError(file + ": " + at + ": the primitive has no " + it.key() + " accessor for it");
         const int64_t id = it.value().get<int64_t>();
         if (id < 0 || id > INT32_MAX || mesh.GetAttributeByUniqueId(uint32_t(id)) == nullptr)
-            throw ImportError(file + ": " + at + ": the Draco data has no attribute " + std::to_string(id) + " (it has " + std::to_string(mesh.num_attributes()) + ")");
+            throw MeshError(file + ": " + at + ": the Draco data has no attribute " + std::to_string(id) + " (it has " + std::to_string(mesh.num_attributes()) + ")");
     }
 }
 
@@ -116,7 +116,7 @@ void check_gltf_references(const json& doc, const std::vector<uint8_t>& bytes, b
         const uint64_t end = view.value("byteOffset", uint64_t(0)) + view.value("byteLength", uint64_t(0));
         const uint64_t declared = doc["buffers"][b].value("byteLength", uint64_t(0));
         if (end > declared)
-            throw ImportError(file + ": $.bufferViews[" + std::to_string(i) + "]: bytes up to " + std::to_string(end) + " of buffer " + std::to_string(b) + ", which has " +
+            throw MeshError(file + ": $.bufferViews[" + std::to_string(i) + "]: bytes up to " + std::to_string(end) + " of buffer " + std::to_string(b) + ", which has " +
                               std::to_string(declared));
     }
     check_member(doc, "accessors", "bufferView", "bufferViews", file);

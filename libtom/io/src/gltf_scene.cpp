@@ -172,8 +172,8 @@ struct Flattener {
 
     void visit(int index, const float parent[16]) {
         if (index < 0 || size_t(index) >= model.nodes.size())
-            throw ImportError(path + ": the node tree refers to node " + std::to_string(index) + ", which does not exist");
-        if (on_path[size_t(index)]) throw ImportError(path + ": node " + std::to_string(index) + " is its own ancestor (the node tree has a cycle)");
+            throw MeshError(path + ": the node tree refers to node " + std::to_string(index) + ", which does not exist");
+        if (on_path[size_t(index)]) throw MeshError(path + ": node " + std::to_string(index) + " is its own ancestor (the node tree has a cycle)");
         on_path[size_t(index)] = 1;
         const tinygltf::Node& node = model.nodes[size_t(index)];
         float local[16], world[16];
@@ -182,7 +182,7 @@ struct Flattener {
         if (node.mesh >= 0 && size_t(node.mesh) < mesh_parts.size()) {
             for (const uint32_t part : mesh_parts[size_t(node.mesh)]) {
                 if (scene.instances.size() >= max_instances)
-                    throw ImportError(path + ": the node tree gives more than " + std::to_string(max_instances) + " instances");
+                    throw MeshError(path + ": the node tree gives more than " + std::to_string(max_instances) + " instances");
                 Instance inst;
                 inst.mesh = part;
                 inst.node = uint32_t(index);
@@ -269,7 +269,7 @@ Scene gltf_scene(const tinygltf::Model& model, const nlohmann::json& doc, const 
         for (const int root : model.scenes[size_t(which)].nodes) f.visit(root, untransformed.transform);
         for (const Instance& inst : scene.instances)
             for (const float x : inst.transform)
-                if (!std::isfinite(x)) throw ImportError(path + ": node " + std::to_string(inst.node) + " has a transform that is not finite");
+                if (!std::isfinite(x)) throw MeshError(path + ": node " + std::to_string(inst.node) + " has a transform that is not finite");
     }
     return scene;
 }

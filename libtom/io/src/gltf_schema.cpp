@@ -162,7 +162,7 @@ const char* type_of(const json& j) {
 
 void check(const json& j, const Rule& rule, const std::string& path, const std::string& file) {
     auto fail = [&](const std::string& expected) {
-        throw ImportError(file + ": " + path + ": expected " + expected + ", found " + type_of(j) +
+        throw MeshError(file + ": " + path + ": expected " + expected + ", found " + type_of(j) +
                           (j.is_primitive() ? " (" + j.dump().substr(0, 40) + ")" : ""));
     };
     switch (rule.kind) {
@@ -195,7 +195,7 @@ void check(const json& j, const Rule& rule, const std::string& path, const std::
     case Rule::Object:
         if (!j.is_object()) fail("an object");
         for (const std::string& r : rule.required)
-            if (!j.contains(r)) throw ImportError(file + ": " + path + ": required property '" + r + "' is missing");
+            if (!j.contains(r)) throw MeshError(file + ": " + path + ": required property '" + r + "' is missing");
         for (const auto& [key, sub] : rule.properties) {
             auto it = j.find(key);
             if (it != j.end()) check(*it, *sub, path + "." + key, file);
@@ -211,14 +211,14 @@ nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary,
     size_t json_size = bytes.size();
     if (binary) {
         // GLB: 12-byte header (magic, version, length), then a JSON chunk (length, type)
-        if (bytes.size() < 20) throw ImportError(file + ": GLB file of " + std::to_string(bytes.size()) + " bytes is shorter than its headers");
-        if (std::memcmp(bytes.data(), "glTF", 4) != 0) throw ImportError(file + ": not a GLB file (bad magic)");
-        if (le32(&bytes[4]) != 2) throw ImportError(file + ": GLB version " + std::to_string(le32(&bytes[4])) + " is not 2");
+        if (bytes.size() < 20) throw MeshError(file + ": GLB file of " + std::to_string(bytes.size()) + " bytes is shorter than its headers");
+        if (std::memcmp(bytes.data(), "glTF", 4) != 0) throw MeshError(file + ": not a GLB file (bad magic)");
+        if (le32(&bytes[4]) != 2) throw MeshError(file + ": GLB version " + std::to_string(le32(&bytes[4])) + " is not 2");
         if (le32(&bytes[8]) > bytes.size())
-            throw ImportError(file + ": GLB header declares " + std::to_string(le32(&bytes[8])) + " bytes, the file has " + std::to_string(bytes.size()));
+            throw MeshError(file + ": GLB header declares " + std::to_string(le32(&bytes[8])) + " bytes, the file has " + std::to_string(bytes.size()));
         const uint32_t chunk = le32(&bytes[12]);
-        if (le32(&bytes[16]) != 0x4E4F534Au) throw ImportError(file + ": the first GLB chunk is not JSON");
-        if (chunk > bytes.size() - 20) throw ImportError(file + ": GLB JSON chunk of " + std::to_string(chunk) + " bytes runs past the end of the file");
+        if (le32(&bytes[16]) != 0x4E4F534Au) throw MeshError(file + ": the first GLB chunk is not JSON");
+        if (chunk > bytes.size() - 20) throw MeshError(file + ": GLB JSON chunk of " + std::to_string(chunk) + " bytes runs past the end of the file");
         json_begin = bytes.data() + 20;
         json_size = chunk;
     }
@@ -226,11 +226,11 @@ nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary,
     try {
         doc = json::parse(json_begin, json_begin + json_size);
     } catch (const json::parse_error& e) {
-        throw ImportError(file + ": the glTF JSON does not parse at byte " + std::to_string(e.byte) + (binary ? " of the JSON chunk" : ""));
+        throw MeshError(file + ": the glTF JSON does not parse at byte " + std::to_string(e.byte) + (binary ? " of the JSON chunk" : ""));
     } catch (const json::exception& e) {  // a number past double's range (out_of_range.406), ...
         std::string what = e.what();
         const size_t close = what.find("] ");
-        throw ImportError(file + ": the glTF JSON does not parse: " + (close == std::string::npos ? what : what.substr(close + 2)));
+        throw MeshError(file + ": the glTF JSON does not parse: " + (close == std::string::npos ? what : what.substr(close + 2)));
     }
     static const RulePtr schema = gltf_schema();
     check(doc, *schema, "$", file);

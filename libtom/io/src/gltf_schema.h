@@ -9,7 +9,7 @@
 
 namespace tom::detail {
 
-/// \throw ImportError naming `file` and the JSON path of the first property of the wrong type,
+/// \throw MeshError naming `file` and the JSON path of the first property of the wrong type,
 ///        a missing required property, or malformed GLB headers.
 /// Returns the parsed document.
 nlohmann::json check_gltf_schema(const std::vector<uint8_t>& bytes, bool binary, const std::string& file);

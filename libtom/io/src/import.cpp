@@ -58,7 +58,7 @@ ImportResult import_file(const std::string& path) {
     struct stat st;
     if (::stat(path.c_str(), &st) != 0) throw IoError("cannot open '" + path + "': " + std::strerror(errno));
     if (!S_ISREG(st.st_mode)) throw IoError("cannot read '" + path + "': not a regular file");
-    if (st.st_size == 0) throw ImportError(path + ": the file is empty");
+    if (st.st_size == 0) throw MeshError(path + ": the file is empty");
     const std::string ext = lower_extension(path);
     ImportResult result;
     if (ext == "gltf" || ext == "glb") {
@@ -69,7 +69,7 @@ ImportResult import_file(const std::string& path) {
     } else if (ext == "obj" || ext == "off" || ext == "stl") {
         result = detail::import_openmesh(path, ext);
     } else {
-        throw ImportError(path + ": unsupported file type '." + ext + "' (supported: obj, ply, off, stl, gltf, glb)");
+        throw MeshError(path + ": unsupported file type '." + ext + "' (supported: obj, ply, off, stl, gltf, glb)");
     }
     result.format = ext;
     return result;

@@ -15,7 +15,7 @@ ImportResult import_gltf(const std::string& path, bool binary);
 /// A binary little-endian PLY of the simple layout of scans (vertex: float x y z, optional float
 /// nx ny nz and uchar red green blue [alpha]; face: only an int or uint vertex_indices list) read
 /// directly; std::nullopt for any other layout (import_openmesh reads those).
-/// \throw ImportError naming the file and the face or count at fault
+/// \throw MeshError naming the file and the face or count at fault
 std::optional<ImportResult> read_simple_binary_ply(const std::string& path, const std::vector<uint8_t>& bytes);
 std::string file_stem(const std::string& path);
 /// A texture coordinate v between OBJ's and PLY's convention (v = 0 at the image's bottom row)

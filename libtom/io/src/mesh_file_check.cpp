@@ -159,7 +159,7 @@ bool parse_number(std::string_view s, bool prefix = false, size_t* used = nullpt
 }
 
 [[noreturn]] void fail(const std::string& path, size_t line, const std::string& problem) {
-    throw ImportError(path + ":" + std::to_string(line) + ": " + problem);
+    throw MeshError(path + ":" + std::to_string(line) + ": " + problem);
 }
 
 std::string quoted(std::string_view s) { return "'" + std::string(s.substr(0, 40)) + (s.size() > 40 ? "...'" : "'"); }

@@ -18,7 +18,7 @@ struct ObjGroups {
     std::vector<uint32_t> face_first, face_vertices;
 };
 
-/// Throws ImportError naming the file, the line and the problem when an OFF, PLY, OBJ or STL file
+/// Throws MeshError naming the file, the line and the problem when an OFF, PLY, OBJ or STL file
 /// announces more than it holds or refers to vertices it does not define. Returns what OpenMesh
 /// is to read in the file's place: the checked content in canonical form (empty for a binary OFF
 /// or STL file, which is read as it is, and for other extensions).

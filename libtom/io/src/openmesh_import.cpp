@@ -245,9 +245,9 @@ ImportResult import_openmesh(const std::string& path, const std::string& extensi
     result.warnings = summarize(messages);
     if (!ok) {
         std::string reason = result.warnings.empty() ? "the " + extension + " reader rejected it" : result.warnings.front();
-        throw ImportError(path + ": cannot read as ." + extension + ": " + reason);
+        throw MeshError(path + ": cannot read as ." + extension + ": " + reason);
     }
-    if (om.n_faces() == 0) throw ImportError(path + ": no triangles or polygons in the file");
+    if (om.n_faces() == 0) throw MeshError(path + ": no triangles or polygons in the file");
 
     // OpenMesh gives a face it cannot add (non-manifold) vertices of its own, with uninitialised
     // attributes: they take their original's

@@ -130,9 +130,9 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
     if (!parse_simple_header(text, l)) return std::nullopt;
     const uint64_t size = bytes.size();
     const std::string vertex_at = path + ":" + std::to_string(l.vertex_line) + ": ", face_at = path + ":" + std::to_string(l.face_line) + ": ";
-    if (l.vertices == 0 && l.faces > 0) throw ImportError(face_at + "faces without a vertex element before them");
+    if (l.vertices == 0 && l.faces > 0) throw MeshError(face_at + "faces without a vertex element before them");
     if (l.stride == 0 || l.vertices > (size - l.body) / l.stride)
-        throw ImportError(vertex_at + std::to_string(l.vertices) + " vertex elements of at least " + std::to_string(l.stride) + " bytes cannot fit in the " +
+        throw MeshError(vertex_at + std::to_string(l.vertices) + " vertex elements of at least " + std::to_string(l.stride) + " bytes cannot fit in the " +
                           std::to_string(size - l.body) + " bytes left");
     Mesh mesh;
     mesh.name = file_stem(path);
@@ -156,7 +156,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
     uint64_t short_faces = 0;
     uint32_t corner[3];
     for (uint64_t f = 0; f < l.faces; ++f) {
-        if (at + size_t(l.count_bytes) > size) throw ImportError(face_at + "the data ends inside face " + std::to_string(f));
+        if (at + size_t(l.count_bytes) > size) throw MeshError(face_at + "the data ends inside face " + std::to_string(f));
         int64_t n = 0;
         if (l.count_bytes == 1) {
             n = l.count_signed ? int64_t(int8_t(bytes[at])) : int64_t(bytes[at]);
@@ -167,7 +167,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
         }
         at += size_t(l.count_bytes);
         if (n < 0 || uint64_t(n) > (size - at) / 4)
-            throw ImportError(face_at + "face " + std::to_string(f) + ": the list " + l.list_name + " announces " + std::to_string(n) + " items, the file holds fewer");
+            throw MeshError(face_at + "face " + std::to_string(f) + ": the list " + l.list_name + " announces " + std::to_string(n) + " items, the file holds fewer");
         if (n < 3) {
             ++short_faces;
             at += size_t(n) * 4;
@@ -177,7 +177,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
             uint32_t index;
             std::memcpy(&index, &bytes[at], 4);
             if (index >= l.vertices)
-                throw ImportError(face_at + "face " + std::to_string(f) + " refers to vertex " + std::to_string(int32_t(index)) + ", the file has " + std::to_string(l.vertices));
+                throw MeshError(face_at + "face " + std::to_string(f) + " refers to vertex " + std::to_string(int32_t(index)) + ", the file has " + std::to_string(l.vertices));
             if (j < 2) {
                 corner[j] = index;
                 continue;
@@ -187,7 +187,7 @@ std::optional<ImportResult> read_simple_binary_ply(const std::string& path, cons
             corner[1] = index;
         }
     }
-    if (mesh.indices.empty()) throw ImportError(path + ": no triangles or polygons in the file");
+    if (mesh.indices.empty()) throw MeshError(path + ": no triangles or polygons in the file");
     ImportResult result;
     if (short_faces) result.warnings.push_back(path + ": " + std::to_string(short_faces) + " faces of fewer than 3 corners skipped");
     result.meshes.push_back(std::move(mesh));

@@ -13,6 +13,7 @@
 #include "simd.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 
@@ -332,6 +333,7 @@ Extracted extract_all_parts(const MeshView& m, uint32_t vertex_count, O* dst, si
 } // namespace
 
 Part part_at(const MeshView& m, uint32_t p) noexcept {
+    assert(p < part_count(m) && "part_at: \\pre p < part_count(mesh)");
     if (m.parts) return m.parts[p];
     Part whole;
     whole.triangle_count = m.triangle_count;
@@ -390,6 +392,7 @@ Extracted extract(const MeshView& m, uint32_t vertex_count, uint32_t* dst, size_
 }
 
 Extracted extract(const MeshView& m, uint32_t vertex_count, uint16_t* dst, size_t capacity) noexcept {
+    assert(std::min(vertex_count, m.vertex_count) <= 65536 && "extract: the uint16_t form needs a resolution of at most 65536 vertices");
     return m.parts ? extract_all_parts(m, vertex_count, dst, capacity, nullptr) : extract_any(m, vertex_count, dst, capacity);
 }
 

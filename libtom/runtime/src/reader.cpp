@@ -2,6 +2,7 @@
 // nothing is dereferenced before the rule that makes it safe has passed.
 
 #include <algorithm>
+#include <cassert>
 #include <cstring>
 #include <string>
 #include <tuple>
@@ -420,7 +421,10 @@ uint32_t File::version_major() const noexcept { return impl_->version_major; }
 uint32_t File::version_minor() const noexcept { return impl_->version_minor; }
 uint64_t File::file_bytes() const noexcept { return impl_->size; }
 uint32_t File::mesh_count() const noexcept { return uint32_t(impl_->meshes.size()); }
-const MeshView& File::mesh(uint32_t index) const noexcept { return impl_->meshes[index]; }
+const MeshView& File::mesh(uint32_t index) const noexcept {
+    assert(index < impl_->meshes.size() && "File::mesh: \\pre index < mesh_count()");
+    return impl_->meshes[index];
+}
 const std::vector<SectionInfo>& File::sections() const noexcept { return impl_->sections; }
 const Scene& File::scene() const noexcept { return impl_->scene; }
 std::string_view File::provenance() const noexcept { return impl_->provenance; }

@@ -38,10 +38,12 @@ private:
 
 /// A mesh file (OBJ, PLY, OFF, STL, glTF) that cannot be imported, or a mesh
 /// whose content is unusable (an index out of range, a non-finite position).
-class ImportError : public Error {
+/// One name in every language: tom::MeshError, Python's tom.MeshError, C's TOM_ERROR_MESH.
+class MeshError : public Error {
 public:
     using Error::Error;
 };
+using ImportError = MeshError;  ///< its former name
 
 /// An I/O failure that is not about content: cannot open, cannot write, cannot rename.
 class IoError : public Error {

@@ -53,7 +53,7 @@ public:
     uint32_t version_minor() const noexcept;
     uint64_t file_bytes() const noexcept;
     uint32_t mesh_count() const noexcept;
-    const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count()
+    const MeshView& mesh(uint32_t index) const noexcept;  ///< \pre index < mesh_count() (asserted)
     /// Materials, instances and stored images (empty when the file has none; see tom::draw_list).
     /// The images' bytes are views into the file, valid while it lives.
     const Scene& scene() const noexcept;

@@ -88,7 +88,7 @@ struct CleanOptions {
 /// Checks a mesh and brings it to the form the builder expects: identical vertices welded (by
 /// default, see CleanOptions), degenerate triangles and unreferenced vertices dropped, normals
 /// computed where absent.
-/// \throw ImportError naming `mesh.name` when an index is >= vertex_count, a
+/// \throw MeshError naming `mesh.name` when an index is >= vertex_count, a
 ///        position is not finite, a stream has the wrong size (a carried stream also when its
 ///        type is unknown, its components not 1 to 4 or its name repeated), or the mesh has
 ///        more than 2^32-2 vertices.
@@ -96,7 +96,7 @@ struct CleanOptions {
 ///       two vertices are identical;
 ///       normals are present (area-weighted from the triangles when absent); the parts still
 ///       tile the triangles (a part left without triangles is dropped; one part left means none).
-/// \throw ImportError also when the parts do not tile the triangles.
+/// \throw MeshError also when the parts do not tile the triangles.
 CleanStats clean_mesh(Mesh& mesh, const CleanOptions& options = {});
 
 /// One mesh made of several: vertices and triangles appended in order, one part per input (an

@@ -33,7 +33,7 @@ bool is_importable(const std::string& path);
 /// Reads every triangle mesh of a file. Polygons and glTF strips and fans become triangles;
 /// normals are kept when present (computed later by clean_mesh() otherwise); TEXCOORD_0 and
 /// COLOR_0 are kept when present. Meshes are returned as read, before clean_mesh().
-/// \throw ImportError with a one-line message naming the file and, for glTF, the mesh,
+/// \throw MeshError with a one-line message naming the file and, for glTF, the mesh,
 ///        primitive and accessor at fault (a primitive whose data cannot be decoded is an
 ///        error, never an empty mesh); IoError when the file cannot be read.
 ImportResult import_file(const std::string& path);
