@@ -524,13 +524,9 @@ void Runtime::commit_capture(uint32_t id, uint32_t way, size_t k) {
     o.lifetime_distance = -1;  // measured again from the new capture
 }
 
-const FrameReport& Runtime::plan_frame(const FrameParams& params) {
-    const auto start = std::chrono::steady_clock::now();
-    last_camera_ = params.camera;
-    last_fixed_c_ = params.fixed_c;
-    report_ = FrameReport();
+// Step 1: each object's box against the frustum; the visible ones' projection and importance.
+void Runtime::cull(const FrameParams& params) {
     visible_ids_.clear();
-    note_viewer(params);
     for (uint32_t id = 0; id < objects_.size(); ++id) {
         Object& o = objects_[id];
         ObjectResult& r = results_[id];
@@ -557,15 +553,12 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         visible_ids_.push_back(id);
         report_.visible_triangles += uint64_t(o.triangles);
     }
-    report_.cull_ms = 1e3 * seconds_since(start);
-    const auto optimize_start = std::chrono::steady_clock::now();
-    const size_t n = visible_ids_.size();
-    problem_.resize(n);
-    coverage_.resize(n);
-    problem_.m = params.m;
-    // model correction from the last frame's measurement (objects' part only): the last
-    // prediction already carried the correction, so measured / predicted is the residual and
-    // correction x residual the factor the calibrated model should have had
+}
+
+// Step 2: the model correction from the last frame's measurement (objects' part only): the last
+// prediction already carried the correction, so measured / predicted is the residual and
+// correction x residual the factor the calibrated model should have had.
+void Runtime::correct_model(const FrameParams& params) {
     if (params.correct_model && params.previous_frame_ms > 0 && last_predicted_ms_ > model_.frame_fixed_ms()) {
         const double residual = (params.previous_frame_ms - model_.frame_fixed_ms() + model_.safety_ms) / (last_predicted_ms_ - model_.frame_fixed_ms());
         if (std::isfinite(residual) && residual > 0)
@@ -573,6 +566,15 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     }
     if (!params.correct_model) correction_ = 1.0;
     report_.correction = correction_;
+}
+
+// Step 3: the menu problem of the visible objects: each one's benefit, cost, triangle range
+// and, with a menu, its other ways.
+void Runtime::build_problem(const FrameParams& params) {
+    const size_t n = visible_ids_.size();
+    problem_.resize(n);
+    coverage_.resize(n);
+    problem_.m = params.m;
     problem_.budget_ms = (params.budget_ms - model_.frame_fixed_ms()) / correction_;
     const bool menu = (params.menu.flat && model_.has_flat()) || (params.menu.imposters && model_.has_imposters()) || (params.menu.textured && model_.has_textured());
     problem_.ways.clear();
@@ -608,6 +610,11 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         }
     }
     if (menu) problem_.way_begin[n] = uint32_t(problem_.ways.size());
+}
+
+// Step 4: the selector's plan (or, error-bounded, every object at its bound's level).
+void Runtime::select_plan(const FrameParams& params) {
+    const size_t n = visible_ids_.size();
     stress_ = update_stress(stress_, params.previous_frame_ms, params.budget_ms);
     report_.stress = stress_;
     if (params.error_bounded) {
@@ -635,7 +642,12 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         select(selector_, problem_, sp, plan_);
         reserve_refreshes(sp, params.menu.refresh_share);
     }
-    // round down to the TOM resolutions and predict with the real vertex counts
+}
+
+// Step 5: the plan rounded down to the TOM resolutions and predicted with the real vertex
+// counts; returns the frame's prediction.
+double Runtime::round_to_levels(const FrameParams& params) {
+    const size_t n = visible_ids_.size();
     double predicted = model_.frame_fixed_ms();
     for (size_t k = 0; k < n; ++k) {
         const uint32_t id = visible_ids_[k];
@@ -646,8 +658,13 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
         if (r.drawn) predicted += choose(id, k, plan_.triangles[k], plan_.way[k]);
     }
     if (!params.error_bounded) repair_refreshes(params.budget_ms, predicted);
-    // vertex counts are exact here and were estimated in the problem: step down if that tipped
-    // a feasible plan over the budget (imposters have no levels to step down)
+    return predicted;
+}
+
+// Step 6: vertex counts are exact here and were estimated in the problem: step down if that
+// tipped a feasible plan over the budget (imposters have no levels to step down).
+void Runtime::step_down(const FrameParams& params, double& predicted) {
+    const size_t n = visible_ids_.size();
     for (int round = 0; round < 8 && plan_.feasible && predicted > params.budget_ms && !params.error_bounded; ++round) {
         const double factor = std::max(0.5, 1.0 - (predicted - params.budget_ms) / std::max(predicted - model_.frame_fixed_ms(), 1e-12) - 0.01);
         predicted = model_.frame_fixed_ms();
@@ -658,6 +675,11 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
             else predicted += choose(visible_ids_[k], k, std::max(problem_.way(k, plan_.way[k]).lo, r.triangles * factor), plan_.way[k]);
         }
     }
+}
+
+// Step 7: the frame's report: what is drawn, how, and the plan's certificate.
+void Runtime::tally(const FrameParams& params, double predicted) {
+    const size_t n = visible_ids_.size();
     for (size_t k = 0; k < n; ++k) {
         const uint32_t id = visible_ids_[k];
         const ObjectResult& r = results_[id];
@@ -688,6 +710,24 @@ const FrameReport& Runtime::plan_frame(const FrameParams& params) {
     report_.feasible = plan_.feasible && predicted <= params.budget_ms * (1 + 1e-9);
     report_.deadline_hit = plan_.deadline_hit;
     report_.iterations = plan_.iterations;
+}
+
+// Cull, correct, build the problem, select, round, step down, tally.
+const FrameReport& Runtime::plan_frame(const FrameParams& params) {
+    const auto start = std::chrono::steady_clock::now();
+    last_camera_ = params.camera;
+    last_fixed_c_ = params.fixed_c;
+    report_ = FrameReport();
+    note_viewer(params);
+    cull(params);
+    report_.cull_ms = 1e3 * seconds_since(start);
+    const auto optimize_start = std::chrono::steady_clock::now();
+    correct_model(params);
+    build_problem(params);
+    select_plan(params);
+    double predicted = round_to_levels(params);
+    step_down(params, predicted);
+    tally(params, predicted);
     report_.optimize_ms = 1e3 * seconds_since(optimize_start);
     return report_;
 }

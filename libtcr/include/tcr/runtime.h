@@ -246,6 +246,14 @@ private:
     std::vector<Renewal> renewals_;  // reserve_refreshes' scratch
     void repair_refreshes(double budget_ms, double& predicted);
     void note_viewer(const FrameParams& params);
+    // plan_frame's steps, in order
+    void cull(const FrameParams& params);
+    void correct_model(const FrameParams& params);
+    void build_problem(const FrameParams& params);
+    void select_plan(const FrameParams& params);
+    double round_to_levels(const FrameParams& params);
+    void step_down(const FrameParams& params, double& predicted);
+    void tally(const FrameParams& params, double predicted);
     void commit_capture(uint32_t id, uint32_t way, size_t k);
     static bool has_geometry(const ObjectResult& r) noexcept { return r.drawn && (!is_imposter(r.representation) || r.refresh); }
     double c_for(const Object& o, double m, double fixed_c) const noexcept;
