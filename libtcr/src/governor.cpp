@@ -70,10 +70,10 @@ void FrameGovernor::frame_done(const FrameTimes& times) {
 }
 
 // The next frame's culling and optimisation: twice the second longest of the last eight
-// (planning times jitter; a single stall of the machine, an optimiser 5x over its deadline once,
-// would otherwise take 90% of the budget for eight frames, the correction would learn those
-// nearly empty frames, and the frame after them overshoot), and at least min_planning_share of
-// the budget; extraction is in the model's t_tri.
+// (planning times jitter; a single stall of the machine would otherwise take most of the budget
+// for eight frames, the correction would learn those nearly empty frames, and the frame after
+// them overshoot), and at least min_planning_share of the budget; extraction is in the model's
+// t_tri.
 void FrameGovernor::note_planning() {
     double longest = 0, second = 0;
     for (double t : recent_planning_) {
