@@ -6,11 +6,13 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "holders.h"
+#include "tcr/calibrate.h"
 #include "tcr/governor.h"
 #include "tcr/model.h"
 #include "tcr/runtime.h"
@@ -58,6 +60,57 @@ py::dict report_dict(const tcr::FrameReport& r) {
                     py::arg("optimize_ms") = r.optimize_ms, py::arg("correction") = r.correction, py::arg("feasible") = r.feasible);
 }
 
+// A Python object as calibration's renderer: its `width` and `height`, its
+// time_frame(camera, draws, way) and, when it has one, time_imposters(camera, captures,
+// imposters). A camera is a dict (view, projection, width, height), a draw a dict (mesh, indices,
+// model), the way "smooth", "flat" or "textured"; each level's indices are one array per call.
+class PyCalibrationRenderer final : public tcr::CalibrationRenderer {
+public:
+    explicit PyCalibrationRenderer(py::object r)
+        : r_(std::move(r)), width_(r_.attr("width").cast<uint32_t>()), height_(r_.attr("height").cast<uint32_t>()) {}
+    uint32_t width() const override { return width_; }
+    uint32_t height() const override { return height_; }
+    double time_frame(const tcr::Camera& camera, const std::vector<tcr::CalibrationDraw>& draws, tcr::Representation way) override {
+        levels_.clear();
+        py::list list;
+        for (const tcr::CalibrationDraw& d : draws) list.append(draw_dict(d));
+        return r_.attr("time_frame")(camera_dict(camera), list, tcr::representation_name(way)).cast<double>();
+    }
+    double time_imposters(const tcr::Camera& camera, const std::vector<tcr::CalibrationCapture>& captures,
+                          const std::vector<tcr::CalibrationImposter>& imposters) override {
+        if (!py::hasattr(r_, "time_imposters")) return -1;
+        levels_.clear();
+        py::list caps, quads;
+        for (const tcr::CalibrationCapture& c : captures)
+            caps.append(py::dict(py::arg("slot") = c.slot, py::arg("side") = c.side, py::arg("view") = row_major(c.view),
+                                 py::arg("projection") = row_major(c.projection), py::arg("grid") = c.grid, py::arg("draw") = draw_dict(c.draw)));
+        for (const tcr::CalibrationImposter& q : imposters) {
+            py::array_t<float> corners({4, 3});
+            std::copy(q.corners, q.corners + 12, corners.mutable_data());
+            quads.append(py::dict(py::arg("slot") = q.slot, py::arg("meshed") = q.meshed, py::arg("corners") = corners));
+        }
+        return r_.attr("time_imposters")(camera_dict(camera), caps, quads).cast<double>();
+    }
+
+private:
+    static py::dict camera_dict(const tcr::Camera& c) {
+        return py::dict(py::arg("view") = row_major(c.view), py::arg("projection") = row_major(c.projection), py::arg("width") = c.viewport_width,
+                        py::arg("height") = c.viewport_height);
+    }
+    py::dict draw_dict(const tcr::CalibrationDraw& d) {
+        auto known = levels_.find({d.indices, d.index_count});
+        if (known == levels_.end()) {
+            py::array_t<uint32_t> a(d.index_count);
+            std::copy(d.indices, d.indices + d.index_count, a.mutable_data());
+            known = levels_.emplace(std::make_pair(d.indices, d.index_count), a).first;
+        }
+        return py::dict(py::arg("mesh") = d.mesh, py::arg("indices") = known->second, py::arg("model") = row_major(d.model));
+    }
+    py::object r_;
+    uint32_t width_, height_;
+    std::map<std::pair<const uint32_t*, uint32_t>, py::array_t<uint32_t>> levels_;
+};
+
 tcr::SelectorKind selector_of(const std::string& name) {
     tcr::SelectorKind kind;
     if (!tcr::parse_selector(name, kind)) throw tom::ArgumentError("selector '" + name + "' is not one of static, stress, greedy, barrier, exact");
@@ -78,6 +131,17 @@ void add_tcr(py::module_& m) {
     TOM_TCR_FIELD(t_pix_ms);
     TOM_TCR_FIELD(safety_ms);
     TOM_TCR_FIELD(noise_rel);
+    TOM_TCR_FIELD(flat_t_tri_ms);
+    TOM_TCR_FIELD(flat_t_vert_ms);
+    TOM_TCR_FIELD(flat_t_pix_ms);
+    TOM_TCR_FIELD(textured_t_tri_ms);
+    TOM_TCR_FIELD(textured_t_vert_ms);
+    TOM_TCR_FIELD(textured_t_pix_ms);
+    TOM_TCR_FIELD(imposter_t_setup_ms);
+    TOM_TCR_FIELD(imposter_t_pix_ms);
+    TOM_TCR_FIELD(refresh_t_setup_ms);
+    TOM_TCR_FIELD(meshed_t_tri_ms);
+    TOM_TCR_FIELD(meshed_refresh_t_setup_ms);
 #undef TOM_TCR_FIELD
     m.def("read_cost_model", &tcr::read_cost_model, py::arg("path"), "Reads a calibration file; raises tom.ParseError naming the line, tom.IoError.");
     m.def("look_at", [](std::vector<float> eye, std::vector<float> target, std::vector<float> up) {
@@ -143,6 +207,17 @@ void add_tcr(py::module_& m) {
         .def_property_readonly("planning_reserve_ms", &tcr::FrameGovernor::planning_reserve_ms)
         .def_property_readonly("model", [](const tcr::FrameGovernor& g) { return g.model(); });
 
+    m.def("calibrate", [](py::object renderer, const std::vector<py::object>& meshes, const std::string& path) {
+              std::vector<const tom::MeshView*> views;
+              for (const py::object& mesh : meshes) views.push_back(&mesh.cast<const FileMesh&>().view());
+              PyCalibrationRenderer timer(renderer);
+              tcr::CalibrationParams params;
+              params.path = path;
+              params.comment = path.empty() ? "" : "tom.tcr.calibrate";
+              return tcr::calibrate(timer, views, params).model;
+          }, py::arg("renderer"), py::arg("meshes"), py::arg("path") = "",
+          "Times `renderer` drawing `meshes` (time_frame(camera, draws, way); optional time_imposters) and fits the cost model; "
+          "writes it to `path` when given. Raises tom.ArgumentError, tom.IoError, or what the renderer raises.");
     py::class_<tcr::SimulatedRenderer>(m, "SimulatedRenderer", "Frames timed from the cost model, slower or faster than calibrated, with noise.")
         .def(py::init<double, double, uint64_t, bool>(), py::arg("noise_rel"), py::arg("slowdown") = 1.0, py::arg("seed") = 1, py::arg("within_allowance") = true)
         .def("frame_ms", [](tcr::SimulatedRenderer& r, const py::dict& report, const tcr::CostModel& cost) {

@@ -80,6 +80,17 @@ class _Tcr:
         t_pix_ms: float
         safety_ms: float
         noise_rel: float
+        flat_t_tri_ms: float
+        flat_t_vert_ms: float
+        flat_t_pix_ms: float
+        textured_t_tri_ms: float
+        textured_t_vert_ms: float
+        textured_t_pix_ms: float
+        imposter_t_setup_ms: float
+        imposter_t_pix_ms: float
+        refresh_t_setup_ms: float
+        meshed_t_tri_ms: float
+        meshed_refresh_t_setup_ms: float
     class Runtime:
         def __init__(self, model: "_Tcr.CostModel", selector: str = ...) -> None: ...
         def add_object(self, mesh: FileMesh, transform: npt.ArrayLike, weight: float = ...) -> int: ...
@@ -101,6 +112,8 @@ class _Tcr:
         def frame_ms(self, report: dict[str, Any], model: "_Tcr.CostModel") -> float: ...
     @staticmethod
     def read_cost_model(path: str) -> "_Tcr.CostModel": ...
+    @staticmethod
+    def calibrate(renderer: Any, meshes: Sequence[FileMesh], path: str = ...) -> "_Tcr.CostModel": ...
     @staticmethod
     def look_at(eye: Sequence[float], target: Sequence[float], up: Sequence[float]) -> npt.NDArray[np.float32]: ...
     @staticmethod

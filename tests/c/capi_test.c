@@ -185,6 +185,46 @@ static void check_real_file(const char* path) {
     tom_file_close(file);
 }
 
+/* A renderer whose frame takes 0.4 ms plus 0.004 ms a draw and 8e-5 ms a triangle, smooth
+ * shading only; it counts its frames. */
+static double geometry_frame(void* user, const tcr_camera* camera, const tcr_calibration_draw* draws, size_t count, tcr_way way) {
+    size_t k;
+    double t = 0.4;
+    (void)camera;
+    if (way != TCR_WAY_SMOOTH) return -1.0;
+    for (k = 0; k < count; ++k) t += 0.004 + 8e-5 * (double)(draws[k].index_count / 3);
+    ++*(uint32_t*)user;
+    return t;
+}
+
+/* tcr_calibrate drives the callbacks, recovers the renderer's costs and writes the file. */
+static void check_calibrate(const tom_mesh_view* mesh, const char* work) {
+    uint32_t frames = 0;
+    tcr_calibration_renderer r;
+    tcr_cost_model m, read;
+    char path[4096];
+    const tom_mesh_view* meshes[1];
+    meshes[0] = mesh;
+    memset(&r, 0, sizeof r);
+    r.user = &frames;
+    r.width = 640;
+    r.height = 480;
+    r.time_frame = geometry_frame;
+    snprintf(path, sizeof path, "%s/c-calibration.txt", work);
+    CHECK(tcr_calibrate(&r, meshes, 1, path, &m) == TOM_OK);
+    CHECK(frames > 100);
+    CHECK(fabs(m.t_init_ms + m.t_final_ms - 0.4) < 1e-9);
+    CHECK(fabs(m.t_tri_ms + 0.5 * m.t_vert_ms - 8e-5) < 0.1 * 8e-5);
+    CHECK(fabs(m.t_setup_ms - 0.004) < 0.002);
+    CHECK(m.flat_t_tri_ms == 0 && m.textured_t_pix_ms == 0 && m.imposter_t_setup_ms == 0);
+    CHECK(tcr_read_cost_model(path, &read) == TOM_OK && fabs(read.t_tri_ms - m.t_tri_ms) <= 1e-8 * m.t_tri_ms);
+    CHECK(tcr_calibrate(NULL, meshes, 1, NULL, &m) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "renderer is NULL") != NULL);
+    CHECK(tcr_calibrate(&r, meshes, 0, NULL, &m) == TOM_ERROR_ARGUMENT && strstr(tom_last_error(), "no meshes") != NULL);
+    snprintf(path, sizeof path, "%s/no-such-folder/c-calibration.txt", work);
+    frames = 0;
+    CHECK(tcr_calibrate(&r, meshes, 1, path, &m) == TOM_ERROR_IO && frames == 0);
+}
+
 /* libtcr through tom/tcr.h: 24 copies of the file's first mesh, a governor holding 8 ms over a
  * renderer whose frames take 1.2x the prediction; each drawn object's level extracts as reported;
  * the warm-up folds extraction into t_tri; bad calls fail with their status and message. */
@@ -286,6 +326,7 @@ static void check_tcr(const char* path, const char* work) {
     }
     CHECK(tcr_read_cost_model(model_path, &model) == TOM_ERROR_PARSE && strstr(tom_last_error(), "bad-calibration.txt") != NULL);
     CHECK(strcmp(tom_status_name(TOM_ERROR_PARSE), "TOM_ERROR_PARSE") == 0);
+    check_calibrate(&mesh, work);
 
     tcr_governor_destroy(governor);
     tcr_runtime_destroy(rt);

@@ -3,10 +3,13 @@
 
 #include "tom/tcr.h"
 
+#include <algorithm>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "capi_common.h"
+#include "tcr/calibrate.h"
 #include "tcr/governor.h"
 #include "tcr/model.h"
 #include "tcr/runtime.h"
@@ -14,6 +17,60 @@
 struct tcr_runtime {
     explicit tcr_runtime(const tcr::CostModel& model, tcr::SelectorKind selector) : runtime(model, selector) {}
     tcr::Runtime runtime;
+};
+
+// The engine's C callbacks as tcr::calibrate's renderer; each call's draws converted to C.
+class CCalibrationRenderer final : public tcr::CalibrationRenderer {
+public:
+    explicit CCalibrationRenderer(const tcr_calibration_renderer& r) : r_(r) {}
+    uint32_t width() const override { return r_.width; }
+    uint32_t height() const override { return r_.height; }
+    double time_frame(const tcr::Camera& camera, const std::vector<tcr::CalibrationDraw>& draws, tcr::Representation way) override {
+        const tcr_camera cam = to_c(camera);
+        draws_.clear();
+        for (const tcr::CalibrationDraw& d : draws) draws_.push_back(to_c(d));
+        return r_.time_frame(r_.user, &cam, draws_.data(), draws_.size(), tcr_way(way));
+    }
+    double time_imposters(const tcr::Camera& camera, const std::vector<tcr::CalibrationCapture>& captures,
+                          const std::vector<tcr::CalibrationImposter>& imposters) override {
+        if (!r_.time_imposters) return -1;
+        const tcr_camera cam = to_c(camera);
+        captures_.clear();
+        for (const tcr::CalibrationCapture& c : captures) {
+            tcr_calibration_capture cc{};
+            cc.slot = c.slot, cc.side = c.side, cc.grid = c.grid, cc.draw = to_c(c.draw);
+            std::copy(c.view, c.view + 16, cc.view);
+            std::copy(c.projection, c.projection + 16, cc.projection);
+            captures_.push_back(cc);
+        }
+        imposters_.clear();
+        for (const tcr::CalibrationImposter& q : imposters) {
+            tcr_calibration_imposter cq{};
+            cq.slot = q.slot, cq.meshed = q.meshed ? 1 : 0;
+            std::copy(q.corners, q.corners + 12, cq.corners);
+            imposters_.push_back(cq);
+        }
+        return r_.time_imposters(r_.user, &cam, captures_.data(), captures_.size(), imposters_.data(), imposters_.size());
+    }
+
+private:
+    static tcr_camera to_c(const tcr::Camera& c) {
+        tcr_camera out{};
+        std::copy(c.view, c.view + 16, out.view);
+        std::copy(c.projection, c.projection + 16, out.projection);
+        out.viewport_width = c.viewport_width, out.viewport_height = c.viewport_height;
+        return out;
+    }
+    static tcr_calibration_draw to_c(const tcr::CalibrationDraw& d) {
+        tcr_calibration_draw out{};
+        out.mesh = d.mesh, out.indices = d.indices, out.index_count = d.index_count;
+        std::copy(d.model, d.model + 16, out.model);
+        return out;
+    }
+    const tcr_calibration_renderer& r_;
+    std::vector<tcr_calibration_draw> draws_;
+    std::vector<tcr_calibration_capture> captures_;
+    std::vector<tcr_calibration_imposter> imposters_;
 };
 
 struct tcr_governor {
@@ -229,3 +286,19 @@ tom_status tcr_governor_model(const tcr_governor* governor, tcr_cost_model* out)
 }
 
 } // extern "C"
+
+tom_status tcr_calibrate(const tcr_calibration_renderer* renderer, const tom_mesh_view* const* meshes, size_t mesh_count, const char* path,
+                         tcr_cost_model* out) {
+    if (!renderer || !renderer->time_frame) return null_argument("tcr_calibrate", "renderer");
+    if (!meshes && mesh_count) return null_argument("tcr_calibrate", "meshes");
+    if (!out) return null_argument("tcr_calibrate", "out");
+    return guarded([&] {
+        std::vector<const tom::MeshView*> views;
+        for (size_t k = 0; k < mesh_count; ++k) views.push_back(view_of(meshes[k]));
+        CCalibrationRenderer timer(*renderer);
+        tcr::CalibrationParams params;
+        if (path) params.path = path, params.comment = "tcr_calibrate";
+        *out = to_c(tcr::calibrate(timer, views, params).model);
+        return TOM_OK;
+    });
+}

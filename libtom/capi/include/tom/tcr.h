@@ -125,6 +125,53 @@ double tcr_governor_planning_reserve_ms(const tcr_governor* governor);
 /* The model the runtime plans with now (the allowance and t_tri as the governor keeps them). */
 tom_status tcr_governor_model(const tcr_governor* governor, tcr_cost_model* out);
 
+/* Calibration (tcr::calibrate, tcr/calibrate.h): fits the cost model to the engine's renderer by
+ * timing frames it draws. The engine fills a tcr_calibration_renderer with its drawing and its
+ * clock: each callback draws one cleared frame, waits until it is finished and returns the
+ * milliseconds since the call began, or < 0 when the renderer does not draw that way (those
+ * coefficients then stay 0). The meshes are the engine's, uploaded in the order given. */
+typedef enum tcr_way {
+    TCR_WAY_SMOOTH = 0,  /* Gouraud shading: required */
+    TCR_WAY_FLAT = 1,
+    TCR_WAY_TEXTURED = 4 /* any texture bound */
+} tcr_way;
+
+typedef struct tcr_calibration_draw {
+    uint32_t mesh;            /* index into tcr_calibrate's meshes */
+    const uint32_t* indices;  /* the level's triangles, into that mesh's vertices */
+    uint32_t index_count;
+    float model[16];          /* object to world, column-major */
+} tcr_calibration_draw;
+
+typedef struct tcr_calibration_capture {
+    uint32_t slot;            /* an imposter texture slot, 0 to 47 */
+    uint32_t side;            /* texels a side */
+    float view[16], projection[16];
+    uint32_t grid;            /* > 0: a meshed imposter's: its depth read back into grid x grid cells */
+    tcr_calibration_draw draw;
+} tcr_calibration_capture;
+
+typedef struct tcr_calibration_imposter {
+    uint32_t slot;
+    int meshed;               /* nonzero: the slot's depth mesh where it was captured */
+    float corners[12];        /* simple: world corners of texture (0,0), (1,0), (1,1), (0,1) */
+} tcr_calibration_imposter;
+
+typedef struct tcr_calibration_renderer {
+    void* user;               /* passed to the callbacks */
+    uint32_t width, height;   /* the viewport, pixels */
+    double (*time_frame)(void* user, const tcr_camera* camera, const tcr_calibration_draw* draws, size_t count, tcr_way way);
+    /* NULL: no imposters. Renders the captures into their slots, then the imposters into the frame. */
+    double (*time_imposters)(void* user, const tcr_camera* camera, const tcr_calibration_capture* captures, size_t capture_count,
+                             const tcr_calibration_imposter* imposters, size_t imposter_count);
+} tcr_calibration_renderer;
+
+/* Times the renderer on `meshes` (about a minute on a software rasterizer) and fits the model
+ * into `out`; writes it to `path` when not NULL (TOM_ERROR_IO when its folder is missing,
+ * checked first). */
+tom_status tcr_calibrate(const tcr_calibration_renderer* renderer, const tom_mesh_view* const* meshes, size_t mesh_count, const char* path,
+                         tcr_cost_model* out);
+
 #ifdef __cplusplus
 }
 #endif
