@@ -16,7 +16,7 @@
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/scene.h"
-#include "tool_common.h"
+#include "cli.h"
 
 int main(int argc, char** argv) {
     std::string path, output;
@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
     app.add_flag("--lod-colors", lod_colors, "Colour each object by its drawn fraction instead of its material");
     app.footer("Exit codes: 0 ok, 1 unreadable input, no OpenGL or unwritable output, 2 usage error.\n"
                "Example: tomview out/2CylinderEngine.tom --fraction 0.1 -o engine10.png");
-    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
+    if (const int code = walk::parse_command_line(app, argc, argv); code >= 0) return code;
     try {
         const tom::File file = tom::File::open(path);
         const std::vector<tom::Instance> instances = tom::draw_list(file.scene(), file.mesh_count());
@@ -104,9 +104,9 @@ int main(int argc, char** argv) {
         std::printf("%s: %zu instances of %u meshes, %zu materials; %llu of %llu triangles drawn (%.1f%%) in %.1f ms -> %s\n", path.c_str(),
                     instances.size(), file.mesh_count(), file.scene().materials.size(), static_cast<unsigned long long>(drawn),
                     static_cast<unsigned long long>(full), full ? 100.0 * double(drawn) / double(full) : 0.0, ms, output.c_str());
-        return tools::exit_ok;
+        return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
-        return tools::exit_failed;
+        return 1;
     }
 }
