@@ -13,7 +13,7 @@
 
 #include <xxhash.h>
 
-#include "report_output.h"
+#include "tom/metrics/report_json.h"
 #include "tom/builder/writer.h"
 #include "tom/errors.h"
 #include "tom/format.h"
@@ -327,7 +327,7 @@ std::string merged_summary(const std::string& header, const std::vector<Manifest
             std::ifstream in(r.report);
             if (!in) throw std::runtime_error("cannot read it");
             const nlohmann::ordered_json doc = nlohmann::ordered_json::parse(in);
-            for (const auto& mesh : doc.at("meshes")) csv += summary_csv_row(mesh, r.input);
+            for (const auto& mesh : doc.at("meshes")) csv += tom::summary_csv_row(mesh, r.input);
         } catch (const std::exception& e) {
             problems.push_back(r.report + ": report of " + r.input + " unusable: " + e.what());
         }

@@ -27,7 +27,7 @@
 #include "tom/io/import.h"
 #include "tom/metrics/report.h"
 #include "batch.h"
-#include "report_output.h"
+#include "tom/metrics/report_json.h"
 #include "tool_common.h"
 
 namespace fs = std::filesystem;
@@ -214,7 +214,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             const tom::Mesh mesh = measured ? tom::original_mesh(t) : tom::Mesh();  // the input again, exactly
             uint32_t floor = 0;  // the usable floor stored (0: none)
             if (opt.report || !report_path.empty()) {
-                tools::ReportContext ctx;
+                tom::ReportContext ctx;
                 ctx.file = job.input;
                 ctx.import_seconds = import_seconds;
                 ctx.build_seconds = build_seconds;
@@ -224,9 +224,9 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
                 const tom::MeshReport r = tom::make_report(mesh, t, rparams);
                 ctx.report_seconds = seconds_since(report_start);
                 if (!opt.no_error_curve) floor = store_curve(t, r.curve, rparams.floor_error);
-                if (opt.report) tables += tools::report_table(r, ctx);
-                json_meshes.push_back(tools::report_json(r, ctx));
-                out.summary_csv += tools::summary_csv_row(json_meshes.back(), job.input);
+                if (opt.report) tables += tom::report_table(r, ctx);
+                json_meshes.push_back(tom::report_json(r, ctx));
+                out.summary_csv += tom::summary_csv_row(json_meshes.back(), job.input);
             } else if (!opt.no_error_curve) {
                 floor = store_curve(t, tom::measure_error_curve(mesh, t, rparams), rparams.floor_error);
             }
@@ -281,7 +281,7 @@ Outcome convert(const tools::Job& job, const Options& opt, const Settings& setti
             doc["output"] = job.output;
             doc["format"] = imported.format;
             doc.update(tools::build_params_json(params));
-            doc["conventions"] = tools::conventions_json(rparams);
+            doc["conventions"] = tom::conventions_json(rparams);
             doc["skipped"] = imported.skipped;
             doc["dropped"] = imported.dropped;
             doc["meshes"] = json_meshes;
@@ -481,7 +481,7 @@ bool report_is_current(const std::string& path, const std::string& input, const 
         const nlohmann::ordered_json doc = nlohmann::ordered_json::parse(in);
         const nlohmann::ordered_json expected = {{"tom", nlohmann::ordered_json::parse(provenance)}, {"report", options}};
         if (!doc.contains("provenance") || doc["provenance"] != expected) return false;
-        for (const auto& mesh : doc.at("meshes")) rows += tools::summary_csv_row(mesh, input);
+        for (const auto& mesh : doc.at("meshes")) rows += tom::summary_csv_row(mesh, input);
         return true;
     } catch (const std::exception&) {
         return false;
@@ -708,7 +708,7 @@ int main(int argc, char** argv) {
         header.shard = shard;
         header.inputs = all_jobs.size();
         header.report_json = opt.report_json_dir;
-        header.summary_header = tools::summary_csv_header(settings.report);
+        header.summary_header = tom::summary_csv_header(settings.report);
         const std::string manifest = tools::manifest_path(opt.outdir, shard);
         tools::write_manifest(manifest, header, records);
         if (!opt.report_json_dir.empty() && shard.count == 1) {  // shards: tombuild --merge writes it

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "holders.h"
-#include "report_output.h"
+#include "tom/metrics/report_json.h"
 #include "tom/builder/builder.h"
 #include "tom/builder/mesh.h"
 #include "tom/builder/writer.h"
@@ -206,7 +206,7 @@ py::object report(const tom::Mesh& original, const BuiltMesh& built, const std::
     tom::ReportParams params;
     params.levels = levels;
     params.error_curve = error_curve;
-    tools::ReportContext context;
+    tom::ReportContext context;
     context.file = original.name;
     context.params = params;
     std::string text;
@@ -217,7 +217,7 @@ py::object report(const tom::Mesh& original, const BuiltMesh& built, const std::
         const auto start = std::chrono::steady_clock::now();
         const tom::MeshReport r = tom::make_report(cleaned, *built.built, params);
         context.report_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        text = tools::report_json(r, context).dump();
+        text = tom::report_json(r, context).dump();
     }
     return py::module_::import("json").attr("loads")(text);
 }

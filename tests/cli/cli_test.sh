@@ -272,9 +272,9 @@ assert levels[2]['vertices'] > 4
 check "tombuild --report with --levels in any order" expect_exit 0 "$tools/tombuild" "$data/meshes/cross.off" -o "$work/floor2" --report --levels 10,50,2,25,1
 check "names the repeats of each level, and only those" grep -qx "  1.0%: the 2.0% level's mesh again (4 vertices, 4 triangles)" "$work/stdout"
 check "one JSON per input" test -s "$work/r/reports/fandisk.json" -a -s "$work/r/reports/cow.json"
-check "the JSON reports follow tools/report.schema.json" /usr/bin/python3 -c "
+check "the JSON reports follow libtom/metrics/report.schema.json" /usr/bin/python3 -c "
 import json, jsonschema, sys
-schema = json.load(open('$src/tools/report.schema.json'))
+schema = json.load(open('$src/libtom/metrics/report.schema.json'))
 for f in sys.argv[1:]:
     doc = json.load(open(f))
     jsonschema.validate(doc, schema)
@@ -293,7 +293,7 @@ check "tominfo says so" bash -c "'$tools/tominfo' '$work/nc/fandisk.tom' --curve
 check "--no-error-curve with a report" expect_exit 0 "$tools/tombuild" "$data/meshes/fandisk.off" -o "$work/ncr" --report-json "$work/ncr" --levels 50,10,2 --no-error-curve
 check "reports the same levels, no curve measured, still valid against the schema" /usr/bin/python3 -c "
 import json, jsonschema
-schema = json.load(open('$src/tools/report.schema.json'))
+schema = json.load(open('$src/libtom/metrics/report.schema.json'))
 plain = json.load(open('$work/ncr/fandisk.json')); full = json.load(open('$work/r/reports/fandisk.json'))
 jsonschema.validate(plain, schema)
 m, f = plain['meshes'][0], full['meshes'][0]

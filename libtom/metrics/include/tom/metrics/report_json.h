@@ -1,6 +1,7 @@
 #pragma once
-// Report output shared by the tools: the JSON contract (docs/REPORT.md), the readable table,
-// and the rows of the batch summary CSV.
+// A mesh's report as its users read it: the JSON contract (docs/REPORT.md; report.schema.json
+// beside this library states it as a JSON Schema), the readable table, and the rows of the batch
+// summary CSV. The JSON is nlohmann::json's (Debian's nlohmann-json3-dev, header-only).
 
 #include <string>
 
@@ -8,7 +9,7 @@
 
 #include "tom/metrics/report.h"
 
-namespace tools {
+namespace tom {
 
 struct ReportContext {
     std::string file;            ///< the input file
@@ -16,7 +17,7 @@ struct ReportContext {
     double build_seconds = 0;    ///< tom::build for this mesh
     double report_seconds = 0;   ///< make_report for this mesh
     uint32_t welded_vertices = 0; ///< identical vertices clean_mesh merged (tom::CleanStats)
-    tom::ReportParams params;
+    ReportParams params;
 };
 
 /// One mesh's report as the documented JSON object.
@@ -31,4 +32,4 @@ std::string summary_csv_header(const tom::ReportParams& params);
 /// rebuilds the same row from the report on disk.
 std::string summary_csv_row(const nlohmann::ordered_json& mesh, const std::string& file);
 
-} // namespace tools
+} // namespace tom

@@ -1,10 +1,12 @@
-#include "report_output.h"
+// A mesh's report as JSON, a table and CSV rows (report_json.h).
+
+#include "tom/metrics/report_json.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <sstream>
 
-namespace tools {
+namespace tom {
 
 namespace {
 
@@ -190,4 +192,4 @@ std::string summary_csv_row(const nlohmann::ordered_json& mesh, const std::strin
     return o.str();
 }
 
-} // namespace tools
+} // namespace tom
