@@ -162,138 +162,185 @@ std::string dropped_warning(const std::string& input, const std::vector<std::str
     return line + "\n";
 }
 
+// One input's conversion as it goes: the settings, the file as imported and cleaned, the
+// meshes built, and what the run prints and writes.
+struct Conversion {
+    const tools::Job& job;
+    const Options& opt;
+    const Settings& settings;
+    const std::string& report_path;  // the JSON report's, or empty
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    StageLine stage;
+    std::string stage_name;
+    tom::BuildParams params;
+    tom::ReportParams rparams;
+    tom::ImportResult imported;
+    tools::Provenance provenance;
+    std::vector<tom::CleanStats> cleans;
+    double import_seconds = 0, build_seconds = 0, measure_seconds = 0, write_seconds = 0;
+    std::vector<tom::TomMesh> built;
+    uint64_t vertices = 0, triangles = 0, fv_bytes = 0, bytes = 0;
+    std::string details, tables;  // -v's lines per mesh, --report's tables
+    nlohmann::ordered_json json_meshes = nlohmann::json::array();
+    std::string tom_provenance;   // as written into the .tom
+
+    Conversion(const tools::Job& j, const Options& o, const Settings& s, const std::string& report)
+        : job(j), opt(o), settings(s), report_path(report), params(s.params), rparams(s.report) {
+        stage.on = opt.mesh_progress;
+        stage.input = job.input;
+        if (stage.on) {
+            params.progress = [this](double f) { stage.show(stage_name, f); };
+            rparams.progress = [this](double f) { stage.show(stage_name, f); };
+        }
+    }
+    Conversion(const Conversion&) = delete;
+    bool reported() const { return opt.report || !report_path.empty(); }
+    std::string of_meshes(size_t mi) const {
+        return imported.meshes.size() > 1 ? " " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size()) : "";
+    }
+};
+
+// The file read, its provenance described, every mesh cleaned (welded unless --no-weld).
+void import_input(Conversion& c, Outcome& out) {
+    c.stage.show("import");
+    c.imported = tom::import_file(c.job.input);
+    c.provenance = tools::describe(c.job.input, c.imported.sources, tool_version, c.settings.output_options);
+    c.provenance.dropped = out.dropped = c.imported.dropped;
+    out.digest = c.provenance.input_digest;
+    if (c.imported.meshes.empty())
+        throw tom::MeshError(c.job.input + ": no triangle primitives (" + std::to_string(c.imported.skipped.size()) + " skipped)");
+    for (tom::Mesh& mesh : c.imported.meshes) {
+        c.cleans.push_back(tom::clean_mesh(mesh, c.settings.clean));
+        if (mesh.indices.empty()) throw tom::MeshError(c.job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
+    }
+    c.import_seconds = seconds_since(c.start);
+}
+
+// -v's line for a built mesh.
+std::string mesh_details(const tom::TomMesh& t, const tom::BuildStats& stats, const tom::CleanStats& clean, uint32_t floor) {
+    auto count = [](uint64_t n, const char* what) { return n ? ", " + std::to_string(n) + what : std::string(); };
+    const std::string parts = t.parts.empty() ? "" : " (" + std::to_string(t.parts.size()) + " parts)";
+    const std::string usable = floor ? ", usable floor " + std::to_string(floor) + " vertices / " +
+                                           std::to_string(tom::active_triangle_count(t.view(), floor)) + " triangles"
+                                     : "";
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
+                  "%u border vertices, %u seam vertices, %u passes%s%s%s%s%s\n",
+                  t.name.c_str(), parts.c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
+                  tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices, stats.border_vertices,
+                  stats.seam_vertices, stats.passes, usable.c_str(), count(stats.pruned_pieces, " small pieces pruned").c_str(),
+                  count(clean.welded_vertices, " identical vertices welded").c_str(), count(clean.degenerate_triangles, " degenerate triangles dropped").c_str(),
+                  count(clean.unreferenced_vertices, " unused vertices dropped").c_str());
+    return line;
+}
+
+// Mesh `mi` built into a TOM, then measured against the input: its error curve and usable floor
+// stored, its report made when asked; its counts and -v's line added up.
+void build_mesh(Conversion& c, size_t mi, Outcome& out) {
+    tom::BuildStats stats;
+    const auto build_start = std::chrono::steady_clock::now();
+    c.stage_name = "build" + (c.imported.meshes.size() > 1 ? " mesh" + c.of_meshes(mi) : std::string());
+    c.stage.show(c.stage_name, 0);
+    c.built.push_back(tom::build(std::move(c.imported.meshes[mi]), c.params, &stats));  // frees the input as it goes: a lower peak
+    const double build_seconds = seconds_since(build_start);
+    c.build_seconds += build_seconds;
+
+    const auto measure_start = std::chrono::steady_clock::now();
+    c.stage_name = (c.reported() ? "report" : "error curve") + c.of_meshes(mi);
+    if (!c.opt.no_error_curve || c.reported()) c.stage.show(c.stage_name, 0);
+    tom::TomMesh& t = c.built.back();
+    const tom::Mesh mesh = c.reported() || !c.opt.no_error_curve ? tom::original_mesh(t) : tom::Mesh();  // the input again, exactly
+    uint32_t floor = 0;  // the usable floor stored (0: none)
+    if (c.reported()) {
+        tom::ReportContext ctx;
+        ctx.file = c.job.input;
+        ctx.import_seconds = c.import_seconds;
+        ctx.build_seconds = build_seconds;
+        ctx.welded_vertices = c.cleans[mi].welded_vertices;
+        ctx.params = c.rparams;
+        const auto report_start = std::chrono::steady_clock::now();
+        const tom::MeshReport r = tom::make_report(mesh, t, c.rparams);
+        ctx.report_seconds = seconds_since(report_start);
+        if (!c.opt.no_error_curve) floor = store_curve(t, r.curve, c.rparams.floor_error);
+        if (c.opt.report) c.tables += tom::report_table(r, ctx);
+        c.json_meshes.push_back(tom::report_json(r, ctx));
+        out.summary_csv += tom::summary_csv_row(c.json_meshes.back(), c.job.input);
+    } else if (!c.opt.no_error_curve) {
+        floor = store_curve(t, tom::measure_error_curve(mesh, t, c.rparams), c.rparams.floor_error);
+    }
+    c.measure_seconds += seconds_since(measure_start);
+
+    c.vertices += t.vertex_count();
+    c.triangles += t.triangle_count();
+    c.fv_bytes += tools::face_vertex_bytes(t.vertex_count(), t.triangle_count());
+    if (c.opt.verbose > 0) c.details += mesh_details(t, stats, c.cleans[mi], floor);
+}
+
+// The meshes and the file's scene serialized and written atomically.
+void write_tom(Conversion& c, Outcome& out) {
+    std::error_code ec;
+    fs::create_directories(fs::path(c.job.output).parent_path(), ec);
+    c.stage.show("write");
+    const auto write_start = std::chrono::steady_clock::now();
+    tom::WriteOptions wopt = c.settings.write;
+    wopt.provenance = c.tom_provenance = c.provenance.text();
+    const std::vector<uint8_t> bytes = tom::serialize(c.built, c.imported.scene, wopt);
+    tom::write_bytes_atomically(c.job.output, bytes.data(), bytes.size());
+    c.bytes = bytes.size();
+    out.triangles = c.triangles;
+    c.write_seconds = seconds_since(write_start);
+}
+
+// The JSON report (docs/REPORT.md) of every mesh, with what made it.
+void write_report(const Conversion& c) {
+    nlohmann::ordered_json doc;
+    doc["file"] = c.job.input;
+    doc["output"] = c.job.output;
+    doc["format"] = c.imported.format;
+    doc.update(tools::build_params_json(c.params));
+    doc["conventions"] = tom::conventions_json(c.rparams);
+    doc["skipped"] = c.imported.skipped;
+    doc["dropped"] = c.imported.dropped;
+    doc["meshes"] = c.json_meshes;
+    // what made the report: its .tom's provenance and the report's own options (a rerun keeps
+    // the report when both are unchanged)
+    doc["provenance"] = {{"tom", nlohmann::ordered_json::parse(c.tom_provenance)}, {"report", c.settings.report_options}};
+    std::error_code ec;
+    fs::create_directories(fs::path(c.report_path).parent_path(), ec);
+    const std::string text = doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+    tom::write_bytes_atomically(c.report_path, text.data(), text.size());
+}
+
+// What the run prints for the input: its line, -v's details and times, the tables, what was skipped.
+std::string conversion_text(const Conversion& c) {
+    char line[1024];
+    std::snprintf(line, sizeof line, "%s: %zu mesh%s, %llu vertices, %llu triangles -> %s (%s, %.1f%% of face-vertex) in %.2f s\n", c.job.input.c_str(),
+                  c.built.size(), c.built.size() == 1 ? "" : "es", static_cast<unsigned long long>(c.vertices), static_cast<unsigned long long>(c.triangles),
+                  c.job.output.c_str(), tools::human_bytes(c.bytes).c_str(), c.fv_bytes ? 100.0 * double(c.bytes) / double(c.fv_bytes) : 0.0,
+                  seconds_since(c.start));
+    std::string text = line + c.details;
+    if (c.opt.verbose > 0) {
+        std::snprintf(line, sizeof line, "  seconds: import %.3f, build %.3f, error curve and report %.3f, write %.3f\n", c.import_seconds, c.build_seconds,
+                      c.measure_seconds, c.write_seconds);
+        text += line;
+    }
+    text += c.tables;
+    for (const std::string& s : c.imported.skipped) text += "  skipped " + s + "\n";
+    if (c.opt.verbose > 0)
+        for (const std::string& w : c.imported.warnings) text += "  warning: " + w + "\n";
+    return text;
+}
+
 Outcome convert(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path) {
     Outcome out;
-    const auto start = std::chrono::steady_clock::now();
-    StageLine stage;
-    stage.on = opt.mesh_progress;
-    stage.input = job.input;
-    tom::BuildParams params = settings.params;
-    tom::ReportParams rparams = settings.report;
-    std::string stage_name;
-    if (stage.on) {
-        params.progress = [&](double f) { stage.show(stage_name, f); };
-        rparams.progress = [&](double f) { stage.show(stage_name, f); };
-    }
     try {
-        stage.show("import");
-        tom::ImportResult imported = tom::import_file(job.input);
-        tools::Provenance provenance = tools::describe(job.input, imported.sources, tool_version, settings.output_options);
-        provenance.dropped = out.dropped = imported.dropped;
-        out.digest = provenance.input_digest;
-        if (imported.meshes.empty())
-            throw tom::MeshError(job.input + ": no triangle primitives (" + std::to_string(imported.skipped.size()) + " skipped)");
-        std::vector<tom::CleanStats> cleans;
-        for (tom::Mesh& mesh : imported.meshes) {
-            cleans.push_back(tom::clean_mesh(mesh, settings.clean));
-            if (mesh.indices.empty()) throw tom::MeshError(job.input + ": mesh '" + mesh.name + "' has no non-degenerate triangle");
-        }
-        const double import_seconds = seconds_since(start);
-        struct {
-            double build = 0, measure = 0;
-        } times;
-        std::vector<tom::TomMesh> built;
-        uint64_t vertices = 0, triangles = 0, fv_bytes = 0;
-        std::string details, tables;
-        nlohmann::ordered_json json_meshes = nlohmann::json::array();
-        for (size_t mi = 0; mi < imported.meshes.size(); ++mi) {
-            const tom::CleanStats& clean = cleans[mi];
-            tom::BuildStats stats;
-            const auto build_start = std::chrono::steady_clock::now();
-            stage_name = imported.meshes.size() > 1 ? "build mesh " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size()) : "build";
-            stage.show(stage_name, 0);
-            built.push_back(tom::build(std::move(imported.meshes[mi]), params, &stats));  // frees the input as it goes: a lower peak
-            stage_name = opt.report || !report_path.empty() ? "report" : "error curve";
-            if (imported.meshes.size() > 1) stage_name += " " + std::to_string(mi + 1) + "/" + std::to_string(imported.meshes.size());
-            if (!opt.no_error_curve || opt.report || !report_path.empty()) stage.show(stage_name, 0);
-            const double build_seconds = seconds_since(build_start);
-            times.build += build_seconds;
-            const auto measure_start = std::chrono::steady_clock::now();
-            tom::TomMesh& t = built.back();
-            const bool measured = opt.report || !report_path.empty() || !opt.no_error_curve;
-            const tom::Mesh mesh = measured ? tom::original_mesh(t) : tom::Mesh();  // the input again, exactly
-            uint32_t floor = 0;  // the usable floor stored (0: none)
-            if (opt.report || !report_path.empty()) {
-                tom::ReportContext ctx;
-                ctx.file = job.input;
-                ctx.import_seconds = import_seconds;
-                ctx.build_seconds = build_seconds;
-                ctx.welded_vertices = clean.welded_vertices;
-                ctx.params = rparams;
-                const auto report_start = std::chrono::steady_clock::now();
-                const tom::MeshReport r = tom::make_report(mesh, t, rparams);
-                ctx.report_seconds = seconds_since(report_start);
-                if (!opt.no_error_curve) floor = store_curve(t, r.curve, rparams.floor_error);
-                if (opt.report) tables += tom::report_table(r, ctx);
-                json_meshes.push_back(tom::report_json(r, ctx));
-                out.summary_csv += tom::summary_csv_row(json_meshes.back(), job.input);
-            } else if (!opt.no_error_curve) {
-                floor = store_curve(t, tom::measure_error_curve(mesh, t, rparams), rparams.floor_error);
-            }
-            times.measure += seconds_since(measure_start);
-            vertices += t.vertex_count();
-            triangles += t.triangle_count();
-            fv_bytes += tools::face_vertex_bytes(t.vertex_count(), t.triangle_count());
-            if (opt.verbose > 0) {
-                char line[512];
-                std::snprintf(line, sizeof line,
-                              "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
-                              "%u border vertices, %u seam vertices, %u passes%s%s%s%s%s\n",
-                              t.name.c_str(), t.parts.empty() ? "" : (" (" + std::to_string(t.parts.size()) + " parts)").c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
-                              tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices,
-                              stats.border_vertices, stats.seam_vertices, stats.passes,
-                              floor ? (", usable floor " + std::to_string(floor) + " vertices / " + std::to_string(tom::active_triangle_count(t.view(), floor)) +
-                                       " triangles").c_str() : "",
-                              stats.pruned_pieces ? (", " + std::to_string(stats.pruned_pieces) + " small pieces pruned").c_str() : "",
-                              clean.welded_vertices ? (", " + std::to_string(clean.welded_vertices) + " identical vertices welded").c_str() : "",
-                              clean.degenerate_triangles ? (", " + std::to_string(clean.degenerate_triangles) + " degenerate triangles dropped").c_str() : "",
-                              clean.unreferenced_vertices ? (", " + std::to_string(clean.unreferenced_vertices) + " unused vertices dropped").c_str() : "");
-                details += line;
-            }
-        }
-        std::error_code ec;
-        fs::create_directories(fs::path(job.output).parent_path(), ec);
-        stage.show("write");
-        const auto write_start = std::chrono::steady_clock::now();
-        tom::WriteOptions wopt = settings.write;
-        wopt.provenance = provenance.text();
-        const std::vector<uint8_t> bytes = tom::serialize(built, imported.scene, wopt);
-        out.triangles = triangles;
-        tom::write_bytes_atomically(job.output, bytes.data(), bytes.size());
-        const double write_seconds = seconds_since(write_start);
-        if (opt.verbose > 0) {
-            char line[256];
-            std::snprintf(line, sizeof line, "  seconds: import %.3f, build %.3f, error curve and report %.3f, write %.3f\n", import_seconds, times.build,
-                          times.measure, write_seconds);
-            details += line;
-        }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        char line[1024];
-        std::snprintf(line, sizeof line, "%s: %zu mesh%s, %llu vertices, %llu triangles -> %s (%s, %.1f%% of face-vertex) in %.2f s\n",
-                      job.input.c_str(), built.size(), built.size() == 1 ? "" : "es", static_cast<unsigned long long>(vertices),
-                      static_cast<unsigned long long>(triangles), job.output.c_str(), tools::human_bytes(bytes.size()).c_str(),
-                      fv_bytes ? 100.0 * double(bytes.size()) / double(fv_bytes) : 0.0, seconds);
-        out.text = line + details + tables;
-        for (const std::string& s : imported.skipped) out.text += "  skipped " + s + "\n";
-        if (!report_path.empty()) {
-            nlohmann::ordered_json doc;
-            doc["file"] = job.input;
-            doc["output"] = job.output;
-            doc["format"] = imported.format;
-            doc.update(tools::build_params_json(params));
-            doc["conventions"] = tom::conventions_json(rparams);
-            doc["skipped"] = imported.skipped;
-            doc["dropped"] = imported.dropped;
-            doc["meshes"] = json_meshes;
-            // what made the report: its .tom's provenance and the report's own options (a rerun
-            // keeps the report when both are unchanged)
-            doc["provenance"] = {{"tom", nlohmann::ordered_json::parse(wopt.provenance)}, {"report", settings.report_options}};
-            fs::create_directories(fs::path(report_path).parent_path(), ec);
-            const std::string text = doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
-            tom::write_bytes_atomically(report_path, text.data(), text.size());
-        }
-        if (opt.verbose > 0)
-            for (const std::string& w : imported.warnings) out.text += "  warning: " + w + "\n";
+        Conversion c(job, opt, settings, report_path);
+        import_input(c, out);
+        for (size_t mi = 0; mi < c.imported.meshes.size(); ++mi) build_mesh(c, mi, out);
+        write_tom(c, out);
+        if (!report_path.empty()) write_report(c);
+        out.text = conversion_text(c);
         out.ok = true;
     } catch (const std::bad_alloc&) {
         out.text = "error: " + job.input + ": needs more memory than this process may take" +
@@ -488,10 +535,8 @@ bool report_is_current(const std::string& path, const std::string& input, const 
     }
 }
 
-} // namespace
-
-int main(int argc, char** argv) {
-    Options opt;
+// Parses the command line into `opt`; an exit code when done (help, version, usage error), else -1.
+int parse_options(Options& opt, int argc, char** argv) {
     CLI::App app{"tombuild: simplify meshes by greedy vertex substitution into Totally Ordered Meshes (.tom)"};
     app.set_version_flag("--version", tool_version);
     app.add_option("inputs", opt.inputs, "Mesh files (obj, ply, off, stl, gltf, glb) or folders, searched recursively")->group("Basics");
@@ -543,194 +588,255 @@ int main(int argc, char** argv) {
         ->group("Batch");
     app.footer("Exit codes: 0 every input converted or up to date, 1 some inputs failed (the others are still written), 2 usage error.\n"
                "Example: tombuild data/meshes/bunny00.off assets/ -o out/ -j 2");
-    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
+    return tools::parse(app, argc, argv);
+}
 
+// The conversion's settings from the options; `per_job`: each job's build and report threads.
+Settings make_settings(const Options& opt, unsigned per_job) {
+    Settings settings;
+    settings.params = opt.build.params();
+    settings.clean = opt.build.clean();
+    settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
+    settings.output_options = output_options(opt, settings.params);
+    settings.report_options = report_options(opt);
+    settings.report = report_params(opt, per_job);
+    if (settings.params.threads == 0) settings.params.threads = per_job;
+    return settings;
+}
+
+// A run over the inputs: the jobs of the whole batch, this shard's share, and what each gave.
+struct Batch {
+    tools::Shard shard;
+    std::vector<std::string> errors;       // inputs that could not be planned
+    std::vector<tools::Job> all_jobs;      // the whole batch, every shard's
+    std::vector<size_t> selected;          // this run's share: indices into all_jobs
+    std::vector<std::string> summary_rows; // per selected job, its rows of summary.csv
+    std::vector<tools::ManifestRecord> records;
+    size_t done = 0, failed = 0, fresh = 0;
+    bool show_progress = false;
+
+    std::string report_path_of(const Options& opt, const tools::Job& job) const {
+        if (opt.report_json_dir.empty()) return "";
+        fs::path rel = fs::path(job.output).lexically_relative(opt.outdir);
+        rel.replace_extension(".json");
+        return (fs::path(opt.report_json_dir) / rel).string();
+    }
+};
+
+// The inputs expanded into jobs, the output folder made, this shard's share chosen (balanced by
+// size). false (after printing why) when the output folder cannot be made.
+bool plan_batch(const Options& opt, Batch& b) {
+    b.all_jobs = tools::plan_jobs(opt.inputs, opt.outdir, ".tom", b.errors);
+    for (const std::string& e : b.errors) std::fprintf(stderr, "error: %s\n", e.c_str());
+    std::error_code ec;
+    fs::create_directories(opt.outdir, ec);
+    if (ec) {
+        std::fprintf(stderr, "error: cannot create output folder '%s': %s\n", opt.outdir.c_str(), ec.message().c_str());
+        return false;
+    }
+    std::vector<uint64_t> sizes;
+    for (const tools::Job& j : b.all_jobs) {
+        const uintmax_t size = fs::file_size(j.input, ec);
+        sizes.push_back(ec ? 0 : uint64_t(size));
+    }
+    const std::vector<uint32_t> of = tools::assign_shards(b.all_jobs, sizes, b.shard.count);
+    for (size_t i = 0; i < b.all_jobs.size(); ++i)
+        if (of[i] == b.shard.index) b.selected.push_back(i);
+    b.summary_rows.resize(b.selected.size());
+    b.records.resize(b.selected.size());
+    b.failed = b.errors.size();
+    return true;
+}
+
+// One job: up to date (its output's provenance, and its report's) or converted.
+Outcome process(const tools::Job& job, const Options& opt, const Settings& settings, const std::string& report_path, bool& up_to_date) {
+    Outcome r;
+    tools::Freshness f;
+    if (!opt.force) {
+        try {
+            f = tools::check_output(job.input, job.output, tool_version, settings.output_options);
+        } catch (const std::exception&) {
+            f = tools::Freshness{};  // an unreadable input: the conversion reports it
+        }
+        if (f.up_to_date && !report_path.empty() && !opt.report &&
+            !report_is_current(report_path, job.input, f.provenance, settings.report_options, r.summary_csv))
+            f.up_to_date = false;
+        if (opt.report) f.up_to_date = false;  // the printed report is made by converting
+    }
+    up_to_date = f.up_to_date;
+    if (f.up_to_date) {
+        r.ok = true;
+        r.digest = f.digest;
+        r.triangles = f.triangles;
+        r.dropped = f.dropped;
+        r.text = job.input + ": up to date (" + job.output + ")\n";
+        return r;
+    }
+    r = opt.isolate ? convert_isolated(job, opt, settings, report_path) : convert(job, opt, settings, report_path);
+    if (r.digest.empty()) {
+        try {
+            r.digest = tools::file_digest(job.input);
+        } catch (const std::exception&) {
+        }
+    }
+    return r;
+}
+
+// The manifest's record of a job's outcome.
+tools::ManifestRecord record_of(size_t index, const tools::Job& job, const std::string& report_path, const Outcome& r, bool up_to_date, double seconds) {
+    tools::ManifestRecord rec;
+    rec.index = index;
+    rec.input = job.input;
+    rec.output = job.output;
+    rec.report = report_path;
+    rec.digest = r.digest == "missing" ? "" : r.digest;
+    rec.status = !r.ok ? "failed" : up_to_date ? "up to date" : "converted";
+    rec.triangles = r.ok ? r.triangles : 0;
+    rec.dropped = r.ok ? r.dropped : std::vector<std::string>();
+    rec.seconds = seconds;
+    if (!r.ok) {
+        std::string message = r.text;
+        if (message.rfind("error: ", 0) == 0) message.erase(0, 7);
+        while (!message.empty() && message.back() == '\n') message.pop_back();
+        rec.message = message;
+    }
+    return rec;
+}
+
+// This shard's jobs on -j threads, each outcome recorded and printed as it comes (a progress
+// bar on a terminal); stops early on SIGTERM or SIGINT.
+void run_batch(const Options& opt, const Settings& settings, Batch& b) {
+    std::atomic<size_t> next{0};
+    std::mutex print_mutex;
+    auto worker = [&] {
+        for (size_t s; (s = next++) < b.selected.size() && stop_signal == 0;) {
+            const tools::Job& job = b.all_jobs[b.selected[s]];
+            const std::string report_path = b.report_path_of(opt, job);
+            const auto start = std::chrono::steady_clock::now();
+            bool up_to_date = false;
+            const Outcome r = process(job, opt, settings, report_path, up_to_date);
+            b.records[s] = record_of(b.selected[s], job, report_path, r, up_to_date, seconds_since(start));
+            std::lock_guard<std::mutex> lock(print_mutex);
+            b.summary_rows[s] = r.summary_csv;
+            ++b.done;
+            if (!r.ok) ++b.failed;
+            if (up_to_date) ++b.fresh;
+            if (b.show_progress) std::fprintf(stderr, "\r%*s\r", 60, "");
+            if (!r.ok)
+                std::fputs(r.text.c_str(), stderr);
+            else if (!opt.quiet && (!up_to_date || opt.verbose > 0))
+                std::fputs(r.text.c_str(), stdout);
+            if (r.ok && !up_to_date && !r.dropped.empty()) std::fputs(dropped_warning(job.input, r.dropped).c_str(), stderr);
+            std::fflush(stdout);
+            if (b.show_progress) draw_progress(b.done, b.selected.size(), b.failed);
+        }
+    };
+    std::signal(SIGTERM, on_stop_signal);
+    std::signal(SIGINT, on_stop_signal);
+    std::vector<std::thread> pool;
+    const unsigned threads = std::min<unsigned>(opt.jobs, unsigned(std::max<size_t>(1, b.selected.size())));
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+    worker();
+    for (std::thread& t : pool) t.join();
+    if (b.show_progress) std::fprintf(stderr, "\n");
+}
+
+// Outputs whose input is gone: named by every run over the whole batch, removed with --prune
+// (by shard 0 only, so that shards do not race).
+void handle_orphans(const Options& opt, const Batch& b) {
+    if (b.shard.index != 0) return;
+    std::error_code ec;
+    for (const std::string& orphan : find_orphans(opt.outdir, b.all_jobs)) {
+        if (opt.prune) {
+            fs::remove(orphan, ec);
+            if (const std::string report = b.report_path_of(opt, {"", orphan}); !report.empty()) fs::remove(report, ec);
+            if (!opt.quiet) std::printf("%s: removed (no input maps to it)\n", orphan.c_str());
+        } else if (!opt.quiet) {
+            std::printf("%s: no input of this run maps to it (its input is gone?); --prune removes it\n", orphan.c_str());
+        }
+    }
+}
+
+// The shard's manifest and, unsharded, the reports' summary.csv (shards: tombuild --merge
+// writes it); returns the manifest's path.
+std::string write_manifest(const Options& opt, const Settings& settings, const Batch& b) {
+    tools::ManifestHeader header;
+    header.shard = b.shard;
+    header.inputs = b.all_jobs.size();
+    header.report_json = opt.report_json_dir;
+    header.summary_header = tom::summary_csv_header(settings.report);
+    const std::string manifest = tools::manifest_path(opt.outdir, b.shard);
+    tools::write_manifest(manifest, header, b.records);
+    if (!opt.report_json_dir.empty() && b.shard.count == 1) {
+        std::string csv = header.summary_header;
+        for (const std::string& rows : b.summary_rows) csv += rows;  // input order, whatever -j
+        std::error_code ec;
+        fs::create_directories(opt.report_json_dir, ec);
+        const std::string path = (fs::path(opt.report_json_dir) / "summary.csv").string();
+        tom::write_bytes_atomically(path, csv.data(), csv.size());
+        if (!opt.quiet) std::printf("reports: %s (one JSON per input), %s\n", opt.report_json_dir.c_str(), path.c_str());
+    }
+    return manifest;
+}
+
+// The closing line and the exit code.
+int finish(const Options& opt, const Batch& b, const std::string& manifest) {
+    const size_t total = b.selected.size() + b.errors.size();
+    if (!opt.quiet || b.failed)
+        std::fprintf(b.failed ? stderr : stdout, "%zu of %zu inputs converted%s%s%s; manifest %s\n", total - b.failed - b.fresh, total,
+                     b.fresh ? (", " + std::to_string(b.fresh) + " up to date").c_str() : "",
+                     b.failed ? (", " + std::to_string(b.failed) + " failed").c_str() : "",
+                     b.shard.count > 1 ? (" (shard " + b.shard.name() + " of " + std::to_string(b.all_jobs.size()) + " inputs)").c_str() : "",
+                     manifest.c_str());
+    if (b.all_jobs.empty() && b.errors.empty()) {
+        std::fprintf(stderr, "error: no mesh files found in the inputs\n");
+        return tools::exit_failed;
+    }
+    return b.failed ? tools::exit_failed : tools::exit_ok;
+}
+
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    return tools::exit_usage;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options opt;
+    if (const int code = parse_options(opt, argc, argv); code >= 0) return code;
     try {
         if (!opt.merge_dir.empty()) {
-            if (!opt.inputs.empty() || !opt.outdir.empty()) {
-                std::fprintf(stderr, "error: --merge OUTDIR takes no inputs and no -o\n");
-                return tools::exit_usage;
-            }
+            if (!opt.inputs.empty() || !opt.outdir.empty()) return usage_error("--merge OUTDIR takes no inputs and no -o");
             return tools::merge_shards(opt.merge_dir, opt.quiet);
         }
-        if (opt.inputs.empty() || opt.outdir.empty()) {
-            std::fprintf(stderr, "error: %s\nRun with --help for more information.\n", opt.inputs.empty() ? "inputs is required" : "--output is required");
-            return tools::exit_usage;
-        }
-        tools::Shard shard;
+        if (opt.inputs.empty() || opt.outdir.empty())
+            return usage_error(std::string(opt.inputs.empty() ? "inputs is required" : "--output is required") + "\nRun with --help for more information.");
+        Batch batch;
         try {
-            shard = tools::parse_shard(opt.shard);
+            batch.shard = tools::parse_shard(opt.shard);
         } catch (const std::invalid_argument& e) {
-            std::fprintf(stderr, "error: %s\n", e.what());
-            return tools::exit_usage;
+            return usage_error(e.what());
         }
-        Settings settings;
-        settings.params = opt.build.params();
-        settings.clean = opt.build.clean();
-        settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
-        settings.output_options = output_options(opt, settings.params);
-        settings.report_options = report_options(opt);
-
-        std::vector<std::string> errors;
-        const std::vector<tools::Job> all_jobs = tools::plan_jobs(opt.inputs, opt.outdir, ".tom", errors);
-        for (const std::string& e : errors) std::fprintf(stderr, "error: %s\n", e.c_str());
-        std::error_code ec;
-        fs::create_directories(opt.outdir, ec);
-        if (ec) {
-            std::fprintf(stderr, "error: cannot create output folder '%s': %s\n", opt.outdir.c_str(), ec.message().c_str());
-            return tools::exit_failed;
-        }
-        // this run's share of the inputs (all of them without --shard)
-        std::vector<size_t> selected;
-        {
-            std::vector<uint64_t> sizes;
-            for (const tools::Job& j : all_jobs) {
-                const uintmax_t size = fs::file_size(j.input, ec);
-                sizes.push_back(ec ? 0 : uint64_t(size));
-            }
-            const std::vector<uint32_t> of = tools::assign_shards(all_jobs, sizes, shard.count);
-            for (size_t i = 0; i < all_jobs.size(); ++i)
-                if (of[i] == shard.index) selected.push_back(i);
-        }
-        const bool show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && selected.size() > 1;
-        opt.mesh_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && opt.jobs == 1;
         // the cores shared among the -j jobs: each job's build and report threads
         const unsigned per_job = std::max(1u, std::max(1u, std::thread::hardware_concurrency()) / std::max(1u, opt.jobs));
-        settings.report = report_params(opt, per_job);
-        if (settings.params.threads == 0) settings.params.threads = per_job;
+        const Settings settings = make_settings(opt, per_job);
         if (opt.max_memory_mb == 0) {
             const double total_mb = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE)) / (1024.0 * 1024.0);
             opt.max_memory_mb = std::max(1024.0, 0.75 * total_mb / double(std::max(1u, opt.jobs)));
         }
-        auto report_path_of = [&](const tools::Job& job) -> std::string {
-            if (opt.report_json_dir.empty()) return "";
-            fs::path rel = fs::path(job.output).lexically_relative(opt.outdir);
-            rel.replace_extension(".json");
-            return (fs::path(opt.report_json_dir) / rel).string();
-        };
-        std::signal(SIGTERM, on_stop_signal);
-        std::signal(SIGINT, on_stop_signal);
+        if (!plan_batch(opt, batch)) return tools::exit_failed;
+        batch.show_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && batch.selected.size() > 1;
+        opt.mesh_progress = (opt.progress || tools::is_terminal(2)) && !opt.quiet && opt.jobs == 1;
 
-        std::vector<std::string> summary_rows(selected.size());
-        std::vector<tools::ManifestRecord> records(selected.size());
-        std::atomic<size_t> next{0};
-        size_t done = 0, failed = errors.size(), fresh = 0;
-        std::mutex print_mutex;
-        auto worker = [&] {
-            for (size_t s; (s = next++) < selected.size() && stop_signal == 0;) {
-                const tools::Job& job = all_jobs[selected[s]];
-                const std::string report_path = report_path_of(job);
-                const auto start = std::chrono::steady_clock::now();
-                tools::ManifestRecord& rec = records[s];
-                rec.index = selected[s];
-                rec.input = job.input;
-                rec.output = job.output;
-                rec.report = report_path;
-                Outcome r;
-                tools::Freshness f;
-                if (!opt.force) {
-                    try {
-                        f = tools::check_output(job.input, job.output, tool_version, settings.output_options);
-                    } catch (const std::exception&) {
-                        f = tools::Freshness{};  // an unreadable input: the conversion reports it
-                    }
-                    if (f.up_to_date && !report_path.empty() && !opt.report &&
-                        !report_is_current(report_path, job.input, f.provenance, settings.report_options, r.summary_csv))
-                        f.up_to_date = false;
-                    if (opt.report) f.up_to_date = false;  // the printed report is made by converting
-                }
-                if (f.up_to_date) {
-                    r.ok = true;
-                    r.digest = f.digest;
-                    r.triangles = f.triangles;
-                    r.dropped = f.dropped;
-                    r.text = job.input + ": up to date (" + job.output + ")\n";
-                } else {
-                    r = opt.isolate ? convert_isolated(job, opt, settings, report_path) : convert(job, opt, settings, report_path);
-                    if (r.digest.empty()) {
-                        try {
-                            r.digest = tools::file_digest(job.input);
-                        } catch (const std::exception&) {
-                        }
-                    }
-                }
-                rec.digest = r.digest == "missing" ? "" : r.digest;
-                rec.status = !r.ok ? "failed" : f.up_to_date ? "up to date" : "converted";
-                rec.triangles = r.ok ? r.triangles : 0;
-                rec.dropped = r.ok ? r.dropped : std::vector<std::string>();
-                rec.seconds = seconds_since(start);
-                if (!r.ok) {
-                    std::string message = r.text;
-                    if (message.rfind("error: ", 0) == 0) message.erase(0, 7);
-                    while (!message.empty() && message.back() == '\n') message.pop_back();
-                    rec.message = message;
-                }
-                std::lock_guard<std::mutex> lock(print_mutex);
-                summary_rows[s] = r.summary_csv;
-                ++done;
-                if (!r.ok) ++failed;
-                if (f.up_to_date) ++fresh;
-                if (show_progress) std::fprintf(stderr, "\r%*s\r", 60, "");
-                if (!r.ok)
-                    std::fputs(r.text.c_str(), stderr);
-                else if (!opt.quiet && (!f.up_to_date || opt.verbose > 0))
-                    std::fputs(r.text.c_str(), stdout);
-                if (r.ok && !f.up_to_date && !r.dropped.empty()) std::fputs(dropped_warning(job.input, r.dropped).c_str(), stderr);
-                std::fflush(stdout);
-                if (show_progress) draw_progress(done, selected.size(), failed);
-            }
-        };
-        std::vector<std::thread> pool;
-        const unsigned threads = std::min<unsigned>(opt.jobs, unsigned(std::max<size_t>(1, selected.size())));
-        for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
-        worker();
-        for (std::thread& t : pool) t.join();
-        if (show_progress) std::fprintf(stderr, "\n");
+        run_batch(opt, settings, batch);
         if (stop_signal != 0) {
             std::fprintf(stderr, "error: stopped by signal %d (%s) after %zu of %zu inputs; no manifest written, a rerun converts the rest\n", int(stop_signal),
-                         strsignal(stop_signal), done, selected.size());
+                         strsignal(stop_signal), batch.done, batch.selected.size());
             return 128 + stop_signal;
         }
-        // outputs whose input is gone: named by every run over the whole batch, removed with
-        // --prune (by shard 0 only, so that shards do not race)
-        if (shard.index == 0) {
-            for (const std::string& orphan : find_orphans(opt.outdir, all_jobs)) {
-                if (opt.prune) {
-                    fs::remove(orphan, ec);
-                    if (const std::string report = report_path_of({"", orphan}); !report.empty()) fs::remove(report, ec);
-                    if (!opt.quiet) std::printf("%s: removed (no input maps to it)\n", orphan.c_str());
-                } else if (!opt.quiet) {
-                    std::printf("%s: no input of this run maps to it (its input is gone?); --prune removes it\n", orphan.c_str());
-                }
-            }
-        }
-        tools::ManifestHeader header;
-        header.shard = shard;
-        header.inputs = all_jobs.size();
-        header.report_json = opt.report_json_dir;
-        header.summary_header = tom::summary_csv_header(settings.report);
-        const std::string manifest = tools::manifest_path(opt.outdir, shard);
-        tools::write_manifest(manifest, header, records);
-        if (!opt.report_json_dir.empty() && shard.count == 1) {  // shards: tombuild --merge writes it
-            std::string csv = header.summary_header;
-            for (const std::string& rows : summary_rows) csv += rows;  // input order, whatever -j
-            fs::create_directories(opt.report_json_dir, ec);
-            const std::string path = (fs::path(opt.report_json_dir) / "summary.csv").string();
-            tom::write_bytes_atomically(path, csv.data(), csv.size());
-            if (!opt.quiet) std::printf("reports: %s (one JSON per input), %s\n", opt.report_json_dir.c_str(), path.c_str());
-        }
-        const size_t total = selected.size() + errors.size();
-        if (!opt.quiet || failed)
-            std::fprintf(failed ? stderr : stdout, "%zu of %zu inputs converted%s%s%s; manifest %s\n", total - failed - fresh, total,
-                         fresh ? (", " + std::to_string(fresh) + " up to date").c_str() : "",
-                         failed ? (", " + std::to_string(failed) + " failed").c_str() : "",
-                         shard.count > 1 ? (" (shard " + shard.name() + " of " + std::to_string(all_jobs.size()) + " inputs)").c_str() : "",
-                         manifest.c_str());
-        if (all_jobs.empty() && errors.empty()) {
-            std::fprintf(stderr, "error: no mesh files found in the inputs\n");
-            return tools::exit_failed;
-        }
-        return failed ? tools::exit_failed : tools::exit_ok;
+        handle_orphans(opt, batch);
+        return finish(opt, batch, write_manifest(opt, settings, batch));
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return tools::exit_failed;
