@@ -8,7 +8,8 @@ src="$1"; build="$2"; data="$3"
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
 for f in include/tom/extract.h include/tom/format.h include/tom/builder/builder.h include/tom/builder/writer.h \
-         include/tom/io/import.h include/tom/metrics/report.h include/tcr/model.h include/tom/tom.h bin/tombuild bin/tominfo; do
+         include/tom/io/import.h include/tom/metrics/report.h include/tom/metrics/report_json.h include/tcr/model.h include/tcr/calibrate.h \
+         include/tom/tom.h include/tom/tcr.h bin/tombuild bin/tominfo share/doc/tom/LICENSE share/doc/tom/CHANGELOG.md share/doc/tom/report.schema.json; do
   [ -e "$work/prefix/$f" ] || { echo "not installed: $f"; exit 1; }
 done
 # the private headers stay private, and the runtime's headers include nothing of the other libraries
