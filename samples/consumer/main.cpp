@@ -18,10 +18,11 @@ int main(int argc, char** argv) {
     }
     try {
         const tom::File file = tom::File::open(argv[1]);  // mapped in place and validated
+        const double fraction = argc == 3 ? std::atof(argv[2]) : 0.10;
         for (uint32_t i = 0; i < file.mesh_count(); ++i) {
             const tom::MeshView& mesh = file.mesh(i);
             std::vector<uint32_t> indices(size_t(mesh.triangle_count) * 3);  // once; reused every frame
-            const uint32_t n = tom::vertex_count_for_fraction(mesh, argc == 3 ? std::atof(argv[2]) : 0.10);
+            const uint32_t n = tom::vertex_count_for_fraction(mesh, fraction);
             const tom::Extracted level = tom::extract(mesh, n, indices.data(), indices.size());
             // draw: vertices [0, level.vertex_count) of mesh.positions/normals, level.triangle_count * 3 indices
             if (argc == 3) {
