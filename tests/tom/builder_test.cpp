@@ -1,5 +1,7 @@
 // Builder invariants over generated and real meshes, for every strategy and predicate.
 
+#include <map>
+
 #include <catch2/catch.hpp>
 
 #include "support.h"
@@ -88,6 +90,25 @@ TEST_CASE("borders stay in place: a grid keeps its outline down to 5% of its tri
         CHECK(lo[1] == 0.0f);
         CHECK(hi[0] == 1.0f);
         CHECK(hi[1] == 1.0f);
+        // and its outline is the square's: every open edge of the level lies on one side of it,
+        // and together they measure its perimeter (a border vertex moved inward would cut a
+        // corner off or open an edge inside)
+        std::map<std::pair<uint32_t, uint32_t>, int> edges;
+        for (size_t f = 0; f < r.triangle_count; ++f)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t a = idx[3 * f + k], b = idx[3 * f + (k + 1) % 3];
+                ++edges[{std::min(a, b), std::max(a, b)}];
+            }
+        double outline = 0;
+        for (const auto& [edge, uses] : edges) {
+            if (uses != 1) continue;
+            const float* a = &t.positions[3 * edge.first];
+            const float* b = &t.positions[3 * edge.second];
+            const bool on_side = (a[0] == b[0] && (a[0] == 0.0f || a[0] == 1.0f)) || (a[1] == b[1] && (a[1] == 0.0f || a[1] == 1.0f));
+            CHECK(on_side);
+            outline += std::hypot(double(a[0]) - b[0], double(a[1]) - b[1]);
+        }
+        CHECK(outline == Approx(4.0).epsilon(1e-6));
         // and the coarsest level is far coarser than the input
         CHECK(t.min_vertex_count < grid.mesh.vertex_count() / 20);
     }

@@ -459,7 +459,22 @@ struct Builder {
         const float normal_term = 1.0f - dot(vnormal[v], vnormal[u]);
         // the attribute term in the penalty's units (length^3): RMS attribute error x area
         const float attribute_term = area0 > 0 ? float(std::sqrt(attribute / area0)) * area0 : 0.0f;
-        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term + attribute_term;
+        return volume + dist * std::fabs(area1 - area0) + dist * rotation + dist * area0 * 0.5f * normal_term + attribute_term +
+               border_sweep(v, u, dist);
+    }
+
+    // A border vertex's move in the memoryless penalty (Lindstrom & Turk's boundary term): its
+    // other border edge (w, v) becomes (w, u), sweeping the triangle (w, v, u), 0 along a straight
+    // border; that area x the distance, weighted as the quadric's border planes. Without it, a
+    // corner of a flat sheet costs little more than the free moves around it and the outline is
+    // cut (the grid of "borders stay in place" lost 10% of its perimeter at 5% of its triangles).
+    float border_sweep(uint32_t v, uint32_t u, float dist) const {
+        if (!kCollapseRules[classes.kind[v]].along_border) return 0.0f;
+        const uint32_t wv = classes.wedge[v], wu = classes.wedge[u];
+        const uint32_t w = wu == classes.border_next[wv] ? classes.border_prev[wv] : wu == classes.border_prev[wv] ? classes.border_next[wv] : kNone;
+        if (w == kNone || w == wu) return 0.0f;
+        const Vec3 pw = pos[w];
+        return kBoundaryWeight * 0.5f * length(cross(sub(pos[v], pw), sub(pos[u], pw))) * dist;
     }
 
     // Best substitution of v, or false when v has none. With check_legal the best *legal* one
