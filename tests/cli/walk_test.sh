@@ -97,10 +97,13 @@ for s in ['exact', 'barrier']:
         a = im.imread('$work/real/shots/%s-%s.png' % (s, v)); b = im.imread('$work/real/shots/%s-%s-lod.png' % (s, v))
         assert a.shape == (240, 320, 4) and b.shape == a.shape, a.shape
         drawn = int(float(rows[shot_frame[v]]['drawn_triangles']))
-        if drawn == 0 or (v == 'B' and a[..., :3].std() <= 0.01):
+        if drawn == 0:
             continue  # nothing drawn at that frame (B looks at the few far objects; a noisy budget may drop all)
-        assert a[..., :3].std() > 0.01, ('blank picture', s, v)
-        assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() > 20, ('LOD view identical', s, v, drawn)
+        # what was drawn shows: pixels away from the background (the corner's colour; at B the
+        # far objects may cover only a few), and the LOD view recolours them
+        covered = (abs(a[..., :3] - a[0, 0, :3]).max(axis=2) > 0.05).sum()
+        assert covered > 0, ('blank picture', s, v, drawn)
+        assert (abs(a[..., :3] - b[..., :3]).max(axis=2) > 0.05).sum() >= min(20, covered // 2), ('LOD view identical', s, v, drawn, covered)
 "
 check "plots of the run" "$src/scripts/plot-walk.py" "$work/real" --format png
 check "the plots exist" test -s "$work/real/frame-times.png" -a -s "$work/real/triangles.png"
@@ -166,6 +169,9 @@ out = subprocess.run(['$walk', '--scene', '$work/scene.txt', '--calibration', '$
 j = json.loads(out)
 assert j['renders'] == 40 and j['triangles'] > 0 and j['objects'] > 0, j
 assert j['median_ms'] > 0 and j['std_percent'] > 0, j                          # real frames vary
+# the frame is the one exact planned at the budget, the model corrected on 10 frames there: it
+# takes about the budget (its reserve and allowance below it, the renderer's noise around it)
+assert 0.3 * $budget <= j['median_ms'] <= 1.3 * $budget, (j['median_ms'], $budget)
 assert j['p5_percent'] <= 100 <= j['p95_percent'], j
 lo, hi = j['block10_percent']
 assert 0 < lo <= hi, j                                                        # means of 10 in a row
