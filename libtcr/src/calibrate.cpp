@@ -350,7 +350,7 @@ void fit_imposters(Session& s, CostModel& m) {
     }
 }
 
-std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+// printf into a string (the summary's lines are short)
 std::string format(const char* fmt, ...) {
     char buffer[1024];
     va_list args;

@@ -60,7 +60,7 @@ inline unsigned thread_count(unsigned threads) noexcept { return threads ? threa
 /// loop and waits only for the helpers that joined, so a helper the system is not running (on a
 /// machine where other work holds a core) does not hold it up. A team made for one loop (`spin` false) never spins: its threads wait
 /// asleep, leaving the cores to other work (the report runs its levels and its error curve at
-/// once, four threads on two cores, where spinning took 2.5% of the time).
+/// once, more threads than cores, where spinning would take time from the work).
 class Team {
 public:
     explicit Team(unsigned threads, bool spin = true) : spinning_(spin) {

@@ -217,9 +217,8 @@ struct PathRun {
 // calibration's isolated objects, which would put the first frames over the budget while the
 // correction caught up), then the recorded path, frame f of every selector in turn before frame
 // f + 1, with screenshots at A, B and C. Interleaved, every selector meets the machine's slow and
-// fast spells alike (run one after another, exact-levels drew 313k to 460k triangles a frame over
-// one stretch of the path in three runs, more than the selectors differ); `--sequential` runs
-// them one after another.
+// fast spells alike (run one after another, a spell can move one selector's triangles more than
+// the selectors differ); `--sequential` runs them one after another.
 // Each run's imposters have their own texture slots in the shared renderer.
 std::vector<Summary> run_paths(const World& w, const Options& o, const tcr::CostModel& calibrated, walk::Renderer* renderer,
                                const std::vector<uint32_t>& mesh_handles, std::vector<std::vector<Row>>& rows, const Reference* reference) {

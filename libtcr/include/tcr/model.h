@@ -37,9 +37,8 @@ struct CostModel {
 
     /// Time of one object: t_setup + max(geometry, fill). `inside_share`: the share of the object
     /// inside the view frustum (Projection::inside_share); the rest is clipped before set-up and
-    /// rasterisation, so the geometry term counts only that share (on the walkthrough's path,
-    /// frames whose close objects reach far off screen took as little as 0.55x the time the
-    /// whole objects' geometry predicted). `draws`: the object's parts, one set-up each.
+    /// rasterisation, so the geometry term counts only that share. `draws`: the object's parts,
+    /// one set-up each.
     double object_ms(double triangles, double vertices, double pixels, double inside_share = 1.0, double draws = 1.0) const noexcept {
         const double geometry = (t_tri_ms * triangles + t_vert_ms * vertices) * inside_share;
         const double fill = t_pix_ms * pixels;

@@ -1,8 +1,8 @@
 // The binary PLY files of scanners and photogrammetry (a vertex element of float positions,
 // optionally float normals and uchar colours, and a face element holding only its index lists),
 // read straight into a Mesh. OpenMesh's reader builds a half-edge mesh behind a checked copy of
-// the file: on a 10-million-triangle scan that took about half as long as the build itself, and
-// most of the import's memory. Any other layout goes to OpenMesh (import_openmesh) as before.
+// the file, which on large scans costs a good part of the build's time and most of the
+// import's memory. Any other layout goes to OpenMesh (import_openmesh) as before.
 //
 // Reads nothing past the bytes it was given: every count is checked against the bytes left
 // before anything is reserved, every index against the vertex count.

@@ -38,7 +38,7 @@ struct CandidateBound {
 // normal(k).p + offset[k]; edge k runs from corner k to corner k + 1 of a, a + e0, a + e1).
 // All zero for a degenerate or sliver triangle, whose plane is not reliable. The normals are
 // floats (the bounds read them so) and each offset puts its float line through the edge's first
-// corner: 64 bytes a record where doubles took 96.
+// corner: 64 bytes a record, against doubles' 96.
 struct EdgeLines {
     float normals[3][3];
     double offset[3];

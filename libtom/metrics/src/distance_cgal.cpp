@@ -764,7 +764,7 @@ struct MetroReference::Impl {
         const uint64_t target = sample_target(original, simplified, params);
         const uint64_t backward_target = sample_target(simplified, original, params);
         // a large level's structure is made once the original's is done: the two made at once
-        // held both their CGAL trees (a 10M-triangle report peaked at 8.7 GB)
+        // would hold both their CGAL trees, the report's peak
         if (simplified.triangle_count >= kAwaitOriginalTriangles) mesh.wait();
         const Mesh3 other(simplified);
         const Forward& f = forward_for(target);

@@ -28,7 +28,7 @@ struct Level {
 Level extract_level(const TomMesh& t, uint32_t n) {
     Level l;
     l.n = n;
-    l.indices.resize(size_t(active_triangle_count(t.view(), n)) * 3);  // (the full size was 24 MB a level on 2M triangles)
+    l.indices.resize(size_t(active_triangle_count(t.view(), n)) * 3);  // the level's size, not the mesh's: reports hold several levels at once
     l.e = extract(t.view(), n, l.indices.data(), l.indices.size());
     return l;
 }

@@ -235,7 +235,7 @@ bool cpu_has_avx2() noexcept {
 // AVX2 gathers at every resolution where the CPU has them. The scalar walk's branches are fast
 // only when the same level is extracted over and over (the predictor learns its chains, as in a
 // benchmark loop); in a renderer, where levels change and other work runs between extractions,
-// the gathers took 3.4 against 6.3 ns per triangle (walkthrough, barrier selector, 150 frames).
+// the gathers are the faster (docs/PERFORMANCE.md).
 template <class I, class C, class O>
 void map_corners(const I* sub, size_t vertices, const C* in, O* dst, size_t corners, uint32_t n) noexcept {
     (void)vertices;  // only the AVX2 path uses it

@@ -66,9 +66,9 @@ struct DistanceParams {
     /// search).
     uint64_t compact_search_triangles = 0;
     /// A direction of more than 4 x this many samples is sampled and searched in batches of
-    /// about this many, each a compact part of the surface (its samples in flight take some 80
-    /// bytes each: a 2M-triangle report's 20M took 3.8 GB in all); the same samples, so the same
-    /// figures up to the order of their sums. 0: never in batches.
+    /// about this many, each a compact part of the surface, so that the samples in flight (some
+    /// 80 bytes each) bound the memory; the same samples, so the same figures up to the order of
+    /// their sums. 0: never in batches.
     uint64_t batch_samples = uint64_t(1) << 20;
 };
 
