@@ -25,6 +25,44 @@ FormatError::FormatError(std::string path, uint64_t offset, std::string field, i
       field_(std::move(field)),
       rule_(rule) {}
 
+namespace {
+
+std::string type_name(uint32_t type) {
+    std::string s;
+    for (int k = 0; k < 4; ++k) {
+        const char c = char((type >> (8 * k)) & 0xFF);
+        s += (c >= 32 && c < 127) ? c : '?';
+    }
+    return s;
+}
+
+struct MeshSections {
+    const SectionInfo* mesh = nullptr;
+    const SectionInfo* positions = nullptr;
+    const SectionInfo* streams[attribute_stream_count] = {};  // as layout::attribute_streams
+    const SectionInfo* substitute = nullptr;
+    const SectionInfo* triangles = nullptr;
+    const SectionInfo* metadata = nullptr;
+    const SectionInfo* pairs = nullptr;
+    const SectionInfo* coarse = nullptr;
+    const SectionInfo* parts = nullptr;
+    const SectionInfo* extra = nullptr;
+};
+
+// The section table as rules 6 to 9 read it: where the table is, and each section by its role.
+struct SectionMap {
+    uint32_t mesh_count = 0;
+    uint64_t table_offset = 0, table_bytes = 0;
+    std::vector<MeshSections> per_mesh;
+    const SectionInfo* materials = nullptr;
+    const SectionInfo* instances = nullptr;
+    const SectionInfo* provenance = nullptr;
+    const SectionInfo* images = nullptr;
+    const SectionInfo* gltf = nullptr;
+};
+
+} // namespace
+
 struct File::Impl {
     std::string path;
     // a mapping, an owned copy, or the caller's bytes (borrow)
@@ -43,7 +81,13 @@ struct File::Impl {
         throw FormatError(path, offset, field, rule, detail);
     }
 
+    // validate() as its steps, each the rules it names (docs/FORMAT.md)
     void validate(const OpenOptions& options);
+    SectionMap validate_header();                                        // rules 1 to 6
+    void read_sections(SectionMap& map, const OpenOptions& options);     // rules 7 to 9
+    void validate_mesh(uint32_t mi, const MeshSections& ms, uint64_t table_offset);  // rules 9 to 16, 20, 22
+    void validate_scene(const SectionMap& map);                          // rules 17, 18, 21, 23
+    void validate_coarse(uint32_t mi, const SectionInfo& sec);           // rule 19
     // rule 17: -1 (none) or one of the `stored` materials
     void check_material(int32_t material, uint64_t offset, const std::string& field, size_t stored) const {
         if (material == -1 || (material >= 0 && size_t(material) < stored)) return;
@@ -81,33 +125,19 @@ void File::Impl::validate_parts(const SectionInfo& sec, uint32_t attributes, Mes
     v.part_count = count;
 }
 
-namespace {
-
-std::string type_name(uint32_t type) {
-    std::string s;
-    for (int k = 0; k < 4; ++k) {
-        const char c = char((type >> (8 * k)) & 0xFF);
-        s += (c >= 32 && c < 127) ? c : '?';
-    }
-    return s;
-}
-
-struct MeshSections {
-    const SectionInfo* mesh = nullptr;
-    const SectionInfo* positions = nullptr;
-    const SectionInfo* streams[attribute_stream_count] = {};  // as layout::attribute_streams
-    const SectionInfo* substitute = nullptr;
-    const SectionInfo* triangles = nullptr;
-    const SectionInfo* metadata = nullptr;
-    const SectionInfo* pairs = nullptr;
-    const SectionInfo* coarse = nullptr;
-    const SectionInfo* parts = nullptr;
-    const SectionInfo* extra = nullptr;
-};
-
-} // namespace
 
 void File::Impl::validate(const OpenOptions& options) {
+    SectionMap map = validate_header();
+    read_sections(map, options);
+    meshes.resize(map.mesh_count);
+    extra_streams.resize(map.mesh_count);
+    for (uint32_t mi = 0; mi < map.mesh_count; ++mi) validate_mesh(mi, map.per_mesh[mi], map.table_offset);
+    validate_scene(map);
+    for (uint32_t mi = 0; mi < map.mesh_count; ++mi)
+        if (map.per_mesh[mi].coarse) validate_coarse(mi, *map.per_mesh[mi].coarse);
+}
+
+SectionMap File::Impl::validate_header() {
     // rule 1: the header fits
     if (size < header_bytes) fail(0, "header", 1, "file is " + std::to_string(size) + " bytes, shorter than the 64-byte header");
     // rule 2: magic
@@ -129,22 +159,23 @@ void File::Impl::validate(const OpenOptions& options) {
              declared > size ? "file is truncated: " + std::to_string(size) + " bytes of " + std::to_string(declared)
                              : "file has " + std::to_string(size - declared) + " bytes past its declared end");
     // rule 6: section table
-    const uint32_t mesh_count = load_u32(data + h_mesh_count);
+    SectionMap map;
+    const uint32_t mesh_count = map.mesh_count = load_u32(data + h_mesh_count);
     const uint32_t section_count = load_u32(data + h_section_count);
-    const uint64_t table_offset = load_u64(data + h_table_offset);
-    const uint64_t table_bytes = uint64_t(section_count) * section_entry_bytes;
+    const uint64_t table_offset = map.table_offset = load_u64(data + h_table_offset);
+    const uint64_t table_bytes = map.table_bytes = uint64_t(section_count) * section_entry_bytes;
     if (table_offset < header_bytes || table_offset > size || table_bytes > size - table_offset)
         fail(h_table_offset, "section_table", 6, std::to_string(section_count) + " sections at offset " + std::to_string(table_offset) + " do not fit in the file");
     if (crc32(data + table_offset, table_bytes) != load_u32(data + h_table_checksum))
         fail(h_table_checksum, "table_checksum", 6, "section table checksum mismatch");
     if (mesh_count > section_count) fail(h_mesh_count, "mesh_count", 9, std::to_string(mesh_count) + " meshes but only " + std::to_string(section_count) + " sections");
+    return map;
+}
 
-    std::vector<MeshSections> per_mesh(mesh_count);
-    const SectionInfo* materials_section = nullptr;
-    const SectionInfo* instances_section = nullptr;
-    const SectionInfo* provenance_section = nullptr;
-    const SectionInfo* images_section = nullptr;
-    const SectionInfo* gltf_section = nullptr;
+void File::Impl::read_sections(SectionMap& map, const OpenOptions& options) {
+    const uint32_t section_count = uint32_t(map.table_bytes / section_entry_bytes), mesh_count = map.mesh_count;
+    const uint64_t table_offset = map.table_offset, table_bytes = map.table_bytes;
+    map.per_mesh.resize(mesh_count);
     sections.resize(section_count);
     for (uint32_t i = 0; i < section_count; ++i) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
@@ -166,11 +197,11 @@ void File::Impl::validate(const OpenOptions& options) {
         // rule 9: known sections belong to an existing mesh, once each; file-level ones to none
         if (type == sec_materials || type == sec_instances || type == sec_provenance || type == sec_images || type == sec_source_gltf) {
             if (s.mesh != file_level) fail(e + s_mesh, field, 9, "a file-level section must have mesh 0xFFFFFFFF");
-            const SectionInfo*& file_slot = type == sec_materials ? materials_section
-                                          : type == sec_instances ? instances_section
-                                          : type == sec_images    ? images_section
-                                          : type == sec_source_gltf ? gltf_section
-                                                                  : provenance_section;
+            const SectionInfo*& file_slot = type == sec_materials     ? map.materials
+                                          : type == sec_instances   ? map.instances
+                                          : type == sec_images      ? map.images
+                                          : type == sec_source_gltf ? map.gltf
+                                                                    : map.provenance;
             if (file_slot) fail(e, field, 9, "the file has this section twice");
             file_slot = &s;
             continue;
@@ -183,7 +214,7 @@ void File::Impl::validate(const OpenOptions& options) {
             type == sec_metadata || type == sec_pairs || type == sec_coarse || type == sec_parts || type == sec_extra_streams) {
             if (s.mesh >= mesh_count)
                 fail(e + s_mesh, field, 9, "belongs to mesh " + std::to_string(s.mesh) + " but the file has " + std::to_string(mesh_count));
-            MeshSections& ms = per_mesh[s.mesh];
+            MeshSections& ms = map.per_mesh[s.mesh];
             slot = type == sec_mesh ? &ms.mesh
                  : type == sec_positions ? &ms.positions
                  : stream >= 0 ? &ms.streams[stream]
@@ -198,179 +229,179 @@ void File::Impl::validate(const OpenOptions& options) {
             *slot = &s;
         }  // unknown types are skipped (forward compatibility)
     }
+}
 
-    meshes.resize(mesh_count);
-    extra_streams.resize(mesh_count);
-    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
-        const MeshSections& ms = per_mesh[mi];
-        const std::string mesh_field = "mesh " + std::to_string(mi);
-        for (auto [sec, name] : {std::pair{ms.mesh, "MESH"}, std::pair{ms.positions, "POSI"}, std::pair{ms.substitute, "SUBS"},
-                                 std::pair{ms.triangles, "TRIS"}})
-            if (!sec) fail(table_offset, mesh_field, 9, std::string("required section ") + name + " is missing");
-        // rule 10: mesh header
-        const uint8_t* h = data + ms.mesh->offset;
-        if (ms.mesh->bytes < mesh_header_bytes) fail(ms.mesh->offset, mesh_field + " MESH", 10, "mesh header shorter than 64 bytes");
-        MeshView& v = meshes[mi];
-        v.vertex_count = load_u32(h + m_vertex_count);
-        v.triangle_count = load_u32(h + m_triangle_count);
-        v.min_vertex_count = load_u32(h + m_min_vertex_count);
-        v.index_size = load_u32(h + m_index_size);
-        v.material = int32_t(load_u32(h + m_material));
-        const uint32_t attributes = load_u32(h + m_attributes);
-        for (int k = 0; k < 3; ++k) {
-            v.bounds_min[k] = load_f32(h + m_bounds_min + 4 * k);
-            v.bounds_max[k] = load_f32(h + m_bounds_max + 4 * k);
-        }
-        const uint32_t name_bytes = load_u32(h + m_name_bytes);
-        if (uint64_t(name_bytes) + mesh_header_bytes != ms.mesh->bytes)
-            fail(ms.mesh->offset + m_name_bytes, mesh_field + " name_bytes", 10, "name of " + std::to_string(name_bytes) + " bytes does not match the section size");
-        v.name = std::string_view(reinterpret_cast<const char*>(h + mesh_header_bytes), name_bytes);
-        if (v.index_size != 2 && v.index_size != 4)
-            fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "index size " + std::to_string(v.index_size) + " is not 2 or 4");
-        if (v.index_size == 2 && v.vertex_count > 65536)
-            fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "16-bit indices for " + std::to_string(v.vertex_count) + " vertices");
-        if (attributes & ~known_attributes) fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "unknown attribute flags");
-        for (int k = 0; k < attribute_stream_count; ++k)
-            if (bool(attributes & attribute_streams[k].flag) != (ms.streams[k] != nullptr))
-                fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10,
-                     std::string("attribute flags and section ") + attribute_streams[k].name + " disagree");
-        if (bool(attributes & attr_parts) != (ms.parts != nullptr))
-            fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "attribute flags and section PART disagree");
-        // rule 11: stream sizes
-        auto check_size = [&](const SectionInfo* sec, uint64_t expected, const char* name) {
-            if (sec && sec->bytes != expected)
-                fail(sec->offset, mesh_field + " " + name, 11,
-                     std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(expected));
-        };
-        const uint64_t nv = v.vertex_count, nt = v.triangle_count;
-        check_size(ms.positions, nv * 12, "POSI");
-        for (int k = 0; k < attribute_stream_count; ++k)
-            check_size(ms.streams[k], nv * 4 * attribute_streams[k].components, attribute_streams[k].name);
-        check_size(ms.substitute, nv * v.index_size, "SUBS");
-        check_size(ms.triangles, nt * 3 * v.index_size, "TRIS");
-        v.positions = reinterpret_cast<const float*>(data + ms.positions->offset);
-        for (int k = 0; k < attribute_stream_count; ++k)
-            v.*attribute_streams[k].view = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
-        v.substitute = data + ms.substitute->offset;
-        v.triangles = data + ms.triangles->offset;
-        // rule 12: resolution range
-        if (v.min_vertex_count > v.vertex_count || (v.vertex_count > 0 && v.min_vertex_count == 0))
-            fail(ms.mesh->offset + m_min_vertex_count, mesh_field + " min_vertex_count", 12,
-                 std::to_string(v.min_vertex_count) + " is not in [1, vertex_count = " + std::to_string(v.vertex_count) + "]");
-        if (v.vertex_count == 0 && v.triangle_count > 0) fail(ms.mesh->offset, mesh_field + " vertex_count", 12, "triangles without vertices");
-        // rule 13: substitutes point strictly down (so every chain ends), survivors to themselves
-        for (uint32_t i = 0; i < v.vertex_count; ++i) {
-            const uint32_t s = v.substitute_at(i);
-            if (i < v.min_vertex_count ? s != i : s >= i)
-                fail(ms.substitute->offset + uint64_t(i) * v.index_size, mesh_field + " substitute[" + std::to_string(i) + "]", 13,
-                     "value " + std::to_string(s) + (i < v.min_vertex_count ? " must equal its own index (survivor)" : " must be smaller than its index"));
-        }
-        // rule 14: triangle corners in range and distinct
-        for (uint32_t t = 0; t < v.triangle_count; ++t) {
-            const uint32_t a = v.corner(3 * t), b = v.corner(3 * t + 1), c = v.corner(3 * t + 2);
-            const uint64_t at = ms.triangles->offset + uint64_t(t) * 3 * v.index_size;
-            if (a >= v.vertex_count || b >= v.vertex_count || c >= v.vertex_count)
-                fail(at, mesh_field + " triangle " + std::to_string(t), 14,
-                     "index out of range (" + std::to_string(std::max(a, std::max(b, c))) + " >= vertex_count " + std::to_string(v.vertex_count) + ")");
-            if (a == b || b == c || a == c) fail(at, mesh_field + " triangle " + std::to_string(t), 14, "degenerate triangle (repeated corner)");
-        }
-        // rule 15: metadata entries
-        if (ms.metadata) {
-            const uint8_t* p = data + ms.metadata->offset;
-            const uint64_t bytes = ms.metadata->bytes;
-            if (bytes < 4) fail(ms.metadata->offset, mesh_field + " META", 15, "shorter than its entry count");
-            const uint32_t count = load_u32(p);
-            uint64_t at = 4;
-            for (uint32_t k = 0; k < count; ++k) {
-                if (bytes - at < 8) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry header past the section end");
-                const uint64_t key_bytes = load_u32(p + at), value_bytes = load_u32(p + at + 4);
-                const uint64_t need = 8 + (key_bytes + 3) / 4 * 4 + (value_bytes + 3) / 4 * 4;
-                if (need > bytes - at) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry runs past the section end");
-                at += need;
-            }
-            if (at != bytes) fail(ms.metadata->offset + at, mesh_field + " META", 15, "bytes after the last entry");
-            v.metadata = p;
-            v.metadata_bytes = bytes;
-        }
-        // rule 16: groups: (V + 7) / 8 bytes, each set bit joining two removed vertices (a run of
-        // set bits one group, since 1.7)
-        if (ms.pairs) {
-            if (ms.pairs->bytes != (nv + 7) / 8)
-                fail(ms.pairs->offset, mesh_field + " PAIR", 16, std::to_string(ms.pairs->bytes) + " bytes where the vertex count requires " + std::to_string((nv + 7) / 8));
-            const uint8_t* bits = data + ms.pairs->offset;
-            for (uint32_t i = 0; i < v.vertex_count; ++i) {
-                const bool set = (bits[i / 8] >> (i % 8)) & 1u;
-                if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count))
-                    fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16, "a group must join removed vertices");
-            }
-            v.pair_bits = bits;
-        }
-        if (ms.parts) validate_parts(*ms.parts, attributes, v, mesh_field);
-        // rule 22: carried streams, one element per vertex each
-        if (ms.extra) {
-            extra_streams[mi] = detail::decode_extra_streams(data + ms.extra->offset, ms.extra->bytes, ms.extra->offset, path, mesh_field, v.vertex_count);
-            v.extra_streams = extra_streams[mi].empty() ? nullptr : extra_streams[mi].data();
-            v.extra_stream_count = uint32_t(extra_streams[mi].size());
-        }
+void File::Impl::validate_mesh(uint32_t mi, const MeshSections& ms, uint64_t table_offset) {
+    const std::string mesh_field = "mesh " + std::to_string(mi);
+    for (auto [sec, name] : {std::pair{ms.mesh, "MESH"}, std::pair{ms.positions, "POSI"}, std::pair{ms.substitute, "SUBS"},
+                             std::pair{ms.triangles, "TRIS"}})
+        if (!sec) fail(table_offset, mesh_field, 9, std::string("required section ") + name + " is missing");
+    // rule 10: mesh header
+    const uint8_t* h = data + ms.mesh->offset;
+    if (ms.mesh->bytes < mesh_header_bytes) fail(ms.mesh->offset, mesh_field + " MESH", 10, "mesh header shorter than 64 bytes");
+    MeshView& v = meshes[mi];
+    v.vertex_count = load_u32(h + m_vertex_count);
+    v.triangle_count = load_u32(h + m_triangle_count);
+    v.min_vertex_count = load_u32(h + m_min_vertex_count);
+    v.index_size = load_u32(h + m_index_size);
+    v.material = int32_t(load_u32(h + m_material));
+    const uint32_t attributes = load_u32(h + m_attributes);
+    for (int k = 0; k < 3; ++k) {
+        v.bounds_min[k] = load_f32(h + m_bounds_min + 4 * k);
+        v.bounds_max[k] = load_f32(h + m_bounds_max + 4 * k);
     }
+    const uint32_t name_bytes = load_u32(h + m_name_bytes);
+    if (uint64_t(name_bytes) + mesh_header_bytes != ms.mesh->bytes)
+        fail(ms.mesh->offset + m_name_bytes, mesh_field + " name_bytes", 10, "name of " + std::to_string(name_bytes) + " bytes does not match the section size");
+    v.name = std::string_view(reinterpret_cast<const char*>(h + mesh_header_bytes), name_bytes);
+    if (v.index_size != 2 && v.index_size != 4)
+        fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "index size " + std::to_string(v.index_size) + " is not 2 or 4");
+    if (v.index_size == 2 && v.vertex_count > 65536)
+        fail(ms.mesh->offset + m_index_size, mesh_field + " index_size", 10, "16-bit indices for " + std::to_string(v.vertex_count) + " vertices");
+    if (attributes & ~known_attributes) fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "unknown attribute flags");
+    for (int k = 0; k < attribute_stream_count; ++k)
+        if (bool(attributes & attribute_streams[k].flag) != (ms.streams[k] != nullptr))
+            fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10,
+                 std::string("attribute flags and section ") + attribute_streams[k].name + " disagree");
+    if (bool(attributes & attr_parts) != (ms.parts != nullptr))
+        fail(ms.mesh->offset + m_attributes, mesh_field + " attributes", 10, "attribute flags and section PART disagree");
+    // rule 11: stream sizes
+    auto check_size = [&](const SectionInfo* sec, uint64_t expected, const char* name) {
+        if (sec && sec->bytes != expected)
+            fail(sec->offset, mesh_field + " " + name, 11,
+                 std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(expected));
+    };
+    const uint64_t nv = v.vertex_count, nt = v.triangle_count;
+    check_size(ms.positions, nv * 12, "POSI");
+    for (int k = 0; k < attribute_stream_count; ++k)
+        check_size(ms.streams[k], nv * 4 * attribute_streams[k].components, attribute_streams[k].name);
+    check_size(ms.substitute, nv * v.index_size, "SUBS");
+    check_size(ms.triangles, nt * 3 * v.index_size, "TRIS");
+    v.positions = reinterpret_cast<const float*>(data + ms.positions->offset);
+    for (int k = 0; k < attribute_stream_count; ++k)
+        v.*attribute_streams[k].view = ms.streams[k] ? reinterpret_cast<const float*>(data + ms.streams[k]->offset) : nullptr;
+    v.substitute = data + ms.substitute->offset;
+    v.triangles = data + ms.triangles->offset;
+    // rule 12: resolution range
+    if (v.min_vertex_count > v.vertex_count || (v.vertex_count > 0 && v.min_vertex_count == 0))
+        fail(ms.mesh->offset + m_min_vertex_count, mesh_field + " min_vertex_count", 12,
+             std::to_string(v.min_vertex_count) + " is not in [1, vertex_count = " + std::to_string(v.vertex_count) + "]");
+    if (v.vertex_count == 0 && v.triangle_count > 0) fail(ms.mesh->offset, mesh_field + " vertex_count", 12, "triangles without vertices");
+    // rule 13: substitutes point strictly down (so every chain ends), survivors to themselves
+    for (uint32_t i = 0; i < v.vertex_count; ++i) {
+        const uint32_t s = v.substitute_at(i);
+        if (i < v.min_vertex_count ? s != i : s >= i)
+            fail(ms.substitute->offset + uint64_t(i) * v.index_size, mesh_field + " substitute[" + std::to_string(i) + "]", 13,
+                 "value " + std::to_string(s) + (i < v.min_vertex_count ? " must equal its own index (survivor)" : " must be smaller than its index"));
+    }
+    // rule 14: triangle corners in range and distinct
+    for (uint32_t t = 0; t < v.triangle_count; ++t) {
+        const uint32_t a = v.corner(3 * t), b = v.corner(3 * t + 1), c = v.corner(3 * t + 2);
+        const uint64_t at = ms.triangles->offset + uint64_t(t) * 3 * v.index_size;
+        if (a >= v.vertex_count || b >= v.vertex_count || c >= v.vertex_count)
+            fail(at, mesh_field + " triangle " + std::to_string(t), 14,
+                 "index out of range (" + std::to_string(std::max(a, std::max(b, c))) + " >= vertex_count " + std::to_string(v.vertex_count) + ")");
+        if (a == b || b == c || a == c) fail(at, mesh_field + " triangle " + std::to_string(t), 14, "degenerate triangle (repeated corner)");
+    }
+    // rule 15: metadata entries
+    if (ms.metadata) {
+        const uint8_t* p = data + ms.metadata->offset;
+        const uint64_t bytes = ms.metadata->bytes;
+        if (bytes < 4) fail(ms.metadata->offset, mesh_field + " META", 15, "shorter than its entry count");
+        const uint32_t count = load_u32(p);
+        uint64_t at = 4;
+        for (uint32_t k = 0; k < count; ++k) {
+            if (bytes - at < 8) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry header past the section end");
+            const uint64_t key_bytes = load_u32(p + at), value_bytes = load_u32(p + at + 4);
+            const uint64_t need = 8 + (key_bytes + 3) / 4 * 4 + (value_bytes + 3) / 4 * 4;
+            if (need > bytes - at) fail(ms.metadata->offset + at, mesh_field + " META entry " + std::to_string(k), 15, "entry runs past the section end");
+            at += need;
+        }
+        if (at != bytes) fail(ms.metadata->offset + at, mesh_field + " META", 15, "bytes after the last entry");
+        v.metadata = p;
+        v.metadata_bytes = bytes;
+    }
+    // rule 16: groups: (V + 7) / 8 bytes, each set bit joining two removed vertices (a run of
+    // set bits one group, since 1.7)
+    if (ms.pairs) {
+        if (ms.pairs->bytes != (nv + 7) / 8)
+            fail(ms.pairs->offset, mesh_field + " PAIR", 16, std::to_string(ms.pairs->bytes) + " bytes where the vertex count requires " + std::to_string((nv + 7) / 8));
+        const uint8_t* bits = data + ms.pairs->offset;
+        for (uint32_t i = 0; i < v.vertex_count; ++i) {
+            const bool set = (bits[i / 8] >> (i % 8)) & 1u;
+            if (set && (i < v.min_vertex_count || i + 1 >= v.vertex_count))
+                fail(ms.pairs->offset + i / 8, mesh_field + " PAIR bit " + std::to_string(i), 16, "a group must join removed vertices");
+        }
+        v.pair_bits = bits;
+    }
+    if (ms.parts) validate_parts(*ms.parts, attributes, v, mesh_field);
+    // rule 22: carried streams, one element per vertex each
+    if (ms.extra) {
+        extra_streams[mi] = detail::decode_extra_streams(data + ms.extra->offset, ms.extra->bytes, ms.extra->offset, path, mesh_field, v.vertex_count);
+        v.extra_streams = extra_streams[mi].empty() ? nullptr : extra_streams[mi].data();
+        v.extra_stream_count = uint32_t(extra_streams[mi].size());
+    }
+}
+
+void File::Impl::validate_scene(const SectionMap& map) {
     // rules 17 and 18: the scene; a material index names a stored material or none (-1), also
     // when the file stores no materials, so that no reader or exporter follows an index the
     // file merely declares
-    if (materials_section)
-        scene.materials = detail::decode_materials(data + materials_section->offset, materials_section->bytes, materials_section->offset, path);
+    if (map.materials)
+        scene.materials = detail::decode_materials(data + map.materials->offset, map.materials->bytes, map.materials->offset, path);
     // rule 21: the images embedded in the source, and which texture shows which
-    if (images_section) detail::decode_images(data + images_section->offset, images_section->bytes, images_section->offset, path, scene);
+    if (map.images) detail::decode_images(data + map.images->offset, map.images->bytes, map.images->offset, path, scene);
     // rule 23: a glTF source's scene beyond meshes, kept for the exporter
-    if (gltf_section) scene.gltf = detail::decode_source_gltf(data + gltf_section->offset, gltf_section->bytes, gltf_section->offset, path);
-    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
+    if (map.gltf) scene.gltf = detail::decode_source_gltf(data + map.gltf->offset, map.gltf->bytes, map.gltf->offset, path);
+    for (uint32_t mi = 0; mi < map.mesh_count; ++mi) {
         const MeshView& v = meshes[mi];
         const std::string field = "mesh " + std::to_string(mi);
-        check_material(v.material, per_mesh[mi].mesh->offset + m_material, field + " material", scene.materials.size());
+        check_material(v.material, map.per_mesh[mi].mesh->offset + m_material, field + " material", scene.materials.size());
         for (uint32_t p = 0; p < v.part_count && v.parts; ++p)
-            check_material(v.parts[p].material, per_mesh[mi].parts->offset + parts_header_bytes + uint64_t(p) * part_record_bytes + 8,
+            check_material(v.parts[p].material, map.per_mesh[mi].parts->offset + parts_header_bytes + uint64_t(p) * part_record_bytes + 8,
                            field + " part " + std::to_string(p) + " material", scene.materials.size());
     }
-    if (provenance_section) provenance = std::string_view(reinterpret_cast<const char*>(data + provenance_section->offset), provenance_section->bytes);
-    if (instances_section)
-        scene.instances = detail::decode_instances(data + instances_section->offset, instances_section->bytes, instances_section->offset, path, mesh_count);
-    // rule 19: coarse corners are exactly the active triangles' corners mapped to their resolution
-    for (uint32_t mi = 0; mi < mesh_count; ++mi) {
-        const SectionInfo* sec = per_mesh[mi].coarse;
-        if (!sec) continue;
-        MeshView& v = meshes[mi];
-        const std::string field = "mesh " + std::to_string(mi) + " COAR";
-        const uint8_t* p = data + sec->offset;
-        if (v.parts) fail(sec->offset, field, 19, "a mesh with parts has no coarse corners (they hold one prefix of TRIS)");
-        if (sec->bytes < coarse_header_bytes) fail(sec->offset, field, 19, "shorter than its 16-byte header");
-        const uint32_t resolution = load_u32(p + c_resolution), triangles = load_u32(p + c_triangle_count), index_size = load_u32(p + c_index_size);
-        if (resolution < v.min_vertex_count || resolution > v.vertex_count || resolution == 0)
-            fail(sec->offset + c_resolution, field + " resolution", 19,
-                 std::to_string(resolution) + " is not in [min_vertex_count, vertex_count] = [" + std::to_string(v.min_vertex_count) + ", " +
-                     std::to_string(v.vertex_count) + "]");
-        if (index_size != detail::coarse_index_size(resolution))
-            fail(sec->offset + c_index_size, field + " index_size", 19,
-                 "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + std::to_string(detail::coarse_index_size(resolution)));
-        if (triangles > v.triangle_count)
-            fail(sec->offset + c_triangle_count, field + " triangle_count", 19, std::to_string(triangles) + " is more than the mesh's " + std::to_string(v.triangle_count));
-        if (sec->bytes != coarse_header_bytes + uint64_t(triangles) * 3 * index_size)
-            fail(sec->offset, field, 19, std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(coarse_header_bytes + uint64_t(triangles) * 3 * index_size));
-        const uint8_t* corners = p + coarse_header_bytes;
-        for (uint32_t c = 0; c < triangles * 3; ++c) {
-            const uint32_t stored = index_size == 2 ? uint32_t(reinterpret_cast<const uint16_t*>(corners)[c]) : reinterpret_cast<const uint32_t*>(corners)[c];
-            const uint32_t expected = detail::map_corner(v, c, resolution);
-            if (stored != expected)
-                fail(sec->offset + coarse_header_bytes + uint64_t(c) * index_size, field + " corner " + std::to_string(c), 19,
-                     "value " + std::to_string(stored) + " is not corner " + std::to_string(c) + " mapped to resolution " + std::to_string(resolution) + " (" + std::to_string(expected) + ")");
-        }
-        if ((triangles > 0 && !detail::triangle_active(v, triangles - 1, resolution)) ||
-            (triangles < v.triangle_count && detail::triangle_active(v, triangles, resolution)))
-            fail(sec->offset + c_triangle_count, field + " triangle_count", 19,
-                 std::to_string(triangles) + " is not the number of triangles active at resolution " + std::to_string(resolution));
-        v.coarse_corners = corners;
-        v.coarse_resolution = resolution;
-        v.coarse_triangle_count = triangles;
-        v.coarse_index_size = index_size;
+    if (map.provenance) provenance = std::string_view(reinterpret_cast<const char*>(data + map.provenance->offset), map.provenance->bytes);
+    if (map.instances)
+        scene.instances = detail::decode_instances(data + map.instances->offset, map.instances->bytes, map.instances->offset, path, map.mesh_count);
+}
+
+// rule 19: coarse corners are exactly the active triangles' corners mapped to their resolution
+void File::Impl::validate_coarse(uint32_t mi, const SectionInfo& section) {
+    const SectionInfo* sec = &section;
+    MeshView& v = meshes[mi];
+    const std::string field = "mesh " + std::to_string(mi) + " COAR";
+    const uint8_t* p = data + sec->offset;
+    if (v.parts) fail(sec->offset, field, 19, "a mesh with parts has no coarse corners (they hold one prefix of TRIS)");
+    if (sec->bytes < coarse_header_bytes) fail(sec->offset, field, 19, "shorter than its 16-byte header");
+    const uint32_t resolution = load_u32(p + c_resolution), triangles = load_u32(p + c_triangle_count), index_size = load_u32(p + c_index_size);
+    if (resolution < v.min_vertex_count || resolution > v.vertex_count || resolution == 0)
+        fail(sec->offset + c_resolution, field + " resolution", 19,
+             std::to_string(resolution) + " is not in [min_vertex_count, vertex_count] = [" + std::to_string(v.min_vertex_count) + ", " +
+                 std::to_string(v.vertex_count) + "]");
+    if (index_size != detail::coarse_index_size(resolution))
+        fail(sec->offset + c_index_size, field + " index_size", 19,
+             "index size " + std::to_string(index_size) + " where resolution " + std::to_string(resolution) + " requires " + std::to_string(detail::coarse_index_size(resolution)));
+    if (triangles > v.triangle_count)
+        fail(sec->offset + c_triangle_count, field + " triangle_count", 19, std::to_string(triangles) + " is more than the mesh's " + std::to_string(v.triangle_count));
+    if (sec->bytes != coarse_header_bytes + uint64_t(triangles) * 3 * index_size)
+        fail(sec->offset, field, 19, std::to_string(sec->bytes) + " bytes where the counts require " + std::to_string(coarse_header_bytes + uint64_t(triangles) * 3 * index_size));
+    const uint8_t* corners = p + coarse_header_bytes;
+    for (uint32_t c = 0; c < triangles * 3; ++c) {
+        const uint32_t stored = index_size == 2 ? uint32_t(reinterpret_cast<const uint16_t*>(corners)[c]) : reinterpret_cast<const uint32_t*>(corners)[c];
+        const uint32_t expected = detail::map_corner(v, c, resolution);
+        if (stored != expected)
+            fail(sec->offset + coarse_header_bytes + uint64_t(c) * index_size, field + " corner " + std::to_string(c), 19,
+                 "value " + std::to_string(stored) + " is not corner " + std::to_string(c) + " mapped to resolution " + std::to_string(resolution) + " (" + std::to_string(expected) + ")");
     }
+    if ((triangles > 0 && !detail::triangle_active(v, triangles - 1, resolution)) ||
+        (triangles < v.triangle_count && detail::triangle_active(v, triangles, resolution)))
+        fail(sec->offset + c_triangle_count, field + " triangle_count", 19,
+             std::to_string(triangles) + " is not the number of triangles active at resolution " + std::to_string(resolution));
+    v.coarse_corners = corners;
+    v.coarse_resolution = resolution;
+    v.coarse_triangle_count = triangles;
+    v.coarse_index_size = index_size;
 }
 
 File::File(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
