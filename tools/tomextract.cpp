@@ -115,68 +115,72 @@ std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<u
     return levels;
 }
 
-} // namespace
-
-int main(int argc, char** argv) {
-    std::string path, output;
+struct Options {
+    std::string path, output, texture_dir;
     std::optional<double> fraction;
     std::optional<uint64_t> triangles, vertices;
     std::optional<uint32_t> mesh_index;
-    CLI::App app{"tomextract: write the meshes of a .tom file at one resolution as OBJ or PLY"};
-    app.set_version_flag("--version", "tomextract 0.1.0");
-    app.add_option("file", path, "A .tom file")->required();
-    auto* f = app.add_option("-f,--fraction", fraction, "Fraction of each mesh's triangles, in [0,1]")->check(CLI::Range(0.0, 1.0));
-    auto* t = app.add_option("-t,--triangles", triangles,
-                             "Triangle count (for several meshes: in total, shared in proportion; a mesh at its floor keeps it and "
-                             "the others give up what it takes beyond its share)");
-    auto* v = app.add_option("-n,--vertices", vertices, "Vertex count (per mesh, clamped to its range)");
-    f->excludes(t)->excludes(v);
-    t->excludes(v);
-    std::vector<double> lods;
-    auto* l = app.add_option("--lods", lods, "Levels in % of the triangles, finest first, into one .glb with MSFT_lod (e.g. 100,50,25,10)")
-                  ->delimiter(',')
-                  ->check(CLI::Range(0.0, 100.0));
-    l->excludes(f)->excludes(t)->excludes(v);
+    std::vector<double> lods, scene_budgets;
     std::string max_error_text, metric = "max";
     std::vector<std::string> lods_error_text;
     std::optional<double> max_error_px, distance, fov_deg;
     std::optional<uint32_t> height;
-    auto* by_max_error = app.add_option("--max-error", max_error_text,
+    bool below_floor = false, embed_images = false, compress = false;
+    std::vector<double> error_bounds;  // --max-error, --lods-error: fractions of each mesh's diagonal
+
+    bool by_error() const { return !error_bounds.empty() || max_error_px.has_value(); }
+    tom::Floor floor() const { return below_floor ? tom::Floor::coarsest : tom::Floor::usable; }
+    bool glb() const { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); }
+    bool wanted(uint32_t mesh) const { return !mesh_index || *mesh_index == mesh; }
+};
+
+// Parses the command line into `o`; an exit code when done (help, version, usage error), else -1.
+int parse_options(Options& o, int argc, char** argv) {
+    CLI::App app{"tomextract: write the meshes of a .tom file at one resolution as OBJ or PLY"};
+    app.set_version_flag("--version", "tomextract 0.1.0");
+    app.add_option("file", o.path, "A .tom file")->required();
+    auto* f = app.add_option("-f,--fraction", o.fraction, "Fraction of each mesh's triangles, in [0,1]")->check(CLI::Range(0.0, 1.0));
+    auto* t = app.add_option("-t,--triangles", o.triangles,
+                             "Triangle count (for several meshes: in total, shared in proportion; a mesh at its floor keeps it and "
+                             "the others give up what it takes beyond its share)");
+    auto* v = app.add_option("-n,--vertices", o.vertices, "Vertex count (per mesh, clamped to its range)");
+    f->excludes(t)->excludes(v);
+    t->excludes(v);
+    auto* l = app.add_option("--lods", o.lods, "Levels in % of the triangles, finest first, into one .glb with MSFT_lod (e.g. 100,50,25,10)")
+                  ->delimiter(',')
+                  ->check(CLI::Range(0.0, 100.0));
+    l->excludes(f)->excludes(t)->excludes(v);
+    auto* by_max_error = app.add_option("--max-error", o.max_error_text,
                              "Each mesh at its coarsest level whose measured error (the stored error curve) is at most E: a fraction of the "
                              "mesh's diagonal, or a percentage (0.5%)");
-    auto* le = app.add_option("--lods-error", lods_error_text, "Levels by error, finest first, into one .glb with MSFT_lod (e.g. 0.1%,0.5%,2%)")->delimiter(',');
-    auto* px = app.add_option("--max-error-px", max_error_px, "The error bound in pixels on screen, with --distance, --fov and --height")->check(CLI::PositiveNumber);
-    app.add_option("--distance", distance, "With --max-error-px: the distance from the eye, in the mesh's units")->check(CLI::PositiveNumber);
-    app.add_option("--fov", fov_deg, "With --max-error-px: the vertical field of view in degrees")->check(CLI::Range(0.01, 179.0));
-    app.add_option("--height", height, "With --max-error-px: the viewport's height in pixels")->check(CLI::Range(1u, 1000000u));
-    app.add_option("--error-metric", metric, "What --max-error bounds: max (the Hausdorff distance, default) or mean (Metro's mean)")
+    auto* le = app.add_option("--lods-error", o.lods_error_text, "Levels by error, finest first, into one .glb with MSFT_lod (e.g. 0.1%,0.5%,2%)")->delimiter(',');
+    auto* px = app.add_option("--max-error-px", o.max_error_px, "The error bound in pixels on screen, with --distance, --fov and --height")->check(CLI::PositiveNumber);
+    app.add_option("--distance", o.distance, "With --max-error-px: the distance from the eye, in the mesh's units")->check(CLI::PositiveNumber);
+    app.add_option("--fov", o.fov_deg, "With --max-error-px: the vertical field of view in degrees")->check(CLI::Range(0.01, 179.0));
+    app.add_option("--height", o.height, "With --max-error-px: the viewport's height in pixels")->check(CLI::Range(1u, 1000000u));
+    app.add_option("--error-metric", o.metric, "What --max-error bounds: max (the Hausdorff distance, default) or mean (Metro's mean)")
         ->check(CLI::IsMember({"max", "mean"}));
-    std::vector<double> scene_budgets;
-    auto* sb = app.add_option("--scene-budget", scene_budgets,
+    auto* sb = app.add_option("--scene-budget", o.scene_budgets,
                               "The whole scene in N triangles drawn (each mesh's count times its instances), shared among its meshes so that "
                               "their summed error (weighted by instances and size) is least; several, finest first, write a .glb chain "
                               "(e.g. 200000,50000,10000)")
                    ->delimiter(',')
                    ->check(CLI::PositiveNumber);
-    for (auto* o : {by_max_error, le, px, sb}) o->excludes(f)->excludes(t)->excludes(v)->excludes(l);
+    for (auto* bound : {by_max_error, le, px, sb}) bound->excludes(f)->excludes(t)->excludes(v)->excludes(l);
     sb->excludes(by_max_error)->excludes(le)->excludes(px);
     by_max_error->excludes(le)->excludes(px);
     le->excludes(px);
-    bool below_floor = false;
-    app.add_flag("--below-floor", below_floor,
+    app.add_flag("--below-floor", o.below_floor,
                  "Let --fraction, --triangles, --lods, the error bounds and --scene-budget go below each mesh's usable floor (tombuild --floor-error) "
                  "to the coarsest level of its chain; --vertices always may");
-    app.add_option("-m,--mesh", mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
-    app.add_option("-o,--output", output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
-    std::string texture_dir;
-    app.add_option("--texture-dir", texture_dir,
+    app.add_option("-m,--mesh", o.mesh_index, "Only this mesh (index as tominfo lists it); default: all meshes in one file");
+    app.add_option("-o,--output", o.output, "Output .obj, .ply or .glb (binary glTF, with the file's materials and instances)")->required();
+    app.add_option("--texture-dir", o.texture_dir,
                    "For .glb and .obj: the folder the stored texture URIs are relative to (default: the source asset's, from the manifest "
                    "tombuild wrote beside the .tom); they are rewritten relative to the output");
-    bool embed_images = false;
-    app.add_flag("--embed-images", embed_images,
+    app.add_flag("--embed-images", o.embed_images,
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
-    bool compress = false;
-    app.add_flag("-c,--compress", compress,
+    app.add_flag("-c,--compress", o.compress,
                  "For .glb: quantize the vertex streams (KHR_mesh_quantization) and compress vertex and index data "
                  "(EXT_meshopt_compression), as gltfpack -c does; both extensions are then required");
     app.footer("Exit codes: 0 ok, 1 unreadable input or unwritable output, 2 usage error.\n"
@@ -184,171 +188,181 @@ int main(int argc, char** argv) {
                "          tomextract out/bunny00.tom --max-error 0.5% -o bunny-half-percent.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb\n"
                "          tomextract out/scene.tom --scene-budget 20000 -o scene-20k.glb");
-    if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
-    // the error bounds, as fractions of each mesh's diagonal (pixels: converted per mesh below)
-    std::vector<double> error_bounds;
+    return tools::parse(app, argc, argv);
+}
+
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "error: %s\n", message.c_str());
+    return tools::exit_usage;
+}
+
+// The options that CLI11 cannot check alone, the error bounds parsed; an exit code when they do
+// not hold, else -1.
+int check_options(Options& o) {
     try {
-        if (!max_error_text.empty()) error_bounds.push_back(tools::parse_fraction(max_error_text, "--max-error"));
-        for (const std::string& text : lods_error_text) error_bounds.push_back(tools::parse_fraction(text, "--lods-error"));
+        if (!o.max_error_text.empty()) o.error_bounds.push_back(tools::parse_fraction(o.max_error_text, "--max-error"));
+        for (const std::string& text : o.lods_error_text) o.error_bounds.push_back(tools::parse_fraction(text, "--lods-error"));
     } catch (const std::invalid_argument& bad) {
-        std::fprintf(stderr, "error: %s\n", bad.what());
-        return tools::exit_usage;
+        return usage_error(bad.what());
     }
-    if (max_error_px && (!distance || !fov_deg || !height)) {
-        std::fprintf(stderr, "error: --max-error-px needs --distance, --fov and --height\n");
-        return tools::exit_usage;
+    if (o.max_error_px && (!o.distance || !o.fov_deg || !o.height)) return usage_error("--max-error-px needs --distance, --fov and --height");
+    if (!o.fraction && !o.triangles && !o.vertices && o.lods.empty() && !o.by_error() && o.scene_budgets.empty())
+        return usage_error("give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px, --lods-error or --scene-budget");
+    const std::string not_glb = "'" + o.output + "' is not one";
+    if (o.compress && !o.glb()) return usage_error("-c compresses a .glb; " + not_glb);
+    if (o.embed_images && !o.glb()) return usage_error("--embed-images writes images into a .glb; " + not_glb);
+    if (!o.lods_error_text.empty() && !o.glb()) return usage_error("--lods-error writes a .glb (MSFT_lod); " + not_glb);
+    if (o.scene_budgets.size() > 1 && !o.glb()) return usage_error("several --scene-budget values write a .glb (MSFT_lod); " + not_glb);
+    if (!o.lods.empty() && !o.glb()) return usage_error("--lods writes a .glb (MSFT_lod); " + not_glb);
+    return -1;
+}
+
+// Mesh m's resolution for bound k of the error bounds (or the pixel bound), from its stored curve.
+uint32_t level_for_error(const Options& o, const tom::MeshView& m, size_t k) {
+    const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m);
+    if (!curve) throw tom::ArgumentError(o.path + ": mesh '" + std::string(m.name) + "' has no stored error curve (it was built with --no-error-curve)");
+    double bound = 0;
+    if (o.max_error_px) {
+        const double pixel = 2.0 * *o.distance * std::tan(*o.fov_deg * 3.14159265358979323846 / 360.0) / double(*o.height);  // object units a pixel spans
+        bound = curve->diagonal > 0 ? *o.max_error_px * pixel / double(curve->diagonal) : 0.0;
+    } else {
+        bound = o.error_bounds[k];
     }
-    const bool by_error = !error_bounds.empty() || max_error_px.has_value();
-    if (!fraction && !triangles && !vertices && lods.empty() && !by_error && scene_budgets.empty()) {
-        std::fprintf(stderr, "error: give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px, --lods-error or --scene-budget\n");
-        return tools::exit_usage;
+    return tom::vertex_count_for_error(m, *curve, bound, o.metric == "max", o.floor());
+}
+
+// --scene-budget: each budget's share, a resolution per wanted mesh (file order).
+std::vector<std::vector<uint32_t>> share_scene_budgets(const tom::File& file, const Options& o) {
+    std::vector<std::vector<uint32_t>> levels;
+    for (const double budget : o.scene_budgets) {
+        const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, o.mesh_index, o.floor(), o.path), budget);
+        if (share.feasible)
+            std::printf("%s: scene budget %.0f triangles: %.0f drawn, summed error %.6g (weighted), certified within %.2f%% of the optimum\n",
+                        o.path.c_str(), budget, share.drawn, share.error, 100.0 * share.gap);
+        else
+            std::fprintf(stderr, "warning: %s: the meshes' floors draw %.0f triangles, more than the budget of %.0f; each is at its floor\n",
+                         o.path.c_str(), share.drawn, budget);
+        levels.push_back(share.vertex_counts);
     }
-    const tom::Floor floor = below_floor ? tom::Floor::coarsest : tom::Floor::usable;
-    // mesh m's resolution for bound k of error_bounds (or the pixel bound), from its stored curve
-    auto level_for_error = [&](const tom::MeshView& m, size_t k) {
-        const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m);
-        if (!curve) throw tom::ArgumentError(path + ": mesh '" + std::string(m.name) + "' has no stored error curve (it was built with --no-error-curve)");
-        double bound = 0;
-        if (max_error_px) {
-            const double pixel = 2.0 * *distance * std::tan(*fov_deg * 3.14159265358979323846 / 360.0) / double(*height);  // object units a pixel spans
-            bound = curve->diagonal > 0 ? *max_error_px * pixel / double(curve->diagonal) : 0.0;
+    return levels;
+}
+
+// --triangles: the proportional share, a resolution per wanted mesh (file order); warns when the
+// floors hold more.
+std::vector<uint32_t> share_triangles(const tom::File& file, const Options& o) {
+    const std::vector<uint32_t> shared = proportional_levels(file, o.mesh_index, o.floor(), *o.triangles);
+    uint64_t total = 0;
+    for (size_t k = 0, i = 0; i < file.mesh_count(); ++i)
+        if (o.wanted(uint32_t(i))) total += tom::active_triangle_count(file.mesh(uint32_t(i)), shared[k++]);
+    if (total > *o.triangles)
+        std::fprintf(stderr, "warning: %s: the meshes' floors hold %llu triangles, more than the %llu asked for; each is at its floor\n",
+                     o.path.c_str(), static_cast<unsigned long long>(total), static_cast<unsigned long long>(*o.triangles));
+    return shared;
+}
+
+// Each wanted mesh's resolutions, finest first (one unless a chain of levels was asked), by
+// whichever option chose them.
+std::vector<std::vector<uint32_t>> choose_levels(const tom::File& file, const Options& o) {
+    const std::vector<std::vector<uint32_t>> budget_levels = share_scene_budgets(file, o);
+    const std::vector<uint32_t> shared = o.triangles ? share_triangles(file, o) : std::vector<uint32_t>();
+    std::vector<std::vector<uint32_t>> levels;
+    for (uint32_t i = 0, k = 0; i < file.mesh_count(); ++i) {
+        if (!o.wanted(i)) continue;
+        const tom::MeshView& m = file.mesh(i);
+        std::vector<uint32_t> n;
+        if (!o.lods.empty()) {
+            for (double pct : o.lods) n.push_back(tom::vertex_count_for_fraction(m, pct / 100.0, o.floor()));
+        } else if (o.by_error()) {
+            for (size_t b = 0; b < std::max<size_t>(1, o.error_bounds.size()); ++b) n.push_back(level_for_error(o, m, b));
+        } else if (!budget_levels.empty()) {
+            for (const std::vector<uint32_t>& budget : budget_levels) n.push_back(budget[k]);
+        } else if (o.fraction) {
+            n.push_back(tom::vertex_count_for_fraction(m, *o.fraction, o.floor()));
+        } else if (o.triangles) {
+            n.push_back(shared[k]);
         } else {
-            bound = error_bounds[k];
+            n.push_back(uint32_t(std::min<uint64_t>(*o.vertices, m.vertex_count)));
         }
-        return tom::vertex_count_for_error(m, *curve, bound, metric == "max", floor);
-    };
-    auto is_glb = [&] { return output.size() > 4 && (output.substr(output.size() - 4) == ".glb" || output.substr(output.size() - 4) == ".GLB"); };
-    if (compress && !is_glb()) {
-        std::fprintf(stderr, "error: -c compresses a .glb; '%s' is not one\n", output.c_str());
-        return tools::exit_usage;
+        levels.push_back(std::move(n));
+        ++k;
     }
-    if (embed_images && !is_glb()) {
-        std::fprintf(stderr, "error: --embed-images writes images into a .glb; '%s' is not one\n", output.c_str());
-        return tools::exit_usage;
+    return levels;
+}
+
+// A .glb of the wanted meshes at their levels (MSFT_lod for a chain), with the scene.
+void write_glb(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+    std::vector<tom::GlbMesh> glb;
+    uint64_t written = 0;
+    tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
+    if (o.mesh_index) {
+        scene.gltf = tom::SourceGltf{};  // the source's node tree names every mesh: one mesh gets its instances' nodes
+        std::vector<tom::Instance> kept;
+        for (tom::Instance inst : scene.instances)
+            if (inst.mesh == *o.mesh_index) inst.mesh = 0, kept.push_back(inst);
+        scene.instances.swap(kept);
     }
-    if (!lods_error_text.empty() && !is_glb()) {
-        std::fprintf(stderr, "error: --lods-error writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
-        return tools::exit_usage;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+        if (!o.wanted(i)) continue;
+        tom::GlbMesh g;
+        g.mesh = &file.mesh(i);
+        g.vertex_counts = levels[glb.size()];
+        written += tom::active_triangle_count(*g.mesh, g.vertex_counts.front());
+        glb.push_back(g);
     }
-    if (scene_budgets.size() > 1 && !is_glb()) {
-        std::fprintf(stderr, "error: several --scene-budget values write a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
-        return tools::exit_usage;
+    tom::export_glb(o.output, glb, scene, o.texture_dir, o.embed_images, o.compress);
+    const size_t level_count = glb.empty() ? 0 : glb.front().vertex_counts.size();
+    const size_t instances = tom::draw_list(scene, uint32_t(glb.size())).size();
+    std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", o.path.c_str(), glb.size(),
+                glb.size() == 1 ? "" : "es", level_count, level_count == 1 ? "" : "s", static_cast<unsigned long long>(written),
+                scene.materials.size(), scene.materials.size() == 1 ? "" : "s", instances, instances == 1 ? "" : "s", o.output.c_str());
+}
+
+// An OBJ or PLY of the wanted meshes, each at its (first) level.
+void write_meshes(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+    std::vector<tom::ExportPart> parts;
+    uint64_t out_tris = 0, out_verts = 0, total_tris = 0;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) {
+        if (!o.wanted(i)) continue;
+        const tom::MeshView& m = file.mesh(i);
+        const uint32_t n = levels[parts.size()].front();
+        total_tris += m.triangle_count;
+        tom::ExportPart part;
+        part.mesh = &m;
+        part.indices.resize(size_t(tom::active_triangle_count(m, n)) * 3);
+        part.draws.resize(tom::part_count(m));
+        const tom::Extracted r = tom::extract_parts(m, n, part.indices.data(), part.indices.size(), part.draws.data());
+        part.vertex_count = r.vertex_count;
+        part.indices.resize(size_t(r.triangle_count) * 3);
+        out_tris += r.triangle_count;
+        out_verts += r.vertex_count;
+        parts.push_back(std::move(part));
     }
-    if (!lods.empty() && !is_glb()) {
-        std::fprintf(stderr, "error: --lods writes a .glb (MSFT_lod); '%s' is not one\n", output.c_str());
-        return tools::exit_usage;
-    }
+    tom::export_meshes(o.output, parts, file.scene(), o.texture_dir);
+    std::printf("%s: %zu mesh%s, %llu vertices, %llu triangles (%.2f%% of %llu) -> %s\n", o.path.c_str(), parts.size(), parts.size() == 1 ? "" : "es",
+                static_cast<unsigned long long>(out_verts), static_cast<unsigned long long>(out_tris),
+                total_tris ? 100.0 * double(out_tris) / double(total_tris) : 0.0, static_cast<unsigned long long>(total_tris), o.output.c_str());
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    if (const int code = parse_options(o, argc, argv); code >= 0) return code;
+    if (const int code = check_options(o); code >= 0) return code;
     try {
-        const tom::File file = tom::File::open(path);
-        if (texture_dir.empty()) texture_dir = source_folder(path, file.scene());
-        if (const std::filesystem::path parent = std::filesystem::path(output).parent_path(); !parent.empty()) {
+        const tom::File file = tom::File::open(o.path);
+        if (o.mesh_index && *o.mesh_index >= file.mesh_count())
+            return usage_error(o.path + " has " + std::to_string(file.mesh_count()) + " meshes; --mesh " + std::to_string(*o.mesh_index) + " does not exist");
+        if (o.texture_dir.empty()) o.texture_dir = source_folder(o.path, file.scene());
+        if (const std::filesystem::path parent = std::filesystem::path(o.output).parent_path(); !parent.empty()) {
             std::error_code ec;
             std::filesystem::create_directories(parent, ec);  // a failure shows when the file is written
         }
-        if (mesh_index && *mesh_index >= file.mesh_count()) {
-            std::fprintf(stderr, "error: %s has %u meshes; --mesh %u does not exist\n", path.c_str(), file.mesh_count(), *mesh_index);
-            return tools::exit_usage;
-        }
-        uint64_t total_tris = 0;
-        for (uint32_t i = 0; i < file.mesh_count(); ++i)
-            if (!mesh_index || *mesh_index == i) total_tris += file.mesh(i).triangle_count;
-        // --scene-budget: each budget's share, a resolution per mesh (file order, --mesh's alone)
-        std::vector<std::vector<uint32_t>> budget_levels;
-        for (const double budget : scene_budgets) {
-            const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, mesh_index, floor, path), budget);
-            if (share.feasible)
-                std::printf("%s: scene budget %.0f triangles: %.0f drawn, summed error %.6g (weighted), certified within %.2f%% of the optimum\n",
-                            path.c_str(), budget, share.drawn, share.error, 100.0 * share.gap);
-            else
-                std::fprintf(stderr, "warning: %s: the meshes' floors draw %.0f triangles, more than the budget of %.0f; each is at its floor\n",
-                             path.c_str(), share.drawn, budget);
-            budget_levels.push_back(share.vertex_counts);
-        }
-        auto budget_level = [&](uint32_t i, size_t k) { return budget_levels[k][mesh_index ? 0 : i]; };
-        // --triangles: the proportional share
-        std::vector<uint32_t> shared;
-        if (triangles) {
-            shared = proportional_levels(file, mesh_index, floor, *triangles);
-            uint64_t total = 0;
-            for (size_t k = 0, i = 0; i < file.mesh_count(); ++i)
-                if (!mesh_index || *mesh_index == i) total += tom::active_triangle_count(file.mesh(uint32_t(i)), shared[k++]);
-            if (total > *triangles)
-                std::fprintf(stderr, "warning: %s: the meshes' floors hold %llu triangles, more than the %llu asked for; each is at its floor\n",
-                             path.c_str(), static_cast<unsigned long long>(total), static_cast<unsigned long long>(*triangles));
-        }
-        auto shared_level = [&](uint32_t i) { return shared[mesh_index ? 0 : i]; };
-        if (is_glb()) {
-            std::vector<tom::GlbMesh> glb;
-            uint64_t written = 0;
-            tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
-            if (mesh_index) {
-                scene.gltf = tom::SourceGltf{};  // the source's node tree names every mesh: one mesh gets its instances' nodes
-                std::vector<tom::Instance> kept;
-                for (tom::Instance inst : scene.instances)
-                    if (inst.mesh == *mesh_index) inst.mesh = 0, kept.push_back(inst);
-                scene.instances.swap(kept);
-            }
-            for (uint32_t i = 0; i < file.mesh_count(); ++i) {
-                if (mesh_index && *mesh_index != i) continue;
-                const tom::MeshView& m = file.mesh(i);
-                tom::GlbMesh g;
-                g.mesh = &m;
-                if (!lods.empty()) {
-                    for (double pct : lods) g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, pct / 100.0, floor));
-                } else if (by_error) {
-                    for (size_t k = 0; k < std::max<size_t>(1, error_bounds.size()); ++k) g.vertex_counts.push_back(level_for_error(m, k));
-                } else if (!budget_levels.empty()) {
-                    for (size_t k = 0; k < budget_levels.size(); ++k) g.vertex_counts.push_back(budget_level(i, k));
-                } else if (fraction) {
-                    g.vertex_counts.push_back(tom::vertex_count_for_fraction(m, *fraction, floor));
-                } else if (triangles) {
-                    g.vertex_counts.push_back(shared_level(i));
-                } else {
-                    g.vertex_counts.push_back(uint32_t(std::min<uint64_t>(*vertices, m.vertex_count)));
-                }
-                written += tom::active_triangle_count(m, g.vertex_counts.front());
-                glb.push_back(g);
-            }
-            tom::export_glb(output, glb, scene, texture_dir, embed_images, compress);
-            const size_t level_count = glb.empty() ? 0 : glb.front().vertex_counts.size();
-            std::printf("%s: %zu mesh%s, %zu level%s, %llu triangles at the finest, %zu material%s, %zu instance%s -> %s\n", path.c_str(), glb.size(),
-                        glb.size() == 1 ? "" : "es", level_count, level_count == 1 ? "" : "s",
-                        static_cast<unsigned long long>(written), scene.materials.size(), scene.materials.size() == 1 ? "" : "s",
-                        tom::draw_list(scene, uint32_t(glb.size())).size(), tom::draw_list(scene, uint32_t(glb.size())).size() == 1 ? "" : "s",
-                        output.c_str());
-            return tools::exit_ok;
-        }
-        std::vector<tom::ExportPart> parts;
-        uint64_t out_tris = 0, out_verts = 0;
-        for (uint32_t i = 0; i < file.mesh_count(); ++i) {
-            if (mesh_index && *mesh_index != i) continue;
-            const tom::MeshView& m = file.mesh(i);
-            uint32_t n;
-            if (by_error)
-                n = level_for_error(m, 0);
-            else if (!budget_levels.empty())
-                n = budget_level(i, 0);
-            else if (fraction)
-                n = tom::vertex_count_for_fraction(m, *fraction, floor);
-            else if (triangles)
-                n = shared_level(i);
-            else
-                n = uint32_t(std::min<uint64_t>(*vertices, m.vertex_count));
-            tom::ExportPart part;
-            part.mesh = &m;
-            part.indices.resize(size_t(tom::active_triangle_count(m, n)) * 3);
-            part.draws.resize(tom::part_count(m));
-            const tom::Extracted r = tom::extract_parts(m, n, part.indices.data(), part.indices.size(), part.draws.data());
-            part.vertex_count = r.vertex_count;
-            part.indices.resize(size_t(r.triangle_count) * 3);
-            out_tris += r.triangle_count;
-            out_verts += r.vertex_count;
-            parts.push_back(std::move(part));
-        }
-        tom::export_meshes(output, parts, file.scene(), texture_dir);
-        std::printf("%s: %zu mesh%s, %llu vertices, %llu triangles (%.2f%% of %llu) -> %s\n", path.c_str(), parts.size(),
-                    parts.size() == 1 ? "" : "es", static_cast<unsigned long long>(out_verts), static_cast<unsigned long long>(out_tris),
-                    total_tris ? 100.0 * double(out_tris) / double(total_tris) : 0.0, static_cast<unsigned long long>(total_tris), output.c_str());
+        const std::vector<std::vector<uint32_t>> levels = choose_levels(file, o);
+        if (o.glb())
+            write_glb(file, o, levels);
+        else
+            write_meshes(file, o, levels);
         return tools::exit_ok;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
