@@ -296,12 +296,8 @@ void mesh_properties(Class& c, ViewOf view_of) {
              }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc);
 }
 
-} // namespace
-
-PYBIND11_MODULE(_tom, m) {
-    m.doc() = "Totally Ordered Meshes: .tom files, extraction at any resolution, building and reports.";
-
-    // errors: tom.Error and one subclass per kind the library throws, with its message
+// tom.Error and one subclass per kind the library throws, with its message.
+void add_errors(py::module_& m) {
     static py::exception<tom::Error> error(m, "Error");
     static py::exception<tom::FormatError> format_error(m, "FormatError", error.ptr());
     static py::exception<tom::MeshError> import_error(m, "MeshError", error.ptr());
@@ -326,6 +322,10 @@ PYBIND11_MODULE(_tom, m) {
         }
     });
 
+}
+
+// tom.File, tom.FileMesh, tom.open and tom.open_bytes: mapped files and views into them.
+void add_files(py::module_& m) {
     py::class_<FileHolder, std::shared_ptr<FileHolder>> file(m, "File", "A validated .tom file, mapped read-only; its arrays keep it alive.");
     py::class_<FileMesh> file_mesh(m, "FileMesh", "One mesh of a .tom file. Its arrays are views into the file: no copy.");
     mesh_properties(file_mesh, [](py::object self) -> const tom::MeshView& { return self.cast<const FileMesh&>().view(); });
@@ -388,7 +388,10 @@ PYBIND11_MODULE(_tom, m) {
         tom::File f = tom::File::borrow(info.ptr, size_t(info.size), name);
         return std::make_shared<FileHolder>(FileHolder{std::move(f), bytes});
     }, py::arg("data"), py::arg("name") = "<memory>", "Validates a .tom image in a bytes-like object and uses it in place (it is kept alive and must not change).");
+}
 
+// tom.Mesh, tom.BuiltMesh, tom.import_file, tom.build, tom.serialize, tom.write, tom.report.
+void add_building(py::module_& m) {
     py::class_<SourceMesh>(m, "Mesh", "A source mesh: positions, triangles and optional normals and uv, as imported or given.")
         .def(py::init([](py::object positions, py::object triangles, py::object normals, py::object uv, const std::string& name) {
                  return SourceMesh{make_mesh(positions, triangles, normals, uv, name)};
@@ -455,9 +458,11 @@ PYBIND11_MODULE(_tom, m) {
         return report(*original.mesh, b, levels, error_curve);
     }, py::arg("original"), py::arg("built"), py::arg("levels") = std::vector<double>{0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005}, py::arg("error_curve") = true,
        "Metro-style report of a built mesh against the tom.Mesh it was built from, as a dict with the figures of tombuild's JSON report (docs/REPORT.md).");
+}
 
-    // for scripts/bench-bindings.py: seconds per call of `batch` extractions through the C++ or
-    // the C API, in this process, so that its rounds interleave with the Python calls'
+// For scripts/bench-bindings.py: seconds per call of `batch` extractions through the C++ or the
+// C API, in this process, so that its rounds interleave with the Python calls'.
+void add_bench(py::module_& m) {
     m.def("_bench_native", [](const FileMesh& mesh, uint32_t vertices, py::array_t<uint32_t, py::array::c_style> out, int batch, const std::string& api) {
         const tom::MeshView& v = mesh.view();
         tom_mesh_view c{};
@@ -480,7 +485,16 @@ PYBIND11_MODULE(_tom, m) {
         }
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / batch;
     });
+}
 
+} // namespace
+
+PYBIND11_MODULE(_tom, m) {
+    m.doc() = "Totally Ordered Meshes: .tom files, extraction at any resolution, building and reports.";
+    add_errors(m);
+    add_files(m);
+    add_building(m);
+    add_bench(m);
     m.attr("format_version") = py::make_tuple(tom::format_version_major, tom::format_version_minor);
     py::module_ tcr = m.def_submodule("tcr", "Time-critical rendering (libtcr): each frame, every object's resolution within a time budget.");
     tom_python::add_tcr(tcr);
