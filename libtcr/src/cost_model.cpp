@@ -76,7 +76,7 @@ CalibrationResult fit_cost_model(const std::vector<CostSample>& samples) {
     CostModel model;
     // relative errors: each sample's row divided by its time, so objects of a few hundred
     // triangles count as much as those of tens of thousands (absolute residuals let the largest
-    // samples decide and left the small ones off by 50-180% on llvmpipe); times below a
+    // samples decide and leave the small ones far off); times below a
     // thousandth of the largest are weighted as that
     double longest = 0;
     for (const CostSample& s : samples) longest = std::max(longest, s.time_ms);

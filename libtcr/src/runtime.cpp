@@ -372,7 +372,8 @@ void Runtime::add_ways(uint32_t id, size_t k, const FrameParams& params, double 
 // choice of it: for each n of w, the smooth resolution of the same error, n / (A_w / A)^(1/m),
 // (or the smooth lo, when that is below it) costs no more. Costs are linear in n on the ranges,
 // so the ends decide. A dominated way is never in an optimal plan; leaving it out makes the
-// frame's problem smaller (flat shading on llvmpipe: barely cheaper a triangle, twice the error).
+// frame's problem smaller (a software rasterizer's flat shading, barely cheaper a triangle at
+// twice the error, is such a way).
 bool Runtime::dominated_by_smooth(const Way& w, size_t k) const noexcept {
     const double A = problem_.error[k], a = problem_.per_tri_ms[k], s = problem_.setup_ms[k], lo = problem_.lo[k];
     if (!(A > 0) || w.error < A || w.m != problem_.m) return false;

@@ -192,9 +192,9 @@ struct Renderer::Impl {
     std::vector<Mesh> meshes;
     // Imposter textures: square cells of power-of-two sides in the layers of 2D array textures
     // (chunks of kChunkLayers layers of kPageSide square), so a frame's imposters bind one
-    // texture per chunk, not one each: on llvmpipe a quad costs 0.004 ms from one texture and
-    // 0.2 ms with sixteen in turn (tcrwalk --calibrate). A slot keeps its cell until it needs
-    // another side; a cell freed is reused whole, at its side.
+    // texture per chunk, not one each (binding a texture per quad costs llvmpipe about fifty
+    // times the quad). A slot keeps its cell until it needs another side; a cell freed is reused
+    // whole, at its side.
     static constexpr uint32_t kPageSide = 256, kChunkLayers = 32, kMinCell = 16, kLevels = 5;  // cells of 16 to 256
     struct Cell {
         uint32_t chunk = 0, layer = 0, x = 0, y = 0, side = 0;  // side 0: none
@@ -524,10 +524,10 @@ void Renderer::render(const float view[16], const float projection[16], const st
         g.draw_meshes(g.textured, vp, draws, int32_t(c), Shading::textured);
         g.keep_depth_mesh(cap, cell);
     }
-    // The captures finished before the frame: left to llvmpipe's queue, they made the *next*
-    // frame's draws stall now and then (60 to 120 ms frames at a 40 ms budget, a few in 300,
-    // right after frames with captures, in whichever selector drew next); finished here, none
-    // over 53 ms in three runs. The wait is in the frame's time, as the refresh's cost.
+    // The captures finished before the frame: left to llvmpipe's queue, they make the *next*
+    // frame's draws stall now and then (frames of 1.5 to 3 times the budget right after frames
+    // with captures, in whichever selector draws next). The wait is in the frame's time, as the
+    // refresh's cost.
     if (!captures.empty()) glFinish();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glViewport(0, 0, GLsizei(width_), GLsizei(height_));
