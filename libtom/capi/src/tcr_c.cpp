@@ -135,6 +135,19 @@ tcr_frame_report to_c(const tcr::FrameReport& r) {
     return c;
 }
 
+// A frame planned by the runtime or the governor (both have plan_frame(FrameParams)), its
+// report converted; `function` and `what` name the call and its first argument in errors.
+template <class Planner>
+tom_status plan_frame(const char* function, const char* what, Planner* planner, const tcr_frame_params* params, tcr_frame_report* report) {
+    if (!planner) return null_argument(function, what);
+    if (!params) return null_argument(function, "params");
+    return guarded([&] {
+        const tcr::FrameReport& r = planner->plan_frame(to_cpp(*params));
+        if (report) *report = to_c(r);
+        return TOM_OK;
+    });
+}
+
 bool valid_selector(tcr_selector s) { return s >= TCR_SELECTOR_STATIC && s <= TCR_SELECTOR_EXACT; }
 
 tom_status object_out_of_range(const char* function, const tcr_runtime* rt, uint32_t id) {
@@ -198,13 +211,7 @@ tom_status tcr_runtime_set_transform(tcr_runtime* runtime, uint32_t id, const fl
 uint32_t tcr_runtime_object_count(const tcr_runtime* runtime) { return runtime ? uint32_t(runtime->runtime.object_count()) : 0; }
 
 tom_status tcr_runtime_plan_frame(tcr_runtime* runtime, const tcr_frame_params* params, tcr_frame_report* report) {
-    if (!runtime) return null_argument("tcr_runtime_plan_frame", "runtime");
-    if (!params) return null_argument("tcr_runtime_plan_frame", "params");
-    return guarded([&] {
-        const tcr::FrameReport& r = runtime->runtime.plan_frame(to_cpp(*params));
-        if (report) *report = to_c(r);
-        return TOM_OK;
-    });
+    return plan_frame("tcr_runtime_plan_frame", "runtime", runtime ? &runtime->runtime : nullptr, params, report);
 }
 
 tom_status tcr_runtime_object(const tcr_runtime* runtime, uint32_t id, tcr_object_result* out) {
@@ -257,13 +264,7 @@ tom_status tcr_governor_create(tcr_runtime* runtime, const tcr_cost_model* calib
 void tcr_governor_destroy(tcr_governor* governor) { delete governor; }
 
 tom_status tcr_governor_plan_frame(tcr_governor* governor, const tcr_frame_params* params, tcr_frame_report* report) {
-    if (!governor) return null_argument("tcr_governor_plan_frame", "governor");
-    if (!params) return null_argument("tcr_governor_plan_frame", "params");
-    return guarded([&] {
-        const tcr::FrameReport& r = governor->governor.plan_frame(to_cpp(*params));
-        if (report) *report = to_c(r);
-        return TOM_OK;
-    });
+    return plan_frame("tcr_governor_plan_frame", "governor", governor ? &governor->governor : nullptr, params, report);
 }
 
 tom_status tcr_governor_frame_done(tcr_governor* governor, double extract_ms, double render_ms, double frame_ms) {
