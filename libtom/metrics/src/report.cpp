@@ -136,7 +136,7 @@ void check(const Mesh& original, const TomMesh& built) {
 // that the floor lies within 1/64 of it. measure(n, point, diagonal) measures resolution n.
 template <class Measure>
 void refine_floor(ErrorCurve& c, double bound, Measure&& measure) {
-    auto within = [&](const ErrorCurvePoint& p) { return p.triangles > 0 && double(p.mean) <= bound; };
+    auto within = [&](const ErrorCurvePoint& p) { return within_floor_bound(p, bound); };
     size_t i = c.points.size();  // the first point from which on every point is within the bound
     while (i > 0 && within(c.points[i - 1])) --i;
     if (i == 0 || i == c.points.size()) return;  // within from the coarsest point on, or never

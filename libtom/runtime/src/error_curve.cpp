@@ -113,11 +113,10 @@ std::optional<UsableFloor> read_usable_floor(const MeshView& mesh) noexcept {
 
 UsableFloor usable_floor_of(const MeshView& mesh, const ErrorCurve& curve, double mean_bound) noexcept {
     UsableFloor f{mesh.vertex_count, float(mean_bound)};
-    // from the finest point down, while every point so far is within the bound (an empty level
-    // measures 0 but is no floor)
+    // from the finest point down, while every point so far is within the bound
     for (auto p = curve.points.rbegin(); p != curve.points.rend(); ++p) {
         if (p->vertices > mesh.vertex_count || p->vertices < mesh.min_vertex_count) continue;
-        if (p->triangles == 0 || double(p->mean) > mean_bound) break;
+        if (!within_floor_bound(*p, mean_bound)) break;
         f.vertices = p->vertices;
     }
     return f;

@@ -69,6 +69,10 @@ std::vector<uint8_t> encode_usable_floor(const UsableFloor& floor);
 /// [min_vertex_count, vertex_count]) reads as absent.
 std::optional<UsableFloor> read_usable_floor(const MeshView& mesh) noexcept;
 
+/// Whether a measured point may be part of a usable floor at `mean_bound`: its level has
+/// triangles (an empty level measures 0 but is no floor) and its mean error is within the bound.
+inline bool within_floor_bound(const ErrorCurvePoint& p, double mean_bound) noexcept { return p.triangles > 0 && double(p.mean) <= mean_bound; }
+
 /// The usable floor for `curve` at `mean_bound`: the coarsest measured point from which on every
 /// point's mean error is within the bound and whose level has triangles (the full resolution
 /// when the finest measured point is already beyond it).
