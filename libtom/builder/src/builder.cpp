@@ -268,9 +268,8 @@ void classify(Builder& b, BuildStats& stats, float tolerance, bool allow_groups,
 // vanishes), each removable whole at the cost of its squared diagonal (about as far as its
 // surface can be from what is left; meshoptimizer's meshopt_simplifyPrune removes such pieces
 // too). A piece goes when that is cheaper than what remains: specks early, a building's planks
-// near the end, instead of folding each into a sheet. (Measured on assimp's samples: half the
-// squared diagonal or a quarter of the mesh's size let a character's large pieces go too early
-// or kept a building's floor at 40%.)
+// near the end, instead of folding each into a sheet. (A smaller cost lets a character's large
+// pieces go too early; a smaller size bound keeps a building's floor high.)
 void find_pieces(Builder& b, float mesh_diagonal) {
     const uint32_t n = b.n;
     FirstCopy piece(n);

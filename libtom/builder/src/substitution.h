@@ -467,7 +467,7 @@ struct Builder {
     // other border edge (w, v) becomes (w, u), sweeping the triangle (w, v, u), 0 along a straight
     // border; that area x the distance, weighted as the quadric's border planes. Without it, a
     // corner of a flat sheet costs little more than the free moves around it and the outline is
-    // cut (the grid of "borders stay in place" lost 10% of its perimeter at 5% of its triangles).
+    // cut.
     float border_sweep(uint32_t v, uint32_t u, float dist) const {
         if (!kCollapseRules[classes.kind[v]].along_border) return 0.0f;
         const uint32_t wv = classes.wedge[v], wu = classes.wedge[u];
