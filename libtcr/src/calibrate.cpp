@@ -54,11 +54,6 @@ Box box_of(const tom::MeshView& mesh) {
     return Box{{mesh.bounds_min[0], mesh.bounds_min[1], mesh.bounds_min[2]}, {mesh.bounds_max[0], mesh.bounds_max[1], mesh.bounds_max[2]}};
 }
 
-void identity(float m[16]) {
-    std::fill(m, m + 16, 0.0f);
-    m[0] = m[5] = m[10] = m[15] = 1.0f;
-}
-
 // One configuration of a sample frame: a level of a mesh (scaled to diagonal 1) at a distance,
 // in `copies` copies side by side (8, or 64 small ones for the per-draw cost).
 struct Config {
@@ -151,9 +146,7 @@ CostSample sample(Session& s, uint32_t mi, const Config& cfg, Representation way
         d.index_count = tris * 3;
         const float x = (float(k % columns) - 0.5f * float(columns - 1)) * spacing;
         const float y = (float(k / columns) - 0.5f * float(copies / columns - 1)) * spacing;
-        const float t[16] = {scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0, x - scale * float(mf.centre[0]), y - scale * float(mf.centre[1]),
-                             -cfg.distance - scale * float(mf.centre[2]), 1};
-        std::copy(t, t + 16, d.model);
+        translation_scale(x - scale * float(mf.centre[0]), y - scale * float(mf.centre[1]), -cfg.distance - scale * float(mf.centre[2]), scale, d.model);
         pixels += project_box(s.camera, d.model, box).coverage_px;
         s.draws.push_back(d);
     }
@@ -251,7 +244,7 @@ double refresh_overhead(Session& s, double fraction, uint32_t side, const CostMo
         imposter_camera(state, cap.view, cap.projection);
         cap.draw.indices = s.indices.data();
         cap.draw.index_count = tris * 3;
-        identity(cap.draw.model);
+        translation_scale(0, 0, 0, 1, cap.draw.model);  // the object where it is
         s.captures.push_back(cap);
     }
     const std::vector<double> times = s.time_imposter_frames(7);
@@ -270,8 +263,8 @@ double meshed_draw_ms(Session& s, uint32_t slot, uint32_t grid, float side_px) {
     const MeshFrame mf = frame_of(mesh);
     const double distance = 10.0, radius = 0.5 * side_px * distance * std::tan(30.0 * kPi / 180.0) / s.renderer.height() * 2.0;
     const double scale = radius / std::max(1e-9, 0.5 * mf.diagonal);
-    const float model[16] = {float(scale), 0, 0, 0, 0, float(scale), 0, 0, 0, 0, float(scale), 0, float(-scale * mf.centre[0]),
-                             float(-scale * mf.centre[1]), float(-distance - scale * mf.centre[2]), 1};
+    float model[16];
+    translation_scale(float(-scale * mf.centre[0]), float(-scale * mf.centre[1]), float(-distance - scale * mf.centre[2]), float(scale), model);
     ImposterState state;
     state.valid = true;
     state.centre[2] = float(-distance);
