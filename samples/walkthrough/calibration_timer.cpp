@@ -3,7 +3,6 @@
 #include "calibration_timer.h"
 
 #include <algorithm>
-#include <chrono>
 
 #include "world.h"
 
@@ -59,9 +58,9 @@ Renderer::Draw CalibrationTimer::walk_draw(const tcr::CalibrationDraw& d, Render
 }
 
 double CalibrationTimer::render(const tcr::Camera& cam) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     r_.render(cam.view, cam.projection, draws_, indices_, indices_.size(), captures_);
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return ms_since(t0);
 }
 
 uint32_t CalibrationTimer::checker() {

@@ -17,15 +17,8 @@
 #include "tom/extract.h"
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 namespace walk {
-namespace {
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-} // namespace
-
 Summary summarize(const std::string& selector, double budget, const std::vector<Row>& rows) {
     Summary s;
     s.selector = selector;

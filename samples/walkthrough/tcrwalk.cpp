@@ -25,11 +25,8 @@
 #include "tom/format.h"
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 namespace {
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 using namespace walk;  // the world, its frames and the results
 

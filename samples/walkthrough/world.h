@@ -3,6 +3,7 @@
 // camera along the path, and the frame a runtime planned, extracted into the renderer's draws.
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -15,6 +16,10 @@
 #include "tom/format.h"
 
 namespace walk {
+
+/// The clock every timed step of the walkthrough reads, and milliseconds since `t0` on it.
+using Clock = std::chrono::steady_clock;
+inline double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // The scene with its meshes mapped and each instance's transform.
 struct World {
