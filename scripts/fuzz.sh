@@ -9,7 +9,7 @@
 # TOM_FUZZ_BUILD=DIR builds and fuzzes in DIR instead (two runs at once need two folders).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-targets=(reader_fuzz export_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
+targets=(reader_fuzz stream_fuzz export_fuzz import_off_fuzz import_obj_fuzz import_ply_fuzz import_stl_fuzz import_gltf_fuzz import_glb_fuzz
          builder_fuzz calibration_fuzz scene_fuzz capi_fuzz)
 if [ "${1:-}" = "list" ]; then printf '%s\n' "${targets[@]}"; exit 0; fi
 [ $# -ge 2 ] || { echo "usage: scripts/fuzz.sh TARGET|all SECONDS [libFuzzer options...]" >&2; exit 2; }
@@ -21,7 +21,7 @@ cmake --build "$build" -j "$(nproc)" >/dev/null
 
 dict_of() {
   case "$1" in
-    reader_fuzz|export_fuzz|capi_fuzz) echo tom ;;
+    reader_fuzz|stream_fuzz|export_fuzz|capi_fuzz) echo tom ;;
     import_off_fuzz|builder_fuzz) echo off ;;
     import_obj_fuzz) echo obj ;;
     import_ply_fuzz) echo ply ;;
@@ -59,6 +59,11 @@ import base64, json, sys
 d = json.load(open(sys.argv[1]))
 d['buffers'][0]['uri'] = 'data:application/octet-stream;base64,' + base64.b64encode(open(sys.argv[2], 'rb').read()).decode()
 json.dump(d, open(sys.argv[3], 'w'))" "$data/assimp/glTF2/draco/2CylinderEngine.gltf" "$data/assimp/glTF2/draco/2CylinderEngine.bin" "$corpus/draco-embedded.gltf"
+      fi ;;
+    stream_fuzz)  # streams with parts, texture coordinates and groups of copies
+      if [ -x "$tools/tombuild" ] && [ -f "$data/assimp/OBJ/spider.obj" ] && [ ! -f "$corpus/spider.tom" ]; then
+        "$tools/tombuild" "$data/assimp/OBJ/spider.obj" -o "$corpus" -q --stream --no-error-curve
+        "$tools/tombuild" "$data/assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb" -o "$corpus" -q --stream
       fi ;;
     import_glb_fuzz)
       local pack="$root/.tools/node_modules/gltfpack/cli.js"  # 0.18, whose output Debian's decoders read

@@ -1,5 +1,7 @@
 #include "batch.h"
 
+#include "tom/stream/stream_file.h"
+
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
@@ -105,7 +107,7 @@ Freshness check_output(const std::string& input, const std::string& output, cons
         return f;
     }
     try {
-        const tom::File file = tom::File::open(output);
+        const tom::File file = tom::open_any(output);
         if (file.provenance().empty()) {
             f.reason = "the output does not say what made it";
             return f;

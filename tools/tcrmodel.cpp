@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tcr/imposters.h"
+#include "tom/stream/stream_file.h"
 #include "tom/error_curve.h"
 #include "tom/errors.h"
 #include "tom/format.h"
@@ -47,7 +48,7 @@ nlohmann::ordered_json choice_json(const im::Choice& c) {
 
 // k, the full model's triangles and the radius from a .tom file's first mesh with a stored curve.
 void read_mesh(const Options& opt, im::Setting& s) {
-    const tom::File file = tom::File::open(opt.tom_file);
+    const tom::File file = tom::open_any(opt.tom_file);
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         const tom::MeshView& m = file.mesh(i);
         const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(m);

@@ -28,6 +28,7 @@
 #include "tom/metrics/report.h"
 #include "batch.h"
 #include "tom/metrics/report_json.h"
+#include "tom/stream/stream_file.h"
 #include "tool_common.h"
 
 namespace fs = std::filesystem;
@@ -40,6 +41,7 @@ struct Options {
     unsigned jobs = 1;
     tools::BuildOptions build;
     std::string index_size = "auto";
+    bool stream = false;            // write the streamed layout (docs/FORMAT.md, "Streamed files")
     bool progress = false;
     bool mesh_progress = false;     // a line per input's stages (set by main: a terminal, one job at a time)
     bool quiet = false;
@@ -70,6 +72,7 @@ nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams
     j["build"] = tools::build_params_json(params);
     j["weld"] = !opt.build.no_weld;
     j["index_size"] = opt.index_size;
+    if (opt.stream) j["stream"] = true;
     j["error_curve"] = !opt.no_error_curve;
     if (!opt.no_error_curve) {
         j["curve_points"] = opt.curve_points;
@@ -99,6 +102,7 @@ struct Settings {
     tom::BuildParams params;
     tom::CleanOptions clean;
     tom::WriteOptions write;
+    bool stream = false;
     tom::ReportParams report;
     nlohmann::ordered_json output_options, report_options;
 };
@@ -285,7 +289,8 @@ void write_tom(Conversion& c, Outcome& out) {
     const auto write_start = std::chrono::steady_clock::now();
     tom::WriteOptions wopt = c.settings.write;
     wopt.provenance = c.tom_provenance = c.provenance.text();
-    const std::vector<uint8_t> bytes = tom::serialize(c.built, c.imported.scene, wopt);
+    std::vector<uint8_t> bytes = tom::serialize(c.built, c.imported.scene, wopt);
+    if (c.settings.stream) bytes = tom::encode_stream(bytes.data(), bytes.size(), {}, c.job.output);
     tom::write_bytes_atomically(c.job.output, bytes.data(), bytes.size());
     c.bytes = bytes.size();
     out.triangles = c.triangles;
@@ -509,7 +514,7 @@ std::vector<std::string> find_orphans(const std::string& outdir, const std::vect
         const std::string path = it->path().lexically_normal().string();
         if (planned.count(path)) continue;
         try {
-            const tom::File f = tom::File::open(path);
+            const tom::File f = tom::open_any(path);
             if (f.provenance().rfind("{\"tool\":\"tombuild", 0) == 0) orphans.push_back(path);
         } catch (const std::exception&) {
         }  // not a .tom of ours: never touched
@@ -548,6 +553,9 @@ int parse_options(Options& opt, int argc, char** argv) {
     opt.build.add_to(app, "Simplification");
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
+        ->group("Output");
+    app.add_flag("--stream", opt.stream,
+                 "Write the streamed layout: quantized, compressed chunks in resolution order, every prefix a coarser mesh (docs/FORMAT.md, \"Streamed files\"); every tool reads it")
         ->group("Output");
     app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds and reports; the JSON report's error_curve is null)")->group("Output");
     app.add_option("--curve-points", opt.curve_points, "Error-curve points per mesh, log-spaced in vertex count (default 16)")
@@ -597,6 +605,7 @@ Settings make_settings(const Options& opt, unsigned per_job) {
     settings.params = opt.build.params();
     settings.clean = opt.build.clean();
     settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
+    settings.stream = opt.stream;
     settings.output_options = output_options(opt, settings.params);
     settings.report_options = report_options(opt);
     settings.report = report_params(opt, per_job);

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tom/stream/stream_file.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
@@ -95,7 +96,7 @@ Loaded load(const std::string& path, std::optional<double> fraction) {
             if (in.mesh < mesh_count) f(in.mesh, in.transform);
     };
     if (ends_with(path, ".tom")) {
-        const tom::File f = tom::File::open(path);
+        const tom::File f = tom::open_any(path);
         each_placement(f.scene(), f.mesh_count(), [&](size_t i, const float* transform) {
             const tom::MeshView& m = f.mesh(uint32_t(i));
             const uint32_t n = fraction ? tom::vertex_count_for_fraction(m, *fraction) : m.vertex_count;

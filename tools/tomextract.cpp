@@ -14,6 +14,7 @@
 #include "tom/io/export.h"
 #include "tom/extract.h"
 #include "tom/format.h"
+#include "tom/stream/stream_file.h"
 #include "tool_common.h"
 
 namespace {
@@ -118,6 +119,7 @@ std::vector<uint32_t> proportional_levels(const tom::File& file, std::optional<u
 struct Options {
     std::string path, output, texture_dir;
     std::optional<double> fraction;
+    std::optional<uint64_t> bytes;  // --bytes: the prefix of a streamed file to decode
     std::optional<uint64_t> triangles, vertices;
     std::optional<uint32_t> mesh_index;
     std::vector<double> lods, scene_budgets;
@@ -144,6 +146,9 @@ int parse_options(Options& o, int argc, char** argv) {
                              "Triangle count (for several meshes: in total, shared in proportion; a mesh at its floor keeps it and "
                              "the others give up what it takes beyond its share)");
     auto* v = app.add_option("-n,--vertices", o.vertices, "Vertex count (per mesh, clamped to its range)");
+    app.add_option("--bytes", o.bytes,
+                   "For a streamed file (tombuild --stream): decode only its first B bytes (the last whole chunk at or before B), what a viewer "
+                   "shows after B bytes; alone, writes that mesh whole");
     f->excludes(t)->excludes(v);
     t->excludes(v);
     auto* l = app.add_option("--lods", o.lods, "Levels in % of the triangles, finest first, into one .glb with MSFT_lod (e.g. 100,50,25,10)")
@@ -187,7 +192,8 @@ int parse_options(Options& o, int argc, char** argv) {
                "Examples: tomextract out/bunny00.tom --fraction 0.1 -o bunny10.obj\n"
                "          tomextract out/bunny00.tom --max-error 0.5% -o bunny-half-percent.obj\n"
                "          tomextract out/bunny00.tom --lods 100,50,25,10 -o bunny-lods.glb\n"
-               "          tomextract out/scene.tom --scene-budget 20000 -o scene-20k.glb");
+               "          tomextract out/scene.tom --scene-budget 20000 -o scene-20k.glb\n"
+               "          tomextract out/bunny00.tom --bytes 50000 -o bunny-50kB.glb   (a file of tombuild --stream)");
     return tools::parse(app, argc, argv);
 }
 
@@ -206,7 +212,9 @@ int check_options(Options& o) {
         return usage_error(bad.what());
     }
     if (o.max_error_px && (!o.distance || !o.fov_deg || !o.height)) return usage_error("--max-error-px needs --distance, --fov and --height");
-    if (!o.fraction && !o.triangles && !o.vertices && o.lods.empty() && !o.by_error() && o.scene_budgets.empty())
+    const bool level_chosen = o.fraction || o.triangles || o.vertices || !o.lods.empty() || o.by_error() || !o.scene_budgets.empty();
+    if (o.bytes && !level_chosen) o.fraction = 1.0;  // the decoded prefix, whole
+    else if (!level_chosen)
         return usage_error("give one of --fraction, --triangles, --vertices, --lods, --max-error, --max-error-px, --lods-error or --scene-budget");
     const std::string not_glb = "'" + o.output + "' is not one";
     if (o.compress && !o.glb()) return usage_error("-c compresses a .glb; " + not_glb);
@@ -350,7 +358,7 @@ int main(int argc, char** argv) {
     if (const int code = parse_options(o, argc, argv); code >= 0) return code;
     if (const int code = check_options(o); code >= 0) return code;
     try {
-        const tom::File file = tom::File::open(o.path);
+        const tom::File file = o.bytes ? tom::open_any(o.path, *o.bytes) : tom::open_any(o.path);
         if (o.mesh_index && *o.mesh_index >= file.mesh_count())
             return usage_error(o.path + " has " + std::to_string(file.mesh_count()) + " meshes; --mesh " + std::to_string(*o.mesh_index) + " does not exist");
         if (o.texture_dir.empty()) o.texture_dir = source_folder(o.path, file.scene());

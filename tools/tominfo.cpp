@@ -1,6 +1,7 @@
 // tominfo: prints what a .tom file holds: header, sections, meshes, counts and sizes.
 
 #include <cstdio>
+#include <fstream>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
+#include "tom/stream/stream_file.h"
 #include "tool_common.h"
 
 namespace {
@@ -257,6 +259,41 @@ void print_sections(const tom::File& file) {
                     static_cast<unsigned long long>(s.bytes), s.checksum);
 }
 
+bool is_stream_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char head[8] = {0};
+    in.read(head, sizeof head);
+    return tom::is_stream(head, size_t(in.gcount()));
+}
+
+// A streamed file's chunks (docs/FORMAT.md, "Streamed files"), in file order, and its meshes'
+// quantization.
+nlohmann::ordered_json stream_json(const tom::StreamDecoder& d) {
+    nlohmann::ordered_json j;
+    j["file_bytes"] = d.file_bytes();
+    j["chunks"] = nlohmann::ordered_json::array();
+    for (const tom::StreamChunk& c : d.chunks())
+        j["chunks"].push_back({{"end_byte", c.end_byte}, {"mesh", c.mesh}, {"vertices", c.vertex_end}, {"triangles", c.triangles}});
+    j["quantization"] = nlohmann::ordered_json::array();
+    for (uint32_t m = 0; m < d.mesh_count(); ++m) {
+        const tom::StreamQuantization& q = d.quantization(m);
+        j["quantization"].push_back({{"position_bits", q.position_bits}, {"position_step", q.position_step}, {"normal_bits", q.normal_bits}, {"texcoord_bits", q.texcoord_bits}});
+    }
+    return j;
+}
+
+void print_stream(const nlohmann::ordered_json& s) {
+    const auto& chunks = s["chunks"];
+    const double bytes = s["file_bytes"].get<double>();
+    std::printf("  streamed: %zu chunks, %.0f bytes; the first ends at byte %llu (%.1f%%)\n", chunks.size(), bytes,
+                static_cast<unsigned long long>(chunks[0]["end_byte"].get<uint64_t>()), 100.0 * chunks[0]["end_byte"].get<double>() / bytes);
+    for (size_t m = 0; m < s["quantization"].size(); ++m) {
+        const auto& q = s["quantization"][m];
+        std::printf("  mesh %zu quantized: positions %u bits (step %.4g), normals %u bits, texture coordinates %u bits\n", m, q["position_bits"].get<uint32_t>(),
+                    q["position_step"].get<double>(), q["normal_bits"].get<uint32_t>(), q["texcoord_bits"].get<uint32_t>());
+    }
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -265,13 +302,17 @@ int main(int argc, char** argv) {
     try {
         tom::OpenOptions oo;
         oo.verify_checksums = !o.no_verify;
-        const tom::File file = tom::File::open(o.path, oo);
-        const nlohmann::ordered_json j = file_json(file, o.path, o.sections || o.json);
+        std::optional<tom::StreamDecoder> stream;
+        if (is_stream_file(o.path)) stream.emplace(tom::read_stream(o.path));
+        const tom::File file = stream ? stream->file() : tom::File::open(o.path, oo);
+        nlohmann::ordered_json j = file_json(file, o.path, o.sections || o.json);
+        if (stream) j["stream"] = stream_json(*stream);
         if (o.json) {
             std::printf("%s\n", j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
             return tools::exit_ok;
         }
         print_summary(file, o.path, j);
+        if (stream) print_stream(j["stream"]);
         if (o.show_scene) print_scene(file);
         if (o.show_curve) print_curves(file, j);
         if (o.sections) print_sections(file);

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include "tom/format.h"
 #include "tom/view.h"
@@ -90,6 +91,46 @@ inline void store_f32(uint8_t* p, float f) {
     uint32_t bits;
     std::memcpy(&bits, &f, 4);
     store_u32(p, bits);
+}
+
+/// One section of a file image being assembled: its type, its mesh (or file_level) and its data.
+struct PendingSection {
+    uint32_t type, mesh;
+    std::vector<uint8_t> bytes;
+};
+
+/// The file image of `sections`, in their order: header, section table, then each section's data
+/// at a multiple of 16 with its checksum. Shared by the writer and the stream decoder, which
+/// validate what it returns.
+inline std::vector<uint8_t> assemble_file(const std::vector<PendingSection>& sections, uint32_t mesh_count) {
+    const uint64_t table_offset = header_bytes;
+    uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;
+    std::vector<uint64_t> offsets;
+    for (const PendingSection& s : sections) {
+        offset = (offset + section_alignment - 1) / section_alignment * section_alignment;
+        offsets.push_back(offset);
+        offset += s.bytes.size();
+    }
+    std::vector<uint8_t> file(offset, 0);
+    std::memcpy(file.data(), magic, 8);
+    store_u32(&file[h_version_major], format_version_major);
+    store_u32(&file[h_version_minor], format_version_minor);
+    store_u64(&file[h_file_bytes], offset);
+    store_u32(&file[h_mesh_count], mesh_count);
+    store_u32(&file[h_section_count], uint32_t(sections.size()));
+    store_u64(&file[h_table_offset], table_offset);
+    for (size_t i = 0; i < sections.size(); ++i) {
+        uint8_t* e = &file[table_offset + i * section_entry_bytes];
+        store_u32(e + s_type, sections[i].type);
+        store_u32(e + s_mesh, sections[i].mesh);
+        store_u64(e + s_offset, offsets[i]);
+        store_u64(e + s_bytes, sections[i].bytes.size());
+        store_u32(e + s_checksum, crc32(sections[i].bytes.data(), sections[i].bytes.size()));
+        if (!sections[i].bytes.empty()) std::memcpy(&file[offsets[i]], sections[i].bytes.data(), sections[i].bytes.size());
+    }
+    store_u32(&file[h_table_checksum], crc32(&file[table_offset], sections.size() * section_entry_bytes));
+    store_u32(&file[h_header_checksum], crc32(file.data(), h_header_checksum));
+    return file;
 }
 
 } // namespace tom::layout

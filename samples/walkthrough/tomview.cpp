@@ -12,6 +12,7 @@
 #include "images.h"
 #include "renderer.h"
 #include "tcr/view.h"
+#include "tom/stream/stream_file.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
@@ -35,7 +36,7 @@ int main(int argc, char** argv) {
                "Example: tomview out/2CylinderEngine.tom --fraction 0.1 -o engine10.png");
     if (const int code = walk::parse_command_line(app, argc, argv); code >= 0) return code;
     try {
-        const tom::File file = tom::File::open(path);
+        const tom::File file = tom::open_any(path);  // an ordinary or a streamed .tom
         const std::vector<tom::Instance> instances = tom::draw_list(file.scene(), file.mesh_count());
         walk::Renderer renderer(width, height);
         // each mesh's level extracted once into the frame's index array, with a draw per part

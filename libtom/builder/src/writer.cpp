@@ -24,11 +24,6 @@ namespace {
 
 using namespace layout;
 
-struct PendingSection {
-    uint32_t type, mesh;
-    std::vector<uint8_t> bytes;
-};
-
 std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
     std::vector<uint8_t> out(values.size() * 4);
     for (size_t i = 0; i < values.size(); ++i) store_f32(&out[4 * i], values[i]);
@@ -208,33 +203,7 @@ std::vector<uint8_t> serialize(const std::vector<TomMesh>& meshes, const Scene& 
             sections.push_back({sec_extra_streams, mi, detail::encode_extra_streams(views, m.vertex_count())});
         }
     }
-    const uint64_t table_offset = header_bytes;
-    uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;
-    std::vector<uint64_t> offsets;
-    for (const PendingSection& s : sections) {
-        offset = (offset + section_alignment - 1) / section_alignment * section_alignment;
-        offsets.push_back(offset);
-        offset += s.bytes.size();
-    }
-    std::vector<uint8_t> file(offset, 0);
-    std::memcpy(file.data(), magic, 8);
-    store_u32(&file[h_version_major], format_version_major);
-    store_u32(&file[h_version_minor], format_version_minor);
-    store_u64(&file[h_file_bytes], offset);
-    store_u32(&file[h_mesh_count], uint32_t(meshes.size()));
-    store_u32(&file[h_section_count], uint32_t(sections.size()));
-    store_u64(&file[h_table_offset], table_offset);
-    for (size_t i = 0; i < sections.size(); ++i) {
-        uint8_t* e = &file[table_offset + i * section_entry_bytes];
-        store_u32(e + s_type, sections[i].type);
-        store_u32(e + s_mesh, sections[i].mesh);
-        store_u64(e + s_offset, offsets[i]);
-        store_u64(e + s_bytes, sections[i].bytes.size());
-        store_u32(e + s_checksum, crc32(sections[i].bytes.data(), sections[i].bytes.size()));
-        if (!sections[i].bytes.empty()) std::memcpy(&file[offsets[i]], sections[i].bytes.data(), sections[i].bytes.size());
-    }
-    store_u32(&file[h_table_checksum], crc32(&file[table_offset], sections.size() * section_entry_bytes));
-    store_u32(&file[h_header_checksum], crc32(file.data(), h_header_checksum));
+    std::vector<uint8_t> file = assemble_file(sections, uint32_t(meshes.size()));
     // the writer never produces what the reader rejects: a mesh the builder got wrong, or a
     // scene whose references do not hold, fails here instead of in an engine
     OpenOptions no_checksums;

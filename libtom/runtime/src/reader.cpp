@@ -98,7 +98,8 @@ struct File::Impl {
     void validate_parts(const SectionInfo& sec, uint32_t attributes, MeshView& v, const std::string& mesh_field) const;
 };
 
-// rule 20: the parts tile the triangles in order, each with at least one; two or more of them;
+// rule 20: the parts tile the triangles in order (since 1.8 a part may be empty: a stream's prefix
+// holds none of its triangles yet); two or more of them;
 // each part's streams are some of the mesh's
 void File::Impl::validate_parts(const SectionInfo& sec, uint32_t attributes, MeshView& v, const std::string& mesh_field) const {
     const std::string field = mesh_field + " PART";
@@ -115,7 +116,6 @@ void File::Impl::validate_parts(const SectionInfo& sec, uint32_t attributes, Mes
         const std::string part = field + " part " + std::to_string(k);
         const uint32_t first = load_u32(r), triangles = load_u32(r + 4), part_attributes = load_u32(r + 12);
         if (first != next) fail(at, part + " first_triangle", 20, "starts at triangle " + std::to_string(first) + ", not where the previous part ends (" + std::to_string(next) + ")");
-        if (triangles == 0) fail(at + 4, part + " triangle_count", 20, "a part has at least one triangle");
         next += triangles;
         if (next > v.triangle_count) fail(at + 4, part + " triangle_count", 20, "ends at triangle " + std::to_string(next) + ", past the mesh's " + std::to_string(v.triangle_count));
         if (part_attributes & ~(attributes & stream_attributes)) fail(at + 12, part + " attributes", 20, "names a stream the mesh does not have");

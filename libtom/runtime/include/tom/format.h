@@ -15,7 +15,7 @@
 namespace tom {
 
 constexpr uint32_t format_version_major = 1;
-constexpr uint32_t format_version_minor = 7;
+constexpr uint32_t format_version_minor = 8;
 
 struct OpenOptions {
     bool verify_checksums = true;  ///< CRC-32 of every section; costs one pass over the file

@@ -1,0 +1,88 @@
+#pragma once
+// Byte layout and quantization of streamed .tom files (docs/FORMAT.md, "Streamed files"), shared
+// by the encoder (tom::stream) and the decoder (the runtime's tom::StreamDecoder). Every function
+// here is the one definition both sides use, so that the decoder rebuilds exactly the values the
+// encoder predicted from.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "format_layout.h"
+
+namespace tom::stream_layout {
+
+constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'S', 0x0D, 0x0A, 0x1A, 0x0A};
+constexpr uint32_t version_major = 1, version_minor = 0;
+constexpr uint32_t header_bytes = 64;
+// header field offsets
+constexpr uint32_t h_version_major = 8, h_version_minor = 12, h_file_bytes = 16, h_mesh_count = 24, h_chunk_count = 28,
+                   h_directory_bytes = 32, h_directory_checksum = 40, h_header_checksum = 44;
+
+constexpr uint32_t directory_header_bytes = 16;   // u32 kept_count, u32[3] reserved
+constexpr uint32_t kept_entry_bytes = 16;         // u32 type, u32 mesh, u64 bytes
+constexpr uint32_t quantization_bytes = 64;       // per mesh, below
+constexpr uint32_t chunk_record_bytes = 24;       // u32 mesh, vertex_end, triangle_end, reserved, bytes, checksum
+// quantization record field offsets
+constexpr uint32_t q_position_bits = 0, q_normal_bits = 4, q_texcoord_bits = 8, q_position_min = 16, q_position_step = 28,
+                   q_texcoord0_min = 32, q_texcoord0_step = 40, q_texcoord1_min = 48, q_texcoord1_step = 56;
+// chunk record field offsets
+constexpr uint32_t r_mesh = 0, r_vertex_end = 4, r_triangle_end = 8, r_bytes = 16, r_checksum = 20;
+
+/// Element sizes of the quantized blocks (the meshopt vertex codec takes multiples of 4).
+constexpr uint32_t substitute_element = 4;   // u32 distance v - substitute[v]
+constexpr uint32_t position_element = 8;     // u16 x, y, z, 0: residuals against the prediction
+constexpr uint32_t normal_element = 4;       // i16 octahedral u, v: residuals
+constexpr uint32_t texcoord_element = 4;     // u16 u, v: residuals
+constexpr uint32_t color_element = 4;        // u8 r, g, b, a: residuals
+constexpr uint32_t tangent_element = 8;      // i16 octahedral u, v: residuals; i16 w (+1 or -1 as stored); 0
+constexpr uint32_t update_element = 8;       // u32 corner slot in the part, u32 new value
+constexpr uint32_t rotation_element = 4;     // u8 per triangle: turns of its decoded corners (0 to 2)
+
+/// Carried (XATT) elements travel raw, padded to a multiple of 4 bytes.
+inline uint32_t padded_element(uint32_t element_bytes) { return (element_bytes + 3) / 4 * 4; }
+
+/// Grid of `bits` bits over [min, min + extent]: the step between grid values.
+inline float grid_step(float extent, uint32_t bits) {
+    const float steps = float((1u << bits) - 1);
+    return extent > 0 ? extent / steps : 1.0f;
+}
+/// The grid value nearest to x (clamped to the grid).
+inline uint32_t quantize(float x, float min, float step, uint32_t bits) {
+    const double q = std::nearbyint((double(x) - double(min)) / double(step));
+    return uint32_t(std::clamp(q, 0.0, double((1u << bits) - 1)));
+}
+/// The value of grid point q: computed in double and rounded once, so every platform agrees.
+inline float dequantize(uint32_t q, float min, float step) { return float(double(min) + double(q) * double(step)); }
+
+/// Octahedral encoding of a unit vector to two signed integers of `bits` bits (at most 16).
+inline void octahedral_encode(const float* n, uint32_t bits, int16_t out[2]) {
+    const float len = std::fabs(n[0]) + std::fabs(n[1]) + std::fabs(n[2]);
+    float u = len > 0 ? n[0] / len : 1.0f, v = len > 0 ? n[1] / len : 0.0f;
+    if (len > 0 && n[2] < 0) {
+        const float fu = (1 - std::fabs(v)) * (u >= 0 ? 1.0f : -1.0f), fv = (1 - std::fabs(u)) * (v >= 0 ? 1.0f : -1.0f);
+        u = fu, v = fv;
+    }
+    const float scale = float((1 << (bits - 1)) - 1);
+    out[0] = int16_t(std::nearbyint(std::clamp(u, -1.0f, 1.0f) * scale));
+    out[1] = int16_t(std::nearbyint(std::clamp(v, -1.0f, 1.0f) * scale));
+}
+/// The unit vector of an octahedral pair (any pair of values decodes to a unit vector).
+inline void octahedral_decode(int16_t qu, int16_t qv, uint32_t bits, float* n) {
+    const float scale = float((1 << (bits - 1)) - 1);
+    float u = std::clamp(float(qu) / scale, -1.0f, 1.0f), v = std::clamp(float(qv) / scale, -1.0f, 1.0f);
+    float z = 1 - std::fabs(u) - std::fabs(v);
+    if (z < 0) {
+        const float fu = (1 - std::fabs(v)) * (u >= 0 ? 1.0f : -1.0f), fv = (1 - std::fabs(u)) * (v >= 0 ? 1.0f : -1.0f);
+        u = fu, v = fv;
+    }
+    const float len = std::sqrt(u * u + v * v + z * z);
+    n[0] = u / len, n[1] = v / len, n[2] = z / len;
+}
+
+/// The vertex whose quantized values predict vertex v's: its substitute (a neighbour it collapses
+/// onto) for a removed vertex, the previous vertex for a survivor, none (zero) for vertex 0.
+/// \pre substitute[v] <= v, every vertex below v decoded.
+inline int64_t predictor(uint32_t v, uint32_t substitute) { return substitute < v ? int64_t(substitute) : int64_t(v) - 1; }
+
+} // namespace tom::stream_layout

@@ -1,0 +1,603 @@
+// Decoding streamed .tom files (docs/FORMAT.md, "Streamed files", rules 31 to 36): the directory,
+// then each chunk as its last byte arrives, into per-mesh state from which tom_bytes() assembles
+// an ordinary .tom of the resolutions received.
+
+#include "tom/stream.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "format_layout.h"
+#include "scene_codec.h"
+#include "stream_layout.h"
+#include "tom/errors.h"
+
+namespace tom {
+
+namespace {
+
+using namespace stream_layout;
+using layout::load_f32;
+using layout::load_u32;
+using layout::load_u64;
+
+/// A carried stream (XATT) of a mesh: its record and the elements decoded so far.
+struct Carried {
+    VertexStreamView record;  // name, type, components, normalized (data unused)
+    std::string name;
+    uint32_t element_bytes = 0;
+    std::vector<uint8_t> data;
+};
+
+/// A mesh as the directory declares it and as far as its chunks are decoded.
+struct MeshState {
+    // declared
+    uint32_t vertex_count = 0, triangle_count = 0, min_vertex_count = 0, index_size = 4, attributes = 0;
+    std::vector<Part> parts;               // the full ranges; one part of all triangles without PART
+    std::vector<uint8_t> header, metadata, pair_bits;
+    std::vector<Carried> carried;
+    StreamQuantization quantization;
+    // decoded: vertices [0, resolution), each part's live triangles at it
+    uint32_t resolution = 0;
+    std::vector<uint32_t> substitute;
+    std::vector<uint16_t> positions;       // 3 per vertex, grid values
+    std::vector<int16_t> normals, tangents;  // octahedral pairs; tangents add w
+    std::vector<uint16_t> texcoords[2];    // 2 per vertex, grid values
+    std::vector<uint8_t> colors;           // 4 per vertex
+    std::vector<std::vector<uint32_t>> corners;  // per part, 3 per live triangle, mapped to resolution
+};
+
+bool splits_group(const std::vector<uint8_t>& bits, uint32_t n, uint32_t vertex_count) {
+    return !bits.empty() && n > 0 && n < vertex_count && (bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
+}
+
+/// A bounded view of the bytes of one chunk, read front to back.
+struct ChunkReader {
+    const uint8_t* data;
+    uint64_t bytes, at = 0, file_offset;
+    const std::string* path;
+    const std::string* field;
+    [[noreturn]] void fail(const std::string& detail, int rule = 35) const {
+        throw FormatError(*path, file_offset + at, *field, rule, detail);
+    }
+    uint32_t u32() {
+        if (bytes - at < 4) fail("ends inside a count");
+        const uint32_t v = load_u32(data + at);
+        at += 4;
+        return v;
+    }
+    /// The next block: its u32 length, then that many bytes.
+    std::pair<const uint8_t*, uint64_t> block(const char* what) {
+        const uint32_t n = u32();
+        if (n > bytes - at) fail(std::string(what) + " block of " + std::to_string(n) + " bytes runs past the chunk's end");
+        const uint8_t* p = data + at;
+        at += n;
+        return {p, n};
+    }
+};
+
+} // namespace
+
+bool is_stream(const void* bytes, size_t size) noexcept { return size >= 8 && std::memcmp(bytes, magic, 8) == 0; }
+
+struct StreamDecoder::Impl {
+    StreamCodecs codecs;
+    std::string path;
+    std::vector<uint8_t> pending;     // received bytes not yet consumed
+    uint64_t received = 0, consumed = 0;
+    bool failed = false, directory = false, verify = true;
+    uint64_t declared_bytes = 0;
+    uint32_t meshes_declared = 0, chunks_declared = 0;
+    uint64_t directory_bytes = 0;
+    std::vector<layout::PendingSection> file_sections;  // MATL, INST, PROV, IMAG, GLTF as stored
+    std::vector<MeshState> meshes;
+    std::vector<StreamChunk> chunks;
+    std::vector<uint32_t> chunk_checksums;
+    size_t decoded = 0;
+
+    [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
+        throw FormatError(path, offset, field, rule, detail);
+    }
+
+    void take(const uint8_t* bytes, size_t size);
+    void read_header();
+    void read_directory();
+    void read_kept_section(uint32_t type, uint32_t mesh, const uint8_t* data, uint64_t bytes, uint64_t offset);
+    void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
+    void read_chunk_table(const uint8_t* table, uint64_t offset);
+    void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
+    void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
+    void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
+    void decode_triangles(MeshState& m, ChunkReader& in, uint32_t b, const std::vector<uint32_t>& added, const std::vector<uint32_t>& updates);
+    std::vector<uint8_t> assemble() const;
+    std::vector<layout::PendingSection> mesh_sections(const MeshState& m, uint32_t index) const;
+};
+
+StreamDecoder::StreamDecoder(const StreamCodecs& codecs, std::string name, const OpenOptions& options) : impl_(std::make_unique<Impl>()) {
+    if (!codecs.decode_vertices || !codecs.decode_indices) throw ArgumentError("StreamDecoder: both codecs are required");
+    impl_->codecs = codecs;
+    impl_->verify = options.verify_checksums;
+    impl_->path = std::move(name);
+}
+StreamDecoder::StreamDecoder(StreamDecoder&&) noexcept = default;
+StreamDecoder& StreamDecoder::operator=(StreamDecoder&&) noexcept = default;
+StreamDecoder::~StreamDecoder() = default;
+
+void StreamDecoder::append(const void* bytes, size_t size) {
+    if (impl_->failed) throw ArgumentError("StreamDecoder: " + impl_->path + " failed to decode; it takes no more bytes");
+    try {
+        impl_->take(static_cast<const uint8_t*>(bytes), size);
+    } catch (...) {
+        impl_->failed = true;
+        throw;
+    }
+}
+
+bool StreamDecoder::has_directory() const noexcept { return impl_->directory; }
+uint64_t StreamDecoder::bytes_received() const noexcept { return impl_->received; }
+uint64_t StreamDecoder::file_bytes() const noexcept { return impl_->declared_bytes; }
+uint32_t StreamDecoder::mesh_count() const noexcept { return uint32_t(impl_->meshes.size()); }
+const std::vector<StreamChunk>& StreamDecoder::chunks() const noexcept { return impl_->chunks; }
+size_t StreamDecoder::decoded_chunks() const noexcept { return impl_->decoded; }
+bool StreamDecoder::complete() const noexcept { return impl_->directory && impl_->decoded == impl_->chunks.size(); }
+uint32_t StreamDecoder::vertex_count(uint32_t mesh) const noexcept { return mesh < impl_->meshes.size() ? impl_->meshes[mesh].resolution : 0; }
+const StreamQuantization& StreamDecoder::quantization(uint32_t mesh) const noexcept { return impl_->meshes[mesh].quantization; }
+
+std::vector<uint8_t> StreamDecoder::tom_bytes() const {
+    if (!impl_->directory) impl_->fail(impl_->received, "directory", 31, "the directory has not arrived (" + std::to_string(impl_->received) + " bytes received)");
+    return impl_->assemble();
+}
+
+File StreamDecoder::file() const {
+    const std::vector<uint8_t> bytes = tom_bytes();
+    OpenOptions no_checksums;
+    no_checksums.verify_checksums = false;  // just computed
+    return File::from_bytes(bytes.data(), bytes.size(), impl_->path, no_checksums);
+}
+
+// Appends the bytes, then consumes whatever is complete: the header and directory once, then
+// chunks in order.
+void StreamDecoder::Impl::take(const uint8_t* bytes, size_t size) {
+    pending.insert(pending.end(), bytes, bytes + size);
+    received += size;
+    if (declared_bytes && received > declared_bytes) fail(declared_bytes, "file_bytes", 31, "the stream has bytes past its declared end of " + std::to_string(declared_bytes));
+    if (!directory) {
+        if (received >= header_bytes && !declared_bytes) read_header();
+        if (!declared_bytes || received < header_bytes + directory_bytes) return;
+        read_directory();
+    }
+    size_t used = 0;
+    while (decoded < chunks.size()) {
+        const StreamChunk& c = chunks[decoded];
+        if (c.end_byte > received) break;
+        const uint8_t* data = pending.data() + (c.begin_byte - consumed);
+        const uint64_t n = c.end_byte - c.begin_byte;
+        if (verify && crc32(data, n) != chunk_checksums[decoded])
+            fail(c.begin_byte, "chunk " + std::to_string(decoded), 34, "checksum mismatch: the chunk is corrupt");
+        decode_chunk(c, data, n);
+        ++decoded;
+        used = c.end_byte - consumed;
+    }
+    pending.erase(pending.begin(), pending.begin() + used);
+    consumed += used;
+}
+
+// rule 31: the header
+void StreamDecoder::Impl::read_header() {
+    const uint8_t* h = pending.data();
+    if (std::memcmp(h, magic, 8) != 0) fail(0, "magic", 31, "not a streamed .tom file (bad magic)");
+    const uint32_t major = load_u32(h + h_version_major);
+    if (major != version_major)
+        fail(h_version_major, "version_major", 31, "unsupported stream version " + std::to_string(major) + "." + std::to_string(load_u32(h + h_version_minor)) + " (this reader reads 1.x)");
+    if (verify && crc32(h, h_header_checksum) != load_u32(h + h_header_checksum)) fail(h_header_checksum, "header_checksum", 31, "header checksum mismatch");
+    const uint64_t file = load_u64(h + h_file_bytes);
+    directory_bytes = load_u64(h + h_directory_bytes);
+    meshes_declared = load_u32(h + h_mesh_count);
+    chunks_declared = load_u32(h + h_chunk_count);
+    if (directory_bytes > file || file - directory_bytes < header_bytes)
+        fail(h_directory_bytes, "directory_bytes", 31, "a directory of " + std::to_string(directory_bytes) + " bytes does not fit in a file of " + std::to_string(file));
+    // every mesh takes at least its kept MESH entry and quantization record, every chunk its record
+    if (uint64_t(meshes_declared) * (kept_entry_bytes + quantization_bytes) + uint64_t(chunks_declared) * chunk_record_bytes > directory_bytes)
+        fail(h_mesh_count, "mesh_count", 31, std::to_string(meshes_declared) + " meshes and " + std::to_string(chunks_declared) + " chunks do not fit in a directory of " + std::to_string(directory_bytes) + " bytes");
+    declared_bytes = file;
+    if (received > declared_bytes) fail(declared_bytes, "file_bytes", 31, "the stream has bytes past its declared end of " + std::to_string(declared_bytes));
+}
+
+// rule 32: the directory (kept sections, quantization, chunk table)
+void StreamDecoder::Impl::read_directory() {
+    const uint8_t* d = pending.data() + header_bytes;
+    const uint64_t base = header_bytes;
+    if (verify && crc32(d, directory_bytes) != load_u32(pending.data() + h_directory_checksum)) fail(h_directory_checksum, "directory_checksum", 32, "directory checksum mismatch");
+    if (directory_bytes < directory_header_bytes) fail(base, "directory", 32, "shorter than its 16-byte header");
+    const uint64_t kept = load_u32(d);
+    meshes.resize(meshes_declared);
+    uint64_t entries = directory_header_bytes;
+    uint64_t data = entries + kept * kept_entry_bytes + uint64_t(meshes_declared) * quantization_bytes + uint64_t(chunks_declared) * chunk_record_bytes;
+    if (data > directory_bytes) fail(base, "directory kept_count", 32, std::to_string(kept) + " kept sections do not fit in the directory");
+    const uint64_t quant = entries + kept * kept_entry_bytes, table = quant + uint64_t(meshes_declared) * quantization_bytes;
+    for (uint64_t k = 0; k < kept; ++k) {
+        const uint8_t* e = d + entries + k * kept_entry_bytes;
+        const uint32_t type = load_u32(e), mesh = load_u32(e + 4);
+        const uint64_t bytes = load_u64(e + 8);
+        if (bytes > directory_bytes - data) fail(base + entries + k * kept_entry_bytes + 8, "kept section " + std::to_string(k) + " bytes", 32, "runs past the directory's end");
+        read_kept_section(type, mesh, d + data, bytes, base + data);
+        data += bytes;
+    }
+    if (data != directory_bytes) fail(base + data, "directory", 32, std::to_string(directory_bytes - data) + " bytes after the kept sections");
+    for (uint32_t m = 0; m < meshes_declared; ++m) {
+        const std::string field = "mesh " + std::to_string(m);
+        if (meshes[m].header.empty()) fail(base, field + " MESH", 32, "the directory keeps no MESH section for the mesh");
+        read_quantization(meshes[m], d + quant + uint64_t(m) * quantization_bytes, base + quant + uint64_t(m) * quantization_bytes, field + " quantization");
+    }
+    read_chunk_table(d + table, base + table);
+    pending.erase(pending.begin(), pending.begin() + header_bytes + directory_bytes);
+    consumed = header_bytes + directory_bytes;
+    directory = true;
+}
+
+// A section the directory keeps whole: a file-level one as stored, or a mesh's header, metadata,
+// groups, parts or carried streams' records.
+void StreamDecoder::Impl::read_kept_section(uint32_t type, uint32_t mesh, const uint8_t* data, uint64_t bytes, uint64_t offset) {
+    using namespace layout;
+    if (mesh == file_level) {
+        file_sections.push_back({type, mesh, std::vector<uint8_t>(data, data + bytes)});
+        return;
+    }
+    if (mesh >= meshes.size()) fail(offset, "kept section", 32, "names mesh " + std::to_string(mesh) + " of " + std::to_string(meshes.size()));
+    MeshState& m = meshes[mesh];
+    const std::string field = "mesh " + std::to_string(mesh);
+    if (type == sec_mesh) {
+        if (bytes < mesh_header_bytes) fail(offset, field + " MESH", 32, "shorter than the 64-byte mesh header");
+        m.header.assign(data, data + bytes);
+        m.vertex_count = load_u32(data + m_vertex_count);
+        m.triangle_count = load_u32(data + m_triangle_count);
+        m.min_vertex_count = load_u32(data + m_min_vertex_count);
+        m.index_size = load_u32(data + m_index_size);
+        m.attributes = load_u32(data + m_attributes);
+        if (m.vertex_count > 0 && (m.min_vertex_count < 1 || m.min_vertex_count > m.vertex_count))
+            fail(offset + m_min_vertex_count, field + " min_vertex_count", 32, std::to_string(m.min_vertex_count) + " is not in [1, " + std::to_string(m.vertex_count) + "]");
+        if (m.index_size != 2 && m.index_size != 4) fail(offset + m_index_size, field + " index_size", 32, "is " + std::to_string(m.index_size) + ", not 2 or 4");
+        if (m.attributes & ~known_attributes) fail(offset + m_attributes, field + " attributes", 32, "has unknown bits");
+        if (m.parts.empty()) m.parts.push_back({0, m.triangle_count, int32_t(load_u32(data + m_material)), m.attributes & stream_attributes});
+    } else if (type == sec_metadata) {
+        m.metadata.assign(data, data + bytes);
+    } else if (type == sec_pairs) {
+        m.pair_bits.assign(data, data + bytes);
+    } else if (type == sec_parts) {
+        if (bytes < parts_header_bytes || (bytes - parts_header_bytes) % part_record_bytes || load_u32(data) != (bytes - parts_header_bytes) / part_record_bytes)
+            fail(offset, field + " PART", 32, "is not a header and its part records");
+        m.parts.clear();
+        for (uint64_t k = 0; k < (bytes - parts_header_bytes) / part_record_bytes; ++k) {
+            const uint8_t* r = data + parts_header_bytes + k * part_record_bytes;
+            m.parts.push_back({load_u32(r), load_u32(r + 4), int32_t(load_u32(r + 8)), load_u32(r + 12)});
+        }
+    } else if (type == sec_extra_streams) {
+        for (const VertexStreamView& s : detail::decode_extra_streams(data, bytes, offset, path, field, 0)) {
+            Carried c;
+            c.record = s;
+            c.name = std::string(s.name);
+            c.element_bytes = s.components * component_bytes(s.component_type);
+            m.carried.push_back(std::move(c));
+        }
+        for (Carried& c : m.carried) c.record.name = c.name;
+    } else {
+        fail(offset, field + " kept section", 32, "a mesh keeps only MESH, META, PAIR, PART and XATT in the directory");
+    }
+}
+
+void StreamDecoder::Impl::read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field) {
+    StreamQuantization& s = m.quantization;
+    s.position_bits = load_u32(q + q_position_bits);
+    s.normal_bits = load_u32(q + q_normal_bits);
+    s.texcoord_bits = load_u32(q + q_texcoord_bits);
+    if (s.position_bits < 1 || s.position_bits > 16) fail(offset + q_position_bits, field + " position_bits", 32, std::to_string(s.position_bits) + " is not in [1, 16]");
+    if (s.normal_bits < 2 || s.normal_bits > 16) fail(offset + q_normal_bits, field + " normal_bits", 32, std::to_string(s.normal_bits) + " is not in [2, 16]");
+    if (s.texcoord_bits < 1 || s.texcoord_bits > 16) fail(offset + q_texcoord_bits, field + " texcoord_bits", 32, std::to_string(s.texcoord_bits) + " is not in [1, 16]");
+    auto finite = [&](uint32_t at, const char* name, bool positive) {
+        const float v = load_f32(q + at);
+        if (!std::isfinite(v) || (positive && !(v > 0))) fail(offset + at, field + " " + name, 32, positive ? "is not a finite positive step" : "is not finite");
+        return v;
+    };
+    for (int k = 0; k < 3; ++k) s.position_min[k] = finite(q_position_min + 4 * k, "position_min", false);
+    s.position_step = finite(q_position_step, "position_step", true);
+    for (int t = 0; t < 2; ++t)
+        for (int k = 0; k < 2; ++k) {
+            s.texcoord_min[t][k] = finite((t ? q_texcoord1_min : q_texcoord0_min) + 4 * k, "texcoord_min", false);
+            s.texcoord_step[t][k] = finite((t ? q_texcoord1_step : q_texcoord0_step) + 4 * k, "texcoord_step", true);
+        }
+    m.corners.resize(m.parts.size());
+}
+
+// rule 33: every chunk adds vertices to one mesh, from where its previous chunk ended, without
+// splitting a group of copies; the first reaches the survivors, the last the whole mesh
+void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset) {
+    std::vector<uint32_t> end(meshes.size(), 0);
+    uint64_t at = header_bytes + directory_bytes;
+    for (uint32_t k = 0; k < chunks_declared; ++k) {
+        const uint8_t* r = table + uint64_t(k) * chunk_record_bytes;
+        const uint64_t ro = offset + uint64_t(k) * chunk_record_bytes;
+        const std::string field = "chunk " + std::to_string(k);
+        StreamChunk c;
+        c.mesh = load_u32(r + r_mesh);
+        if (c.mesh >= meshes.size()) fail(ro + r_mesh, field + " mesh", 33, "mesh " + std::to_string(c.mesh) + " does not exist");
+        const MeshState& m = meshes[c.mesh];
+        c.vertex_begin = end[c.mesh];
+        c.vertex_end = load_u32(r + r_vertex_end);
+        c.triangles = load_u32(r + r_triangle_end);
+        if (c.vertex_end <= c.vertex_begin || c.vertex_end > m.vertex_count)
+            fail(ro + r_vertex_end, field + " vertex_end", 33, std::to_string(c.vertex_end) + " is not in (" + std::to_string(c.vertex_begin) + ", " + std::to_string(m.vertex_count) + "]");
+        if (c.vertex_end < m.min_vertex_count) fail(ro + r_vertex_end, field + " vertex_end", 33, "the mesh's first chunk holds its " + std::to_string(m.min_vertex_count) + " survivors");
+        if (splits_group(m.pair_bits, c.vertex_end, m.vertex_count)) fail(ro + r_vertex_end, field + " vertex_end", 33, "ends inside a group of copies");
+        if (c.triangles > m.triangle_count) fail(ro + r_triangle_end, field + " triangle_end", 33, "past the mesh's " + std::to_string(m.triangle_count) + " triangles");
+        end[c.mesh] = c.vertex_end;
+        c.begin_byte = at;
+        c.end_byte = at + load_u32(r + r_bytes);
+        if (c.end_byte > declared_bytes) fail(ro + r_bytes, field + " bytes", 33, "runs past the file's end");
+        at = c.end_byte;
+        chunks.push_back(c);
+        chunk_checksums.push_back(load_u32(r + r_checksum));
+    }
+    if (at != declared_bytes) fail(h_file_bytes, "file_bytes", 33, "the chunks end at byte " + std::to_string(at) + ", not at the file's " + std::to_string(declared_bytes));
+    for (uint32_t m = 0; m < meshes.size(); ++m)
+        if (end[m] != meshes[m].vertex_count)
+            fail(offset, "mesh " + std::to_string(m) + " chunks", 33, "reach vertex " + std::to_string(end[m]) + " of " + std::to_string(meshes[m].vertex_count));
+}
+
+// rules 35 and 36: a chunk's counts, its blocks and the values they decode to
+void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
+    MeshState& m = meshes[chunk.mesh];
+    const std::string field = "chunk " + std::to_string(&chunk - chunks.data());
+    ChunkReader in{data, bytes, 0, chunk.begin_byte, &path, &field};
+    // a block of count elements holds at least count / 16 bytes: a bound on what we allocate
+    const uint64_t plausible = 16 * bytes + 16;
+    if (chunk.vertex_end - chunk.vertex_begin > plausible) in.fail(std::to_string(chunk.vertex_end - chunk.vertex_begin) + " vertices cannot fit in " + std::to_string(bytes) + " bytes");
+    std::vector<uint32_t> added(m.parts.size()), updates(m.parts.size());
+    for (size_t p = 0; p < m.parts.size(); ++p) {
+        added[p] = in.u32();
+        updates[p] = in.u32();
+        const uint64_t live = m.corners[p].size() / 3;
+        if (added[p] > m.parts[p].triangle_count - live) in.fail("part " + std::to_string(p) + " adds " + std::to_string(added[p]) + " triangles to its " + std::to_string(live) + " of " + std::to_string(m.parts[p].triangle_count));
+        if (updates[p] > 3 * live) in.fail("part " + std::to_string(p) + " updates " + std::to_string(updates[p]) + " corners of its " + std::to_string(3 * live));
+        if (added[p] > plausible || updates[p] > plausible) in.fail("part " + std::to_string(p) + "'s counts cannot fit in " + std::to_string(bytes) + " bytes");
+    }
+    decode_vertices(m, in, chunk.vertex_begin, chunk.vertex_end);
+    decode_triangles(m, in, chunk.vertex_end, added, updates);
+    if (in.at != bytes) in.fail(std::to_string(bytes - in.at) + " bytes after the last block");
+    uint64_t live = 0;
+    for (const auto& c : m.corners) live += c.size() / 3;
+    if (live != chunk.triangles) in.fail("decodes to " + std::to_string(live) + " live triangles where the chunk table says " + std::to_string(chunk.triangles), 36);
+    m.resolution = chunk.vertex_end;
+}
+
+namespace {
+
+/// Decodes a block of `count` elements of `size` bytes with the vertex codec.
+std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, size_t count, size_t size, const char* what) {
+    const auto [p, n] = in.block(what);
+    std::vector<uint8_t> out(count * size);
+    if (!codecs.decode_vertices(out.data(), count, size, p, n)) in.fail(std::string(what) + " block does not decode (meshopt vertex codec)");
+    return out;
+}
+
+/// Adds residuals to the predicted grid values, `lanes` values of type T per vertex.
+template <class T>
+void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const uint8_t* residuals, uint32_t element, uint32_t a, uint32_t b, int lanes) {
+    for (uint32_t v = a; v < b; ++v) {
+        const int64_t from = predictor(v, substitute[v]);
+        for (int k = 0; k < lanes; ++k) {
+            T r;
+            std::memcpy(&r, residuals + size_t(v - a) * element + k * sizeof(T), sizeof(T));
+            const T base = from < 0 ? T(0) : values[size_t(from) * lanes + k];
+            values.push_back(T(base + r));
+        }
+    }
+}
+
+} // namespace
+
+void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
+    using namespace layout;
+    const size_t count = b - a;
+    const std::vector<uint8_t> subs = vertex_block(codecs, in, count, substitute_element, "SUBS");
+    for (uint32_t v = a; v < b; ++v) {
+        const uint32_t d = load_u32(&subs[size_t(v - a) * 4]);
+        if (v < m.min_vertex_count ? d != 0 : (d < 1 || d > v))
+            in.fail("vertex " + std::to_string(v) + " substitute distance " + std::to_string(d) + (v < m.min_vertex_count ? " (a survivor's is 0)" : " is not in [1, v]"), 36);
+        m.substitute.push_back(v - d);
+    }
+    const StreamQuantization& q = m.quantization;
+    const std::vector<uint8_t> pos = vertex_block(codecs, in, count, position_element, "POSI");
+    predict(m.positions, m.substitute, pos.data(), position_element, a, b, 3);
+    for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)
+        if (m.positions[i] >> q.position_bits) in.fail("vertex " + std::to_string(i / 3) + " position is off its " + std::to_string(q.position_bits) + "-bit grid", 36);
+    if (m.attributes & attr_normals) predict(m.normals, m.substitute, vertex_block(codecs, in, count, normal_element, "NORM").data(), normal_element, a, b, 2);
+    for (int t = 0; t < 2; ++t) {
+        if (!(m.attributes & (t ? attr_texcoords1 : attr_texcoords))) continue;
+        predict(m.texcoords[t], m.substitute, vertex_block(codecs, in, count, texcoord_element, t ? "TEX1" : "TEX0").data(), texcoord_element, a, b, 2);
+        for (size_t i = size_t(a) * 2; i < m.texcoords[t].size(); ++i)
+            if (m.texcoords[t][i] >> q.texcoord_bits) in.fail("vertex " + std::to_string(i / 2) + " texture coordinate is off its grid", 36);
+    }
+    if (m.attributes & attr_colors) predict(m.colors, m.substitute, vertex_block(codecs, in, count, color_element, "COL0").data(), color_element, a, b, 4);
+    if (m.attributes & attr_tangents) {
+        const std::vector<uint8_t> tan = vertex_block(codecs, in, count, tangent_element, "TANG");
+        predict(m.tangents, m.substitute, tan.data(), tangent_element, a, b, 3);
+    }
+    for (Carried& c : m.carried) {
+        const uint32_t size = padded_element(c.element_bytes);
+        const std::vector<uint8_t> raw = vertex_block(codecs, in, count, size, "XATT");
+        for (size_t v = 0; v < count; ++v) c.data.insert(c.data.end(), raw.begin() + v * size, raw.begin() + v * size + c.element_bytes);
+    }
+}
+
+// The rotation block after an index block: the index codec may turn a triangle's corners, and
+// the file's order is restored (an empty block: nothing turned).
+void StreamDecoder::Impl::rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles) {
+    const auto [data, n] = in.block("rotations");
+    if (n == 0) return;
+    const size_t elements = (size_t(triangles) + 3) / 4;
+    std::vector<uint8_t> turns(elements * rotation_element);
+    if (!codecs.decode_vertices(turns.data(), elements, rotation_element, data, n)) in.fail("rotations block does not decode (meshopt vertex codec)");
+    for (size_t t = 0; t < triangles; ++t) {
+        const uint8_t r = turns[t];
+        if (r > 2) in.fail("triangle " + std::to_string(t) + " of the block turns by " + std::to_string(r) + ", not 0 to 2", 36);
+        uint32_t* c = corners + 3 * t;
+        const uint32_t d[3] = {c[0], c[1], c[2]};
+        for (int k = 0; k < 3; ++k) c[k] = d[(r + k) % 3];
+    }
+}
+
+void StreamDecoder::Impl::decode_triangles(MeshState& m, ChunkReader& in, uint32_t b, const std::vector<uint32_t>& added, const std::vector<uint32_t>& updates) {
+    for (size_t p = 0; p < m.parts.size(); ++p) {
+        std::vector<uint32_t>& corners = m.corners[p];
+        const size_t old = corners.size();
+        if (added[p]) {
+            const auto [data, n] = in.block("TRIS");
+            corners.resize(old + 3 * size_t(added[p]));
+            if (!codecs.decode_indices(corners.data() + old, 3 * size_t(added[p]), data, n)) in.fail("TRIS block does not decode (meshopt index codec)");
+            rotate_back(in, corners.data() + old, added[p]);
+            for (size_t i = old; i < corners.size(); ++i)
+                if (corners[i] >= b) in.fail("part " + std::to_string(p) + " corner " + std::to_string(i) + " is vertex " + std::to_string(corners[i]) + ", not below " + std::to_string(b), 36);
+        }
+        if (updates[p]) {
+            const std::vector<uint8_t> records = vertex_block(codecs, in, updates[p], update_element, "updates");
+            int64_t previous = -1;
+            for (uint32_t k = 0; k < updates[p]; ++k) {
+                const uint32_t slot = layout::load_u32(&records[size_t(k) * 8]), value = layout::load_u32(&records[size_t(k) * 8 + 4]);
+                if (int64_t(slot) <= previous || slot >= old)
+                    in.fail("part " + std::to_string(p) + " update " + std::to_string(k) + " names corner " + std::to_string(slot) + ": slots ascend and stay below the " + std::to_string(old) + " corners before the chunk", 36);
+                if (value >= b) in.fail("part " + std::to_string(p) + " update " + std::to_string(k) + " sets vertex " + std::to_string(value) + ", not below " + std::to_string(b), 36);
+                corners[slot] = value;
+                previous = slot;
+            }
+        }
+    }
+}
+
+// The .tom of what is decoded: the file-level sections as stored, then every mesh.
+std::vector<uint8_t> StreamDecoder::Impl::assemble() const {
+    std::vector<layout::PendingSection> sections = file_sections;
+    for (uint32_t i = 0; i < meshes.size(); ++i)
+        for (layout::PendingSection& s : mesh_sections(meshes[i], i)) sections.push_back(std::move(s));
+    return layout::assemble_file(sections, uint32_t(meshes.size()));
+}
+
+namespace {
+
+std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
+    std::vector<uint8_t> out(values.size() * 4);
+    for (size_t i = 0; i < values.size(); ++i) layout::store_f32(&out[4 * i], values[i]);
+    return out;
+}
+
+void put_index(std::vector<uint8_t>& out, uint32_t v, uint32_t index_size) {
+    for (uint32_t k = 0; k < index_size; ++k) out.push_back(uint8_t(v >> (8 * k)));
+}
+
+/// META with its usable floor lowered to the decoded resolution (a floor above it would make
+/// every decoded level "below the floor", and readers ignore a floor past the vertex count).
+std::vector<uint8_t> clamped_metadata(std::vector<uint8_t> meta, uint32_t resolution) {
+    if (meta.size() < 4) return meta;
+    uint64_t at = 4;
+    for (uint32_t e = 0, count = layout::load_u32(meta.data()); e < count && meta.size() - at >= 8; ++e) {
+        const uint32_t key = layout::load_u32(&meta[at]), value = layout::load_u32(&meta[at + 4]);
+        const uint64_t key_at = at + 8, value_at = key_at + (uint64_t(key) + 3) / 4 * 4;
+        if (value_at > meta.size() || meta.size() - value_at < value) break;
+        if (std::string_view(reinterpret_cast<const char*>(&meta[key_at]), key) == "usable_floor" && value >= 8 &&
+            layout::load_u32(&meta[value_at + 4]) > resolution)
+            layout::store_u32(&meta[value_at + 4], resolution);
+        at = value_at + (uint64_t(value) + 3) / 4 * 4;
+    }
+    return meta;
+}
+
+} // namespace
+
+std::vector<layout::PendingSection> StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index) const {
+    using namespace layout;
+    const uint32_t n = m.resolution;
+    const StreamQuantization& q = m.quantization;
+    std::vector<PendingSection> out;
+    // positions and bounds
+    std::vector<float> positions(size_t(n) * 3);
+    float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (size_t i = 0; i < positions.size(); ++i) {
+        const size_t k = i % 3;
+        positions[i] = dequantize(m.positions[i], q.position_min[k], q.position_step);
+        lo[k] = i < 3 ? positions[i] : std::min(lo[k], positions[i]);
+        hi[k] = i < 3 ? positions[i] : std::max(hi[k], positions[i]);
+    }
+    std::vector<uint8_t> tris;
+    uint32_t live = 0;
+    for (const std::vector<uint32_t>& c : m.corners) {
+        for (uint32_t v : c) put_index(tris, v, m.index_size);
+        live += uint32_t(c.size() / 3);
+    }
+    std::vector<uint8_t> head = m.header;
+    store_u32(&head[m_vertex_count], n);
+    store_u32(&head[m_triangle_count], live);
+    store_u32(&head[m_min_vertex_count], n ? m.min_vertex_count : 0);
+    for (int k = 0; k < 3; ++k) store_f32(&head[m_bounds_min + 4 * k], lo[k]), store_f32(&head[m_bounds_max + 4 * k], hi[k]);
+    out.push_back({sec_mesh, index, std::move(head)});
+    out.push_back({sec_positions, index, float_bytes(positions)});
+    // the other streams, in the order of layout::attribute_streams
+    if (m.attributes & attr_normals) {
+        std::vector<float> normals(size_t(n) * 3);
+        for (uint32_t v = 0; v < n; ++v) octahedral_decode(m.normals[2 * v], m.normals[2 * v + 1], q.normal_bits, &normals[3 * v]);
+        out.push_back({sec_normals, index, float_bytes(normals)});
+    }
+    auto texcoords = [&](int t) {
+        std::vector<float> uv(size_t(n) * 2);
+        for (size_t i = 0; i < uv.size(); ++i) uv[i] = dequantize(m.texcoords[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2]);
+        return float_bytes(uv);
+    };
+    if (m.attributes & attr_texcoords) out.push_back({sec_texcoords, index, texcoords(0)});
+    if (m.attributes & attr_colors) {
+        std::vector<float> colors(size_t(n) * 4);
+        for (size_t i = 0; i < colors.size(); ++i) colors[i] = float(m.colors[i]) / 255.0f;
+        out.push_back({sec_colors, index, float_bytes(colors)});
+    }
+    if (m.attributes & attr_texcoords1) out.push_back({sec_texcoords1, index, texcoords(1)});
+    if (m.attributes & attr_tangents) {
+        std::vector<float> tangents(size_t(n) * 4);
+        for (uint32_t v = 0; v < n; ++v) {
+            octahedral_decode(m.tangents[3 * v], m.tangents[3 * v + 1], q.normal_bits, &tangents[4 * v]);
+            tangents[4 * v + 3] = m.tangents[3 * v + 2] < 0 ? -1.0f : 1.0f;
+        }
+        out.push_back({sec_tangents, index, float_bytes(tangents)});
+    }
+    std::vector<uint8_t> subs;
+    for (uint32_t v = 0; v < n; ++v) put_index(subs, m.substitute[v], m.index_size);
+    out.push_back({sec_substitute, index, std::move(subs)});
+    out.push_back({sec_triangles, index, std::move(tris)});
+    if (!m.metadata.empty()) out.push_back({sec_metadata, index, clamped_metadata(m.metadata, n)});
+    if (!m.pair_bits.empty() && n > 0) {
+        std::vector<uint8_t> bits(m.pair_bits.begin(), m.pair_bits.begin() + (n + 7) / 8);
+        for (uint32_t i = n - 1; i < (n + 7) / 8 * 8; ++i) bits[i / 8] &= uint8_t(~(1u << (i % 8)));  // no group past the last vertex
+        out.push_back({sec_pairs, index, std::move(bits)});
+    }
+    if (m.parts.size() > 1) {
+        std::vector<uint8_t> parts(parts_header_bytes + part_record_bytes * m.parts.size(), 0);
+        store_u32(parts.data(), uint32_t(m.parts.size()));
+        uint32_t first = 0;
+        for (size_t p = 0; p < m.parts.size(); ++p) {
+            uint8_t* r = &parts[parts_header_bytes + part_record_bytes * p];
+            const uint32_t count = uint32_t(m.corners[p].size() / 3);
+            store_u32(r, first), store_u32(r + 4, count), store_u32(r + 8, uint32_t(m.parts[p].material)), store_u32(r + 12, m.parts[p].attributes);
+            first += count;
+        }
+        out.push_back({sec_parts, index, std::move(parts)});
+    }
+    if (!m.carried.empty()) {
+        std::vector<VertexStreamView> views;
+        for (const Carried& c : m.carried) {
+            VertexStreamView v = c.record;
+            v.data = c.data.data();
+            views.push_back(v);
+        }
+        out.push_back({sec_extra_streams, index, detail::encode_extra_streams(views, n)});
+    }
+    return out;
+}
+
+} // namespace tom

@@ -1,0 +1,263 @@
+// Streamed .tom files (docs/FORMAT.md, "Streamed files"): every prefix that ends on a chunk
+// boundary decodes to the level at the vertex counts received, index for index what extraction
+// gives from the ordinary file, with positions and attributes within the stated quantization;
+// bad bytes are errors that name the place, never a crash.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+
+#include "support.h"
+#include "tom/errors.h"
+#include "tom/extract.h"
+#include "tom/format.h"
+#include "tom/builder/writer.h"
+#include "tom/io/import.h"
+#include "tom/stream/stream_file.h"
+#include "format_layout.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The ordinary .tom image of a mesh file: every mesh cleaned and built, with its scene.
+std::vector<uint8_t> tom_image(const std::string& path) {
+    tom::ImportResult r = tom::import_file(path);
+    std::vector<tom::TomMesh> built;
+    for (tom::Mesh& m : r.meshes) {
+        tom::clean_mesh(m);
+        built.push_back(tom::build(m));
+    }
+    return tom::serialize(built, r.scene);
+}
+
+/// The triangles of a mesh at resolution n, as extraction gives them (parts one after another).
+std::vector<uint32_t> level(const tom::MeshView& m, uint32_t n) {
+    std::vector<uint32_t> out(3 * size_t(m.triangle_count));
+    const tom::Extracted e = tom::extract(m, n, out.data(), out.size());
+    out.resize(3 * size_t(e.triangle_count));
+    return out;
+}
+
+float distance3(const float* a, const float* b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/// Mesh `d` (decoded from a prefix) against mesh `o` (the ordinary file's) at d's resolution n:
+/// the same triangles at n and at two coarser resolutions, the same substitutes, groups and
+/// carried streams, and values within the quantization's bounds.
+void check_prefix_mesh(const tom::MeshView& o, const tom::MeshView& d, const tom::StreamQuantization& q) {
+    const uint32_t n = d.vertex_count;
+    INFO("mesh '" << std::string(o.name) << "' at " << n << " of " << o.vertex_count << " vertices");
+    if (n == 0) {
+        CHECK(d.triangle_count == 0);
+        return;
+    }
+    CHECK(d.min_vertex_count == o.min_vertex_count);
+    CHECK(level(d, n) == level(o, n));
+    for (const uint32_t coarser : {o.min_vertex_count, d.whole_groups_below(std::max(o.min_vertex_count, n / 2))}) CHECK(level(d, coarser) == level(o, coarser));
+    REQUIRE(tom::part_count(d) == tom::part_count(o));
+    for (uint32_t p = 0; p < tom::part_count(d); ++p) CHECK(tom::part_at(d, p).material == tom::part_at(o, p).material);
+    float worst_position = 0, worst_normal = 0, worst_uv = 0;
+    for (uint32_t v = 0; v < n; ++v) {
+        REQUIRE(d.substitute_at(v) == o.substitute_at(v));
+        CHECK(d.splits_pair(v) == (v < n && o.splits_pair(v)));
+        for (int k = 0; k < 3; ++k) worst_position = std::max(worst_position, std::fabs(d.positions[3 * v + k] - o.positions[3 * v + k]));
+        if (o.normals) worst_normal = std::max(worst_normal, distance3(d.normals + 3 * v, o.normals + 3 * v));
+        if (o.texcoords)
+            for (int k = 0; k < 2; ++k)
+                worst_uv = std::max(worst_uv, std::fabs(d.texcoords[2 * v + k] - o.texcoords[2 * v + k]) / q.texcoord_step[0][k]);
+    }
+    // half a grid step, and the float rounding of the step's multiples
+    CHECK(worst_position <= 0.5f * q.position_step * 1.001f + 1e-6f * (1 + std::fabs(q.position_min[0]) + std::fabs(q.position_min[1]) + std::fabs(q.position_min[2])));
+    // octahedral pairs of b bits: a unit vector within 2.5 grid steps of 1 / (2^(b-1) - 1) (chord)
+    CHECK(worst_normal <= 2.5f / float((1 << (q.normal_bits - 1)) - 1));
+    CHECK(worst_uv <= 0.5001f);
+    REQUIRE(d.extra_stream_count == o.extra_stream_count);
+    for (uint32_t s = 0; s < d.extra_stream_count; ++s) {
+        const tom::VertexStreamView &x = d.extra_streams[s], &y = o.extra_streams[s];
+        CHECK(x.name == y.name);
+        const size_t bytes = size_t(n) * x.components * tom::component_bytes(x.component_type);
+        CHECK(std::equal(x.data, x.data + bytes, y.data));
+    }
+}
+
+/// Feeds the stream chunk by chunk, checking each decoded prefix against the ordinary file.
+void check_every_prefix(const std::string& what, const std::vector<uint8_t>& image, const tom::StreamOptions& options = {}) {
+    INFO(what);
+    const tom::File original = tom::File::from_bytes(image.data(), image.size(), what);
+    const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size(), options, what);
+    CHECK(tom::encode_stream(image.data(), image.size(), options, what) == stream);  // deterministic
+    tom::StreamDecoder decoder(tom::meshopt_codecs(), what);
+    decoder.append(stream.data(), 64);
+    CHECK_FALSE(decoder.has_directory());
+    uint64_t fed = 64;
+    const uint64_t directory_end = 64 + [&] { tom::StreamDecoder d(tom::meshopt_codecs()); d.append(stream.data(), stream.size()); return d.chunks()[0].begin_byte - 64; }();
+    decoder.append(stream.data() + fed, directory_end - fed);
+    fed = directory_end;
+    REQUIRE(decoder.has_directory());
+    REQUIRE(decoder.mesh_count() == original.mesh_count());
+    const std::vector<tom::StreamChunk> chunks = decoder.chunks();
+    std::printf("%s: %zu bytes as .tom, %zu streamed (%.1f%%) in %zu chunks; the first chunk ends at byte %llu (%.1f%%)\n", what.c_str(), image.size(),
+                stream.size(), 100.0 * double(stream.size()) / double(image.size()), chunks.size(), (unsigned long long)chunks[0].end_byte,
+                100.0 * double(chunks[0].end_byte) / double(stream.size()));
+    for (size_t k = 0; k < chunks.size(); ++k) {
+        // a chunk in two pieces: nothing is decoded until its last byte
+        const uint64_t middle = (chunks[k].begin_byte + chunks[k].end_byte) / 2;
+        decoder.append(stream.data() + fed, middle - fed);
+        CHECK(decoder.decoded_chunks() == k);
+        decoder.append(stream.data() + middle, chunks[k].end_byte - middle);
+        fed = chunks[k].end_byte;
+        REQUIRE(decoder.decoded_chunks() == k + 1);
+        CHECK(decoder.vertex_count(chunks[k].mesh) == chunks[k].vertex_end);
+        const tom::File prefix = decoder.file();
+        CHECK(prefix.mesh(chunks[k].mesh).triangle_count == chunks[k].triangles);
+        CHECK(prefix.scene().materials.size() == original.scene().materials.size());
+        CHECK(prefix.scene().instances.size() == original.scene().instances.size());
+        for (uint32_t i = 0; i < original.mesh_count(); ++i) check_prefix_mesh(original.mesh(i), prefix.mesh(i), decoder.quantization(i));
+    }
+    CHECK(decoder.complete());
+    CHECK(fed == stream.size());
+}
+
+/// Byte offset of chunk k's record in the directory (FORMAT.md: header, kept entries,
+/// quantization records, then the chunk table).
+uint64_t chunk_record(const std::vector<uint8_t>& s, uint32_t k) {
+    using namespace tom::layout;
+    return 64 + 16 + 16 * uint64_t(load_u32(&s[64])) + 64 * uint64_t(load_u32(&s[24])) + 24 * uint64_t(k);
+}
+
+/// Recomputes every checksum of a stream after a test changed its bytes, so that the checks
+/// behind the checksums are what refuses them.
+void reseal(std::vector<uint8_t>& s) {
+    using namespace tom::layout;
+    const uint64_t directory = load_u64(&s[32]);
+    uint64_t at = 64 + directory;
+    for (uint32_t k = 0; k < load_u32(&s[28]); ++k) {
+        const uint64_t r = chunk_record(s, k);
+        const uint32_t bytes = load_u32(&s[r + 16]);
+        if (at + bytes <= s.size()) store_u32(&s[r + 20], tom::crc32(&s[at], bytes));
+        at += bytes;
+    }
+    store_u32(&s[40], tom::crc32(&s[64], directory));
+    store_u32(&s[44], tom::crc32(s.data(), 44));
+}
+
+} // namespace
+
+TEST_CASE("every chunk of a streamed scanned mesh decodes to its level", "[stream]") {
+    check_every_prefix("bunny00", tom_image(test::sample("meshes/bunny00.off")));
+}
+
+TEST_CASE("streamed meshes made here, at every precision, decode to their levels", "[stream]") {
+    for (const test::NamedMesh& m : test::generated_meshes()) {
+        const std::vector<uint8_t> image = tom::serialize({tom::build(m.mesh)});
+        check_every_prefix(m.name, image);
+        tom::StreamOptions fine;
+        fine.position_bits = 16, fine.normal_bits = 16, fine.texcoord_bits = 16, fine.growth = 2;
+        check_every_prefix(m.name + " at 16 bits", image, fine);
+    }
+}
+
+TEST_CASE("streamed scenes keep parts, materials, textures, groups and carried streams", "[stream]") {
+    for (const char* path : {"assimp/OBJ/spider.obj", "assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf", "assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
+                             "assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf", "assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"}) {
+        const std::vector<uint8_t> image = tom_image(test::sample(path));
+        check_every_prefix(path, image);
+        // the whole stream keeps the file's scene: its images and source glTF byte for byte
+        const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size());
+        tom::StreamDecoder d(tom::meshopt_codecs());
+        d.append(stream.data(), stream.size());
+        const tom::File whole = d.file(), original = tom::File::from_bytes(image.data(), image.size());
+        REQUIRE(whole.scene().images.size() == original.scene().images.size());
+        for (size_t i = 0; i < whole.scene().images.size(); ++i)
+            CHECK(std::equal(whole.scene().images[i].data, whole.scene().images[i].data + whole.scene().images[i].bytes, original.scene().images[i].data));
+        CHECK(whole.scene().gltf.json == original.scene().gltf.json);
+        CHECK(whole.provenance() == original.provenance());
+    }
+}
+
+TEST_CASE("a stream fed in random pieces decodes as when fed whole", "[stream]") {
+    const std::vector<uint8_t> image = tom_image(test::sample("assimp/OBJ/spider.obj"));
+    const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size());
+    tom::StreamDecoder whole(tom::meshopt_codecs());
+    whole.append(stream.data(), stream.size());
+    std::mt19937 rng(7);
+    for (int run = 0; run < 5; ++run) {
+        tom::StreamDecoder pieces(tom::meshopt_codecs());
+        for (size_t at = 0; at < stream.size();) {
+            const size_t n = std::min(stream.size() - at, size_t(rng() % 3000));
+            pieces.append(stream.data() + at, n);
+            at += n;
+        }
+        CHECK(pieces.tom_bytes() == whole.tom_bytes());
+    }
+}
+
+TEST_CASE("bad streams are errors naming the place, and keep what was decoded", "[stream][errors]") {
+    const std::vector<uint8_t> image = tom_image(test::sample("meshes/fandisk.off"));
+    const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size());
+    tom::StreamDecoder reference(tom::meshopt_codecs());
+    reference.append(stream.data(), stream.size());
+    const std::vector<tom::StreamChunk> chunks = reference.chunks();
+    const uint64_t directory_end = chunks[0].begin_byte;
+
+    SECTION("a flipped byte anywhere is refused by a checksum") {
+        for (const uint64_t at : {uint64_t(20), uint64_t(70), directory_end - 3, chunks[0].begin_byte + 5, chunks[3].begin_byte + 9, stream.size() - 1}) {
+            std::vector<uint8_t> bad = stream;
+            bad[at] ^= 0x40;
+            tom::StreamDecoder d(tom::meshopt_codecs(), "bad.tom");
+            INFO("byte " << at);
+            try {
+                d.append(bad.data(), bad.size());
+                FAIL("accepted");
+            } catch (const tom::FormatError& e) {
+                CHECK(e.path() == "bad.tom");
+                CHECK(e.rule() >= 31);
+                CHECK(e.rule() <= 34);
+            }
+            // what came before the bad chunk is kept, and the decoder takes no more bytes
+            if (at >= chunks[0].end_byte) CHECK(d.file().mesh(0).vertex_count > 0);
+            CHECK_THROWS_AS(d.append(bad.data(), 1), tom::ArgumentError);
+        }
+    }
+    SECTION("a chunk or a table that lies behind valid checksums is refused by the decoder's checks") {
+        std::vector<uint8_t> bad = stream;
+        for (uint64_t i = chunks[2].begin_byte + 8; i < chunks[2].end_byte; ++i) bad[i] = uint8_t(bad[i] * 31 + 7);
+        reseal(bad);
+        tom::StreamDecoder d(tom::meshopt_codecs(), "lying.tom");
+        try {
+            d.append(bad.data(), bad.size());
+            FAIL("accepted");
+        } catch (const tom::FormatError& e) {
+            INFO(e.what());
+            CHECK(e.rule() >= 35);
+            CHECK(e.offset() >= chunks[2].begin_byte);
+            CHECK(e.offset() <= chunks[2].end_byte);
+        }
+        CHECK(d.decoded_chunks() == 2);
+        // a chunk table entry past the mesh's vertices
+        std::vector<uint8_t> table = stream;
+        tom::layout::store_u32(&table[chunk_record(table, 1) + 4], 1u << 30);
+        reseal(table);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "t.tom").append(table.data(), table.size()), Catch::Contains("t.tom") && Catch::Contains("chunk 1 vertex_end"));
+    }
+    SECTION("a truncated file is an error unless a byte limit asks for a prefix") {
+        const fs::path dir = fs::temp_directory_path() / ("tom_stream_" + std::to_string(::getpid()));
+        fs::create_directories(dir);
+        const fs::path path = dir / "cut.tom";
+        std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(stream.data()), std::streamsize(chunks[4].end_byte + 10));
+        CHECK_THROWS_WITH(tom::open_any(path.string()), Catch::Contains("cut.tom") && Catch::Contains("truncated"));
+        const tom::File prefix = tom::open_any(path.string(), chunks[4].end_byte + 10);
+        CHECK(prefix.mesh(0).vertex_count == chunks[4].vertex_end);
+        CHECK_THROWS_WITH(tom::open_any(test::sample("meshes/fandisk.off"), 100), Catch::Contains("not a streamed .tom"));
+        fs::remove_all(dir);
+    }
+}
