@@ -80,6 +80,19 @@ inline void octahedral_decode(int16_t qu, int16_t qv, uint32_t bits, float* n) {
     n[0] = u / len, n[1] = v / len, n[2] = z / len;
 }
 
+/// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.
+inline uint32_t index_bits(uint32_t v) {
+    uint32_t bits = 0;
+    while (v > 1 && (uint64_t(1) << bits) < v) ++bits;
+    return bits;
+}
+
+/// The six orders of a born triangle's corners: entry o gives, for each stored corner, which of
+/// (v, p, x) it is, v the split vertex, p its substitute, x the third corner. Orders 0-2 turn
+/// v -> p -> x, orders 3-5 p -> v -> x.
+constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
+constexpr uint32_t order_bits = 3;
+
 /// The vertex whose quantized values predict vertex v's: its substitute (a neighbour it collapses
 /// onto) for a removed vertex, the previous vertex for a survivor, none (zero) for vertex 0.
 /// \pre substitute[v] <= v, every vertex below v decoded.

@@ -46,6 +46,8 @@ struct MeshState {
     std::vector<uint16_t> texcoords[2];    // 2 per vertex, grid values
     std::vector<uint8_t> colors;           // 4 per vertex
     std::vector<std::vector<uint32_t>> corners;  // per part, 3 per live triangle, mapped to resolution
+    std::vector<uint64_t> part_ends;             // per part, first_triangle + triangle_count
+    std::vector<std::vector<uint32_t>> incident; // per vertex: the live corners holding it (3 t + k in the file's TRIS)
 };
 
 bool splits_group(const std::vector<uint8_t>& bits, uint32_t n, uint32_t vertex_count) {
@@ -77,6 +79,31 @@ struct ChunkReader {
     }
 };
 
+/// Bits, least significant first, within a block; reading past it is an error.
+struct BitReader {
+    const uint8_t* data;
+    uint64_t bytes, at = 0;
+    ChunkReader* in;
+    uint32_t bits(uint32_t n) {
+        uint32_t v = 0;
+        for (uint32_t i = 0; i < n; ++i, ++at) {
+            if (at >= 8 * bytes) fail("runs past the splits block");
+            v |= uint32_t(data[at / 8] >> (at % 8) & 1u) << i;
+        }
+        return v;
+    }
+    /// Elias gamma: n >= 1.
+    uint32_t gamma() {
+        uint32_t zeros = 0;
+        while (bits(1) == 0)
+            if (++zeros > 31) fail("holds a gamma code of more than 32 bits");
+        return (1u << zeros) | bits(zeros);
+    }
+    [[noreturn]] void fail(const std::string& detail) const;
+};
+
+void BitReader::fail(const std::string& detail) const { in->fail("splits block bit " + std::to_string(at) + " " + detail); }
+
 } // namespace
 
 bool is_stream(const void* bytes, size_t size) noexcept { return size >= 8 && std::memcmp(bytes, magic, 8) == 0; }
@@ -107,9 +134,10 @@ struct StreamDecoder::Impl {
     void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
     void read_chunk_table(const uint8_t* table, uint64_t offset);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
+    void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
+    void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
-    void decode_triangles(MeshState& m, ChunkReader& in, uint32_t b, const std::vector<uint32_t>& added, const std::vector<uint32_t>& updates);
     std::vector<uint8_t> assemble() const;
     std::vector<layout::PendingSection> mesh_sections(const MeshState& m, uint32_t index) const;
 };
@@ -307,6 +335,14 @@ void StreamDecoder::Impl::read_quantization(MeshState& m, const uint8_t* q, uint
             s.texcoord_step[t][k] = finite((t ? q_texcoord1_step : q_texcoord0_step) + 4 * k, "texcoord_step", true);
         }
     m.corners.resize(m.parts.size());
+    // the parts tile the triangles: a corner's place in TRIS names its part
+    uint64_t end = 0;
+    for (const Part& p : m.parts) {
+        if (p.first_triangle != end) fail(offset, field + " PART", 32, "the parts do not tile the mesh's triangles in order");
+        end += p.triangle_count;
+        m.part_ends.push_back(end);
+    }
+    if (end != m.triangle_count) fail(offset, field + " PART", 32, "the parts hold " + std::to_string(end) + " triangles, not the mesh's " + std::to_string(m.triangle_count));
 }
 
 // rule 33: every chunk adds vertices to one mesh, from where its previous chunk ended, without
@@ -349,20 +385,24 @@ void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* 
     MeshState& m = meshes[chunk.mesh];
     const std::string field = "chunk " + std::to_string(&chunk - chunks.data());
     ChunkReader in{data, bytes, 0, chunk.begin_byte, &path, &field};
-    // a block of count elements holds at least count / 16 bytes: a bound on what we allocate
+    // a block of count elements holds at least count / 16 bytes, a split at least a bit: a bound
+    // on what a chunk makes the decoder allocate
     const uint64_t plausible = 16 * bytes + 16;
     if (chunk.vertex_end - chunk.vertex_begin > plausible) in.fail(std::to_string(chunk.vertex_end - chunk.vertex_begin) + " vertices cannot fit in " + std::to_string(bytes) + " bytes");
-    std::vector<uint32_t> added(m.parts.size()), updates(m.parts.size());
+    std::vector<uint32_t> base(m.parts.size()), born(m.parts.size());
     for (size_t p = 0; p < m.parts.size(); ++p) {
-        added[p] = in.u32();
-        updates[p] = in.u32();
+        base[p] = in.u32();
+        born[p] = in.u32();
         const uint64_t live = m.corners[p].size() / 3;
-        if (added[p] > m.parts[p].triangle_count - live) in.fail("part " + std::to_string(p) + " adds " + std::to_string(added[p]) + " triangles to its " + std::to_string(live) + " of " + std::to_string(m.parts[p].triangle_count));
-        if (updates[p] > 3 * live) in.fail("part " + std::to_string(p) + " updates " + std::to_string(updates[p]) + " corners of its " + std::to_string(3 * live));
-        if (added[p] > plausible || updates[p] > plausible) in.fail("part " + std::to_string(p) + "'s counts cannot fit in " + std::to_string(bytes) + " bytes");
+        if (base[p] && chunk.vertex_begin > 0) in.fail("part " + std::to_string(p) + " has coarsest triangles outside the mesh's first chunk");
+        if (uint64_t(base[p]) + born[p] > m.parts[p].triangle_count - live)
+            in.fail("part " + std::to_string(p) + " adds " + std::to_string(uint64_t(base[p]) + born[p]) + " triangles to its " + std::to_string(live) + " of " + std::to_string(m.parts[p].triangle_count));
+        if (base[p] > plausible || born[p] > plausible) in.fail("part " + std::to_string(p) + "'s counts cannot fit in " + std::to_string(bytes) + " bytes");
     }
+    m.incident.resize(chunk.vertex_end);
+    decode_base(m, in, base);
+    decode_splits(m, in, chunk.vertex_begin, chunk.vertex_end, born);
     decode_vertices(m, in, chunk.vertex_begin, chunk.vertex_end);
-    decode_triangles(m, in, chunk.vertex_end, added, updates);
     if (in.at != bytes) in.fail(std::to_string(bytes - in.at) + " bytes after the last block");
     uint64_t live = 0;
     for (const auto& c : m.corners) live += c.size() / 3;
@@ -394,18 +434,114 @@ void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, co
     }
 }
 
+/// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
+uint32_t* corner(MeshState& m, uint32_t g) {
+    const uint64_t t = g / 3;
+    const size_t p = size_t(std::upper_bound(m.part_ends.begin(), m.part_ends.end(), t) - m.part_ends.begin());
+    if (p >= m.parts.size()) return nullptr;
+    const uint64_t slot = g - 3 * uint64_t(m.parts[p].first_triangle);
+    return slot < m.corners[p].size() ? &m.corners[p][slot] : nullptr;
+}
+
+/// Appends a triangle to part p and lists its corners at their vertices.
+void add_triangle(MeshState& m, size_t p, const uint32_t c[3]) {
+    const uint32_t g = 3 * (m.parts[p].first_triangle + uint32_t(m.corners[p].size() / 3));
+    for (int k = 0; k < 3; ++k) {
+        m.corners[p].push_back(c[k]);
+        m.incident[c[k]].push_back(g + uint32_t(k));
+    }
+}
+
 } // namespace
+
+// The triangles live at the coarsest resolution, in the mesh's first chunk: meshoptimizer's
+// index codec per part, and the rotations that undo its turns.
+void StreamDecoder::Impl::decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base) {
+    for (size_t p = 0; p < m.parts.size(); ++p) {
+        if (!base[p]) continue;
+        const auto [data, n] = in.block("TRIS");
+        std::vector<uint32_t> c(3 * size_t(base[p]));
+        if (!codecs.decode_indices(c.data(), c.size(), data, n)) in.fail("TRIS block does not decode (meshopt index codec)");
+        rotate_back(in, c.data(), base[p]);
+        for (size_t t = 0; t < base[p]; ++t) {
+            for (int k = 0; k < 3; ++k)
+                if (c[3 * t + k] >= m.min_vertex_count)
+                    in.fail("part " + std::to_string(p) + " coarsest triangle " + std::to_string(t) + " holds vertex " + std::to_string(c[3 * t + k]) + ", not a survivor", 36);
+            add_triangle(m, p, &c[3 * t]);
+        }
+    }
+}
+
+// The splits of vertices [a, b) (FORMAT.md): each vertex's substitute, which of its corners take
+// the vertex, and the triangles born with it.
+void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born) {
+    const auto [data, n] = in.block("splits");
+    BitReader r{data, n, 0, &in};
+    std::vector<uint32_t> left = born, keep, candidates;
+    for (uint32_t v = a; v < b; ++v) {
+        if (v < m.min_vertex_count) {
+            m.substitute.push_back(v);
+            continue;
+        }
+        const uint32_t p = r.bits(index_bits(v));
+        if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
+        m.substitute.push_back(p);
+        std::vector<uint32_t>& around = m.incident[p];
+        std::sort(around.begin(), around.end());
+        keep.clear();
+        for (const uint32_t g : around) {
+            if (r.bits(1)) {
+                *corner(m, g) = v;
+                m.incident[v].push_back(g);
+            } else {
+                keep.push_back(g);
+            }
+        }
+        around.swap(keep);
+        std::vector<uint32_t> count(m.parts.size());
+        uint64_t births = 0;
+        for (size_t q = 0; q < m.parts.size(); ++q) {
+            count[q] = r.gamma() - 1;
+            if (count[q] > left[q]) in.fail("vertex " + std::to_string(v) + " bears more triangles in part " + std::to_string(q) + " than the chunk's count", 36);
+            left[q] -= count[q];
+            births += count[q];
+        }
+        if (!births) continue;
+        candidates.clear();
+        for (const std::vector<uint32_t>* list : {&m.incident[p], &m.incident[v]})
+            for (const uint32_t g : *list) {
+                const uint32_t* c = corner(m, g - g % 3);
+                for (int k = 0; k < 3; ++k)
+                    if (c[k] != p && c[k] != v) candidates.push_back(c[k]);
+            }
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        for (size_t q = 0; q < m.parts.size(); ++q)
+            for (uint32_t i = 0; i < count[q]; ++i) {
+                const uint32_t order = r.bits(order_bits), index = r.gamma() - 1;
+                if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
+                uint32_t x = 0;
+                if (index < candidates.size()) {
+                    x = candidates[index];
+                } else if (index == candidates.size()) {
+                    x = r.bits(index_bits(v));
+                    if (x >= v || x == p) in.fail("vertex " + std::to_string(v) + " born triangle corner " + std::to_string(x) + " is not another vertex below it", 36);
+                } else {
+                    in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates.size()), 36);
+                }
+                const uint32_t role[3] = {v, p, x};
+                const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
+                add_triangle(m, q, c);
+            }
+    }
+    for (size_t q = 0; q < m.parts.size(); ++q)
+        if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
+    if ((r.at + 7) / 8 != n) in.fail("splits block has " + std::to_string(n - (r.at + 7) / 8) + " bytes after its last split");
+}
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
     using namespace layout;
     const size_t count = b - a;
-    const std::vector<uint8_t> subs = vertex_block(codecs, in, count, substitute_element, "SUBS");
-    for (uint32_t v = a; v < b; ++v) {
-        const uint32_t d = load_u32(&subs[size_t(v - a) * 4]);
-        if (v < m.min_vertex_count ? d != 0 : (d < 1 || d > v))
-            in.fail("vertex " + std::to_string(v) + " substitute distance " + std::to_string(d) + (v < m.min_vertex_count ? " (a survivor's is 0)" : " is not in [1, v]"), 36);
-        m.substitute.push_back(v - d);
-    }
     const StreamQuantization& q = m.quantization;
     const std::vector<uint8_t> pos = vertex_block(codecs, in, count, position_element, "POSI");
     predict(m.positions, m.substitute, pos.data(), position_element, a, b, 3);
@@ -444,33 +580,6 @@ void StreamDecoder::Impl::rotate_back(ChunkReader& in, uint32_t* corners, uint32
         uint32_t* c = corners + 3 * t;
         const uint32_t d[3] = {c[0], c[1], c[2]};
         for (int k = 0; k < 3; ++k) c[k] = d[(r + k) % 3];
-    }
-}
-
-void StreamDecoder::Impl::decode_triangles(MeshState& m, ChunkReader& in, uint32_t b, const std::vector<uint32_t>& added, const std::vector<uint32_t>& updates) {
-    for (size_t p = 0; p < m.parts.size(); ++p) {
-        std::vector<uint32_t>& corners = m.corners[p];
-        const size_t old = corners.size();
-        if (added[p]) {
-            const auto [data, n] = in.block("TRIS");
-            corners.resize(old + 3 * size_t(added[p]));
-            if (!codecs.decode_indices(corners.data() + old, 3 * size_t(added[p]), data, n)) in.fail("TRIS block does not decode (meshopt index codec)");
-            rotate_back(in, corners.data() + old, added[p]);
-            for (size_t i = old; i < corners.size(); ++i)
-                if (corners[i] >= b) in.fail("part " + std::to_string(p) + " corner " + std::to_string(i) + " is vertex " + std::to_string(corners[i]) + ", not below " + std::to_string(b), 36);
-        }
-        if (updates[p]) {
-            const std::vector<uint8_t> records = vertex_block(codecs, in, updates[p], update_element, "updates");
-            int64_t previous = -1;
-            for (uint32_t k = 0; k < updates[p]; ++k) {
-                const uint32_t slot = layout::load_u32(&records[size_t(k) * 8]), value = layout::load_u32(&records[size_t(k) * 8 + 4]);
-                if (int64_t(slot) <= previous || slot >= old)
-                    in.fail("part " + std::to_string(p) + " update " + std::to_string(k) + " names corner " + std::to_string(slot) + ": slots ascend and stay below the " + std::to_string(old) + " corners before the chunk", 36);
-                if (value >= b) in.fail("part " + std::to_string(p) + " update " + std::to_string(k) + " sets vertex " + std::to_string(value) + ", not below " + std::to_string(b), 36);
-                corners[slot] = value;
-                previous = slot;
-            }
-        }
     }
 }
 

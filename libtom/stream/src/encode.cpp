@@ -148,57 +148,168 @@ void put_index_block(std::vector<uint8_t>& out, const uint32_t* corners, size_t 
     }
 }
 
+/// Bits, least significant first, as the decoder's reader takes them.
+struct BitWriter {
+    std::vector<uint8_t> bytes;
+    uint64_t bits = 0;
+    void put(uint32_t value, uint32_t n) {
+        for (uint32_t i = 0; i < n; ++i, ++bits) {
+            if (bits % 8 == 0) bytes.push_back(0);
+            if (value >> i & 1u) bytes.back() |= uint8_t(1u << (bits % 8));
+        }
+    }
+    /// Elias gamma code of n >= 1: as many zeros as n has bits after its leading one, a one,
+    /// then those bits.
+    void gamma(uint32_t n) {
+        uint32_t width = 0;
+        while (width < 31 && (n >> (width + 1))) ++width;
+        put(0, width);
+        put(1, 1);
+        put(n, width);
+    }
+};
+
+/// What the decoder reads for the split of vertex v (docs/FORMAT.md, "Streamed files").
+struct Split {
+    uint32_t p = 0;
+    std::vector<bool> moves;            // over p's live corners in order before the split: 1 = becomes v
+    std::vector<uint32_t> born_count;   // per part
+    struct Born {
+        uint8_t order;
+        uint32_t index;  // among the candidates; their count: an escape, then x
+        uint32_t x;
+        bool escape;
+    };
+    std::vector<Born> born;             // part by part, in file order
+};
+
+/// A mesh's connectivity as the stream codes it: the triangles live at the coarsest resolution
+/// S (per part, corners mapped to S) and every vertex's split, found by removing the vertices
+/// from the finest down, as the order defines.
+struct Connectivity {
+    std::vector<std::vector<uint32_t>> base;  // per part
+    std::vector<Split> splits;                // vertex S + i
+};
+
+Connectivity connectivity(const MeshView& m) {
+    const uint32_t V = m.vertex_count, S = m.min_vertex_count, T = m.triangle_count, P = part_count(m);
+    std::vector<uint32_t> cur(3 * size_t(T)), part_of(T), alive_count(P);
+    for (size_t c = 0; c < cur.size(); ++c) cur[c] = m.corner(uint32_t(c));
+    for (uint32_t q = 0; q < P; ++q) {
+        const Part part = part_at(m, q);
+        for (uint32_t t = 0; t < part.triangle_count; ++t) part_of[part.first_triangle + t] = q;
+        alive_count[q] = part.triangle_count;
+    }
+    std::vector<std::vector<uint32_t>> incident(V);
+    for (size_t g = 0; g < cur.size(); ++g) incident[cur[g]].push_back(uint32_t(g));
+    std::vector<uint8_t> alive(T, 1);
+    auto prune = [&](std::vector<uint32_t>& list) { list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t g) { return !alive[g / 3]; }), list.end()); };
+    Connectivity out;
+    out.splits.resize(V - S);
+    for (uint32_t v = V; v-- > S;) {
+        Split& s = out.splits[v - S];
+        const uint32_t p = m.substitute_at(v);
+        s.p = p;
+        // born at v + 1: the live triangles holding both v and p, each part's last ones
+        prune(incident[v]);
+        std::vector<uint32_t> born;
+        for (uint32_t g : incident[v]) {
+            const uint32_t* c = &cur[3 * size_t(g / 3)];
+            if (c[0] == p || c[1] == p || c[2] == p) born.push_back(g / 3);
+        }
+        std::sort(born.begin(), born.end());
+        s.born_count.assign(P, 0);
+        for (uint32_t t : born) ++s.born_count[part_of[t]];
+        for (uint32_t q = 0, k = 0; q < P; ++q)
+            for (uint32_t i = 0; i < s.born_count[q]; ++i, ++k)
+                if (born[k] != part_at(m, q).first_triangle + alive_count[q] - s.born_count[q] + i)
+                    throw ArgumentError("encode_stream: mesh '" + std::string(m.name) + "' triangle " + std::to_string(born[k]) + " is born out of order (not a TOM order)");
+        for (uint32_t q = 0; q < P; ++q) alive_count[q] -= s.born_count[q];
+        for (uint32_t t : born) alive[t] = 0;
+        prune(incident[v]);
+        prune(incident[p]);
+        // the candidates for x: third corners of the triangles around p and v once v is split
+        std::vector<uint32_t> candidates;
+        if (!born.empty()) {
+            for (const std::vector<uint32_t>* list : {&incident[p], &incident[v]})
+                for (uint32_t g : *list)
+                    for (int k = 0; k < 3; ++k) {
+                        const uint32_t u = cur[3 * size_t(g / 3) + k];
+                        if (u != p && u != v) candidates.push_back(u);
+                    }
+            std::sort(candidates.begin(), candidates.end());
+            candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        }
+        for (uint32_t t : born) {
+            const uint32_t* c = &cur[3 * size_t(t)];
+            uint8_t role[3];
+            uint32_t x = 0;
+            for (int k = 0; k < 3; ++k) {
+                role[k] = c[k] == v ? 0 : c[k] == p ? 1 : 2;
+                if (role[k] == 2) x = c[k];
+            }
+            uint8_t order = 0;
+            while (!(born_orders[order][0] == role[0] && born_orders[order][1] == role[1] && born_orders[order][2] == role[2])) ++order;
+            const auto at = std::lower_bound(candidates.begin(), candidates.end(), x);
+            const uint32_t index = at != candidates.end() && *at == x ? uint32_t(at - candidates.begin()) : uint32_t(candidates.size());
+            s.born.push_back({order, index, x, index == candidates.size()});
+        }
+        // v's other corners were p's before the split: p's list in order, marked
+        std::vector<uint32_t> merged = incident[p];
+        merged.insert(merged.end(), incident[v].begin(), incident[v].end());
+        std::sort(merged.begin(), merged.end());
+        for (uint32_t g : merged) s.moves.push_back(cur[g] == v);
+        for (uint32_t g : incident[v]) cur[g] = p;
+        incident[p] = std::move(merged);
+        std::vector<uint32_t>().swap(incident[v]);
+    }
+    for (uint32_t q = 0; q < P; ++q) {
+        const Part part = part_at(m, q);
+        out.base.emplace_back(cur.begin() + 3 * size_t(part.first_triangle), cur.begin() + 3 * (size_t(part.first_triangle) + alive_count[q]));
+    }
+    return out;
+}
+
+void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
+    BitWriter w;
+    for (uint32_t v = std::max(a, S); v < b; ++v) {
+        const Split& s = conn.splits[v - S];
+        w.put(s.p, index_bits(v));
+        for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
+        for (uint32_t count : s.born_count) w.gamma(count + 1);
+        for (const Split::Born& t : s.born) {
+            w.put(t.order, order_bits);
+            w.gamma(t.index + 1);
+            if (t.escape) w.put(t.x, index_bits(v));
+        }
+    }
+    put_u32(out, uint32_t(w.bytes.size()));
+    out.insert(out.end(), w.bytes.begin(), w.bytes.end());
+}
+
 /// One chunk of a mesh before it is placed in the file.
 struct Chunk {
     uint32_t mesh = 0, round = 0, vertex_end = 0, triangles = 0;
     std::vector<uint8_t> bytes;
 };
 
-/// A mesh's corners mapped to one resolution, per part, and each part's live prefix there.
-struct Level {
-    uint32_t resolution = 0;
-    std::vector<uint32_t> corners;   // all of TRIS, mapped
-    std::vector<uint32_t> live;      // per part
-};
-
-Level map_level(const MeshView& m, const std::vector<uint32_t>& from, uint32_t b) {
-    Level l{b, from, {}};
-    for (uint32_t& c : l.corners)
-        while (c >= b) c = m.substitute_at(c);
-    for (uint32_t p = 0; p < part_count(m); ++p) {
-        const Part part = part_at(m, p);
-        uint32_t t = 0;
-        while (t < part.triangle_count) {
-            const uint32_t* c = &l.corners[3 * size_t(part.first_triangle + t)];
-            if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) break;
-            ++t;
-        }
-        l.live.push_back(t);
-    }
-    return l;
-}
-
-/// The payload of the chunk that takes mesh `m` from level `before` (null for the first) to `at`.
-std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const Level* before, const Level& at) {
-    const uint32_t a = before ? before->resolution : 0, b = at.resolution, count = b - a, parts = part_count(m);
+/// The payload of the chunk that adds vertices [a, b) to mesh `m`; `live` holds each part's live
+/// triangles at a and is moved on to b.
+std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const Connectivity& conn, uint32_t a, uint32_t b, std::vector<uint32_t>& live) {
+    const uint32_t count = b - a, parts = part_count(m), S = m.min_vertex_count;
     std::vector<uint8_t> out;
-    // per part: triangles added, corners updated (slots within the part's range, ascending)
-    std::vector<std::vector<uint8_t>> updates(parts);
     for (uint32_t p = 0; p < parts; ++p) {
-        const Part part = part_at(m, p);
-        const uint32_t old = before ? before->live[p] : 0;
-        for (uint32_t s = 0; s < 3 * old; ++s) {
-            const size_t c = 3 * size_t(part.first_triangle) + s;
-            if (at.corners[c] == before->corners[c]) continue;
-            put_u32(updates[p], s);
-            put_u32(updates[p], at.corners[c]);
-        }
-        put_u32(out, at.live[p] - old);
-        put_u32(out, uint32_t(updates[p].size() / update_element));
+        const uint32_t base = a == 0 ? uint32_t(conn.base[p].size() / 3) : 0;
+        uint32_t born = 0;
+        for (uint32_t v = std::max(a, S); v < b; ++v) born += conn.splits[v - S].born_count[p];
+        put_u32(out, base);
+        put_u32(out, born);
+        live[p] += base + born;
     }
-    std::vector<uint8_t> subs(size_t(count) * 4);
-    for (uint32_t v = a; v < b; ++v) store_u32(&subs[size_t(v - a) * 4], v - m.substitute_at(v));
-    put_vertex_block(out, subs, count, substitute_element);
+    if (a == 0)
+        for (uint32_t p = 0; p < parts; ++p)
+            if (!conn.base[p].empty()) put_index_block(out, conn.base[p].data(), conn.base[p].size(), S);
+    put_splits(out, conn, S, a, b);
     put_vertex_block(out, residuals(q.positions, m, a, b, 3, position_element), count, position_element);
     if (m.normals) put_vertex_block(out, residuals(q.normals, m, a, b, 2, normal_element), count, normal_element);
     if (m.texcoords) put_vertex_block(out, residuals(q.texcoords[0], m, a, b, 2, texcoord_element), count, texcoord_element);
@@ -212,33 +323,22 @@ std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const 
         for (uint32_t v = a; v < b; ++v) std::memcpy(&raw[size_t(v - a) * size], x.data + size_t(v) * element, element);
         put_vertex_block(out, raw, count, size);
     }
-    for (uint32_t p = 0; p < parts; ++p) {
-        const Part part = part_at(m, p);
-        const uint32_t old = before ? before->live[p] : 0;
-        if (at.live[p] > old) put_index_block(out, &at.corners[3 * (size_t(part.first_triangle) + old)], 3 * size_t(at.live[p] - old), b);
-        if (!updates[p].empty()) put_vertex_block(out, updates[p], updates[p].size() / update_element, update_element);
-    }
     return out;
 }
 
-/// Every chunk of mesh `index`, finest first computed (each level walks on from the finer one).
+/// Every chunk of mesh `index`.
 std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Quantized& q, const StreamOptions& o) {
-    const std::vector<uint32_t> ends = chunk_ends(m, o);
-    std::vector<uint32_t> corners(3 * size_t(m.triangle_count));
-    for (size_t c = 0; c < corners.size(); ++c) corners[c] = m.corner(uint32_t(c));
-    std::vector<Chunk> out(ends.size());
-    Level at = map_level(m, corners, m.vertex_count);
-    for (size_t k = ends.size(); k-- > 0;) {
-        Chunk& c = out[k];
-        c.mesh = index, c.round = uint32_t(k), c.vertex_end = ends[k];
-        for (uint32_t t : at.live) c.triangles += t;
-        if (k == 0) {
-            c.bytes = chunk_payload(m, q, nullptr, at);
-            break;
-        }
-        Level before = map_level(m, at.corners, ends[k - 1]);
-        c.bytes = chunk_payload(m, q, &before, at);
-        at = std::move(before);
+    const Connectivity conn = connectivity(m);
+    std::vector<uint32_t> live(part_count(m), 0);
+    std::vector<Chunk> out;
+    uint32_t a = 0;
+    for (const uint32_t b : chunk_ends(m, o)) {
+        Chunk c;
+        c.mesh = index, c.round = uint32_t(out.size()), c.vertex_end = b;
+        c.bytes = chunk_payload(m, q, conn, a, b, live);
+        for (uint32_t t : live) c.triangles += t;
+        out.push_back(std::move(c));
+        a = b;
     }
     return out;
 }
