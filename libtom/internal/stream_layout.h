@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <type_traits>
+#include <vector>
 
 #include "format_layout.h"
 
@@ -80,6 +82,22 @@ inline void octahedral_decode(int16_t qu, int16_t qv, uint32_t bits, float* n) {
     n[0] = u / len, n[1] = v / len, n[2] = z / len;
 }
 
+/// Residuals travel zigzag-coded (0, -1, 1, -2, ... as 0, 1, 2, 3, ...), so that small ones of
+/// either sign have their high bits clear, which the vertex codec packs.
+template <class T>
+T zigzag(T r) {
+    using U = std::make_unsigned_t<T>;
+    const U u = U(r);
+    constexpr int top = int(sizeof(T) * 8 - 1);
+    return T(U(u << 1) ^ U(0 - U(u >> top)));
+}
+template <class T>
+T unzigzag(T z) {
+    using U = std::make_unsigned_t<T>;
+    const U u = U(z);
+    return T(U(u >> 1) ^ U(0 - U(u & 1u)));
+}
+
 /// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.
 inline uint32_t index_bits(uint32_t v) {
     uint32_t bits = 0;
@@ -93,9 +111,22 @@ inline uint32_t index_bits(uint32_t v) {
 constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
 constexpr uint32_t order_bits = 3;
 
-/// The vertex whose quantized values predict vertex v's: its substitute (a neighbour it collapses
-/// onto) for a removed vertex, the previous vertex for a survivor, none (zero) for vertex 0.
-/// \pre substitute[v] <= v, every vertex below v decoded.
-inline int64_t predictor(uint32_t v, uint32_t substitute) { return substitute < v ? int64_t(substitute) : int64_t(v) - 1; }
+/// The prediction of lane k of vertex v's grid values: for positions (`ring` not null) the rounded
+/// mean of its neighbours' when it has any (the vertices it shares a triangle with just after its
+/// split, all below v); else its substitute's for a removed vertex (normals, texture coordinates
+/// and colours: across a hard edge or a seam the neighbours' mean is a poor guess, its copy's a
+/// good one), the previous vertex's for a survivor, zero for vertex 0. `values` holds `lanes`
+/// values per vertex; every vertex below v is decoded.
+template <class T>
+T prediction(const std::vector<T>& values, int lanes, int k, uint32_t v, uint32_t substitute, const std::vector<uint32_t>* ring) {
+    if (ring && !ring->empty()) {
+        int64_t sum = 0;
+        for (const uint32_t u : *ring) sum += int64_t(values[size_t(u) * lanes + k]);
+        const int64_t n = int64_t(ring->size());
+        return T(sum >= 0 ? (sum + n / 2) / n : -((-sum + n / 2) / n));
+    }
+    const int64_t from = substitute < v ? int64_t(substitute) : int64_t(v) - 1;
+    return from < 0 ? T(0) : values[size_t(from) * lanes + k];
+}
 
 } // namespace tom::stream_layout

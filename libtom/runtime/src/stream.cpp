@@ -48,10 +48,11 @@ struct MeshState {
     std::vector<std::vector<uint32_t>> corners;  // per part, 3 per live triangle, mapped to resolution
     std::vector<uint64_t> part_ends;             // per part, first_triangle + triangle_count
     std::vector<std::vector<uint32_t>> incident; // per vertex: the live corners holding it (3 t + k in the file's TRIS)
+    std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
 };
 
 bool splits_group(const std::vector<uint8_t>& bits, uint32_t n, uint32_t vertex_count) {
-    return !bits.empty() && n > 0 && n < vertex_count && (bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
+    return (n - 1) / 8 < bits.size() && n > 0 && n < vertex_count && (bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
 }
 
 /// A bounded view of the bytes of one chunk, read front to back.
@@ -136,6 +137,7 @@ struct StreamDecoder::Impl {
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
+    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep, std::vector<uint32_t>& candidates);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
@@ -256,6 +258,8 @@ void StreamDecoder::Impl::read_directory() {
     for (uint32_t m = 0; m < meshes_declared; ++m) {
         const std::string field = "mesh " + std::to_string(m);
         if (meshes[m].header.empty()) fail(base, field + " MESH", 32, "the directory keeps no MESH section for the mesh");
+        if (!meshes[m].pair_bits.empty() && meshes[m].pair_bits.size() != (uint64_t(meshes[m].vertex_count) + 7) / 8)
+            fail(base, field + " PAIR", 32, std::to_string(meshes[m].pair_bits.size()) + " bytes where the mesh's vertices require " + std::to_string((uint64_t(meshes[m].vertex_count) + 7) / 8));
         read_quantization(meshes[m], d + quant + uint64_t(m) * quantization_bytes, base + quant + uint64_t(m) * quantization_bytes, field + " quantization");
     }
     read_chunk_table(d + table, base + table);
@@ -422,16 +426,24 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
 
 /// Adds residuals to the predicted grid values, `lanes` values of type T per vertex.
 template <class T>
-void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const uint8_t* residuals, uint32_t element, uint32_t a, uint32_t b, int lanes) {
+void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const std::vector<std::vector<uint32_t>>* rings, const uint8_t* residuals,
+             uint32_t element, uint32_t a, uint32_t b, int lanes) {
     for (uint32_t v = a; v < b; ++v) {
-        const int64_t from = predictor(v, substitute[v]);
         for (int k = 0; k < lanes; ++k) {
             T r;
             std::memcpy(&r, residuals + size_t(v - a) * element + k * sizeof(T), sizeof(T));
-            const T base = from < 0 ? T(0) : values[size_t(from) * lanes + k];
-            values.push_back(T(base + r));
+            r = unzigzag(r);
+            values.push_back(T(prediction(values, lanes, k, v, substitute[v], rings ? &(*rings)[v - a] : nullptr) + r));
         }
     }
+}
+
+/// The u32 before an attribute block: its prediction, the substitute's values (null) or the
+/// neighbours' mean (the chunk's rings).
+const std::vector<std::vector<uint32_t>>* predictor_of(ChunkReader& in, const MeshState& m) {
+    const uint32_t p = in.u32();
+    if (p > 1) in.fail("prediction " + std::to_string(p) + " is not 0 (substitute) or 1 (neighbours)");
+    return p ? &m.rings : nullptr;
 }
 
 /// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
@@ -478,10 +490,31 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
     const auto [data, n] = in.block("splits");
     BitReader r{data, n, 0, &in};
     std::vector<uint32_t> left = born, keep, candidates;
+    m.rings.assign(b - a, {});
     for (uint32_t v = a; v < b; ++v) {
+        split_vertex(m, in, r, v, left, keep, candidates);
+        if (v < m.min_vertex_count) continue;
+        std::vector<uint32_t>& ring = m.rings[v - a];
+        for (const uint32_t g : m.incident[v]) {
+            const uint32_t* c = corner(m, g - g % 3);
+            for (int k = 0; k < 3; ++k)
+                if (c[k] != v) ring.push_back(c[k]);
+        }
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    }
+    for (size_t q = 0; q < m.parts.size(); ++q)
+        if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
+    if ((r.at + 7) / 8 != n) in.fail("splits block has " + std::to_string(n - (r.at + 7) / 8) + " bytes after its last split");
+}
+
+// The split of vertex v: its substitute, the corners it takes, the triangles born with it.
+void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep,
+                                       std::vector<uint32_t>& candidates) {
+    {
         if (v < m.min_vertex_count) {
             m.substitute.push_back(v);
-            continue;
+            return;
         }
         const uint32_t p = r.bits(index_bits(v));
         if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
@@ -506,7 +539,7 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
             left[q] -= count[q];
             births += count[q];
         }
-        if (!births) continue;
+        if (!births) return;
         candidates.clear();
         for (const std::vector<uint32_t>* list : {&m.incident[p], &m.incident[v]})
             for (const uint32_t g : *list) {
@@ -534,31 +567,30 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
                 add_triangle(m, q, c);
             }
     }
-    for (size_t q = 0; q < m.parts.size(); ++q)
-        if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
-    if ((r.at + 7) / 8 != n) in.fail("splits block has " + std::to_string(n - (r.at + 7) / 8) + " bytes after its last split");
 }
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
     using namespace layout;
     const size_t count = b - a;
     const StreamQuantization& q = m.quantization;
-    const std::vector<uint8_t> pos = vertex_block(codecs, in, count, position_element, "POSI");
-    predict(m.positions, m.substitute, pos.data(), position_element, a, b, 3);
+    // each attribute block: its prediction (a u32), then the residuals
+    auto attribute = [&](auto& values, uint32_t element, const char* name, int lanes) {
+        const std::vector<std::vector<uint32_t>>* rings = predictor_of(in, m);
+        const std::vector<uint8_t> residuals = vertex_block(codecs, in, count, element, name);
+        predict(values, m.substitute, rings, residuals.data(), element, a, b, lanes);
+    };
+    attribute(m.positions, position_element, "POSI", 3);
     for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)
         if (m.positions[i] >> q.position_bits) in.fail("vertex " + std::to_string(i / 3) + " position is off its " + std::to_string(q.position_bits) + "-bit grid", 36);
-    if (m.attributes & attr_normals) predict(m.normals, m.substitute, vertex_block(codecs, in, count, normal_element, "NORM").data(), normal_element, a, b, 2);
+    if (m.attributes & attr_normals) attribute(m.normals, normal_element, "NORM", 2);
     for (int t = 0; t < 2; ++t) {
         if (!(m.attributes & (t ? attr_texcoords1 : attr_texcoords))) continue;
-        predict(m.texcoords[t], m.substitute, vertex_block(codecs, in, count, texcoord_element, t ? "TEX1" : "TEX0").data(), texcoord_element, a, b, 2);
+        attribute(m.texcoords[t], texcoord_element, t ? "TEX1" : "TEX0", 2);
         for (size_t i = size_t(a) * 2; i < m.texcoords[t].size(); ++i)
             if (m.texcoords[t][i] >> q.texcoord_bits) in.fail("vertex " + std::to_string(i / 2) + " texture coordinate is off its grid", 36);
     }
-    if (m.attributes & attr_colors) predict(m.colors, m.substitute, vertex_block(codecs, in, count, color_element, "COL0").data(), color_element, a, b, 4);
-    if (m.attributes & attr_tangents) {
-        const std::vector<uint8_t> tan = vertex_block(codecs, in, count, tangent_element, "TANG");
-        predict(m.tangents, m.substitute, tan.data(), tangent_element, a, b, 3);
-    }
+    if (m.attributes & attr_colors) attribute(m.colors, color_element, "COL0", 4);
+    if (m.attributes & attr_tangents) attribute(m.tangents, tangent_element, "TANG", 3);
     for (Carried& c : m.carried) {
         const uint32_t size = padded_element(c.element_bytes);
         const std::vector<uint8_t> raw = vertex_block(codecs, in, count, size, "XATT");

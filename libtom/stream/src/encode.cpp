@@ -96,16 +96,17 @@ std::vector<uint32_t> chunk_ends(const MeshView& m, const StreamOptions& o) {
     return ends;
 }
 
-/// The residuals of vertices [a, b) against their predictions (stream_layout::predictor), each
+/// The residuals of vertices [a, b) against their predictions (stream_layout::prediction), each
 /// element `lanes` values of T padded to `element` bytes: what the decoder adds back.
 template <class T>
-std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, uint32_t a, uint32_t b, int lanes, uint32_t element) {
+std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, const std::vector<std::vector<uint32_t>>* rings, uint32_t a, uint32_t b, int lanes,
+                               uint32_t element) {
     std::vector<uint8_t> out(size_t(b - a) * element, 0);
     for (uint32_t v = a; v < b; ++v) {
-        const int64_t from = predictor(v, m.substitute_at(v));
+        const std::vector<uint32_t>* ring = rings && v >= m.min_vertex_count ? &(*rings)[v - m.min_vertex_count] : nullptr;
         for (int k = 0; k < lanes; ++k) {
-            const T base = from < 0 ? T(0) : values[size_t(from) * lanes + k];
-            const T r = T(values[size_t(v) * lanes + k] - base);
+            const T base = prediction(values, lanes, k, v, m.substitute_at(v), ring);
+            const T r = zigzag(T(values[size_t(v) * lanes + k] - base));
             std::memcpy(&out[size_t(v - a) * element + k * sizeof(T)], &r, sizeof(T));
         }
     }
@@ -189,6 +190,7 @@ struct Split {
 struct Connectivity {
     std::vector<std::vector<uint32_t>> base;  // per part
     std::vector<Split> splits;                // vertex S + i
+    std::vector<std::vector<uint32_t>> rings; // vertex S + i: its neighbours just after its split, ascending
 };
 
 Connectivity connectivity(const MeshView& m) {
@@ -206,12 +208,19 @@ Connectivity connectivity(const MeshView& m) {
     auto prune = [&](std::vector<uint32_t>& list) { list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t g) { return !alive[g / 3]; }), list.end()); };
     Connectivity out;
     out.splits.resize(V - S);
+    out.rings.resize(V - S);
     for (uint32_t v = V; v-- > S;) {
         Split& s = out.splits[v - S];
         const uint32_t p = m.substitute_at(v);
         s.p = p;
         // born at v + 1: the live triangles holding both v and p, each part's last ones
         prune(incident[v]);
+        std::vector<uint32_t>& ring = out.rings[v - S];
+        for (uint32_t g : incident[v])
+            for (int k = 0; k < 3; ++k)
+                if (cur[3 * size_t(g / 3) + k] != v) ring.push_back(cur[3 * size_t(g / 3) + k]);
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
         std::vector<uint32_t> born;
         for (uint32_t g : incident[v]) {
             const uint32_t* c = &cur[3 * size_t(g / 3)];
@@ -287,6 +296,23 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
     out.insert(out.end(), w.bytes.begin(), w.bytes.end());
 }
 
+/// An attribute block with the prediction that codes it smaller: a u32 saying which (0 the
+/// substitute's values, 1 the neighbours' mean), then the residuals. Smooth surfaces favour the
+/// mean; hard edges, seams and flat CAD faces the substitute.
+template <class T>
+void put_attribute(std::vector<uint8_t>& out, const std::vector<T>& values, const MeshView& m, const Connectivity& conn, uint32_t a, uint32_t b, int lanes,
+                   uint32_t element) {
+    std::vector<uint8_t> best;
+    uint32_t chosen = 0;
+    for (uint32_t predictor : {0u, 1u}) {
+        std::vector<uint8_t> block;
+        put_vertex_block(block, residuals(values, m, predictor ? &conn.rings : nullptr, a, b, lanes, element), b - a, element);
+        if (best.empty() || block.size() < best.size()) best.swap(block), chosen = predictor;
+    }
+    put_u32(out, chosen);
+    out.insert(out.end(), best.begin(), best.end());
+}
+
 /// One chunk of a mesh before it is placed in the file.
 struct Chunk {
     uint32_t mesh = 0, round = 0, vertex_end = 0, triangles = 0;
@@ -310,12 +336,12 @@ std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const 
         for (uint32_t p = 0; p < parts; ++p)
             if (!conn.base[p].empty()) put_index_block(out, conn.base[p].data(), conn.base[p].size(), S);
     put_splits(out, conn, S, a, b);
-    put_vertex_block(out, residuals(q.positions, m, a, b, 3, position_element), count, position_element);
-    if (m.normals) put_vertex_block(out, residuals(q.normals, m, a, b, 2, normal_element), count, normal_element);
-    if (m.texcoords) put_vertex_block(out, residuals(q.texcoords[0], m, a, b, 2, texcoord_element), count, texcoord_element);
-    if (m.colors) put_vertex_block(out, residuals(q.colors, m, a, b, 4, color_element), count, color_element);
-    if (m.texcoords1) put_vertex_block(out, residuals(q.texcoords[1], m, a, b, 2, texcoord_element), count, texcoord_element);
-    if (m.tangents) put_vertex_block(out, residuals(q.tangents, m, a, b, 3, tangent_element), count, tangent_element);
+    put_attribute(out, q.positions, m, conn, a, b, 3, position_element);
+    if (m.normals) put_attribute(out, q.normals, m, conn, a, b, 2, normal_element);
+    if (m.texcoords) put_attribute(out, q.texcoords[0], m, conn, a, b, 2, texcoord_element);
+    if (m.colors) put_attribute(out, q.colors, m, conn, a, b, 4, color_element);
+    if (m.texcoords1) put_attribute(out, q.texcoords[1], m, conn, a, b, 2, texcoord_element);
+    if (m.tangents) put_attribute(out, q.tangents, m, conn, a, b, 3, tangent_element);
     for (uint32_t s = 0; s < m.extra_stream_count; ++s) {
         const VertexStreamView& x = m.extra_streams[s];
         const uint32_t element = x.components * component_bytes(x.component_type), size = padded_element(element);
