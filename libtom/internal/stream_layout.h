@@ -5,6 +5,7 @@
 // encoder predicted from.
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <cstdint>
 #include <type_traits>
@@ -110,6 +111,17 @@ inline uint32_t index_bits(uint32_t v) {
 /// v -> p -> x, orders 3-5 p -> v -> x.
 constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
 constexpr uint32_t order_bits = 3;
+
+/// The candidates for a born triangle's third corner x: the vertices that share a live triangle
+/// with both p and v (`around_p` and `around_v`: each one's neighbours, ascending, without p and
+/// v) first, where a manifold split's x lies, then the others; each group ascending.
+inline void order_candidates(const std::vector<uint32_t>& around_p, const std::vector<uint32_t>& around_v, std::vector<uint32_t>& out) {
+    out.clear();
+    std::set_intersection(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
+    const size_t common = out.size();
+    std::set_symmetric_difference(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
+    std::sort(out.begin() + common, out.end());
+}
 
 /// The prediction of lane k of vertex v's grid values: for positions (`ring` not null) the rounded
 /// mean of its neighbours' when it has any (the vertices it shares a triangle with just after its

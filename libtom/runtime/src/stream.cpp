@@ -49,6 +49,7 @@ struct MeshState {
     std::vector<uint64_t> part_ends;             // per part, first_triangle + triangle_count
     std::vector<std::vector<uint32_t>> incident; // per vertex: the live corners holding it (3 t + k in the file's TRIS)
     std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
+    std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
 };
 
 bool splits_group(const std::vector<uint8_t>& bits, uint32_t n, uint32_t vertex_count) {
@@ -533,22 +534,26 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
         around.swap(keep);
         std::vector<uint32_t> count(m.parts.size());
         uint64_t births = 0;
+        const bool usual = m.parts.size() == 1 && r.bits(1);  // one part: a 1 bit for the usual two
         for (size_t q = 0; q < m.parts.size(); ++q) {
-            count[q] = r.gamma() - 1;
+            count[q] = usual ? 2 : r.gamma() - 1;
             if (count[q] > left[q]) in.fail("vertex " + std::to_string(v) + " bears more triangles in part " + std::to_string(q) + " than the chunk's count", 36);
             left[q] -= count[q];
             births += count[q];
         }
         if (!births) return;
-        candidates.clear();
-        for (const std::vector<uint32_t>* list : {&m.incident[p], &m.incident[v]})
-            for (const uint32_t g : *list) {
+        for (int side = 0; side < 2; ++side) {
+            std::vector<uint32_t>& list = m.around[side];
+            list.clear();
+            for (const uint32_t g : m.incident[side ? v : p]) {
                 const uint32_t* c = corner(m, g - g % 3);
                 for (int k = 0; k < 3; ++k)
-                    if (c[k] != p && c[k] != v) candidates.push_back(c[k]);
+                    if (c[k] != p && c[k] != v) list.push_back(c[k]);
             }
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+            std::sort(list.begin(), list.end());
+            list.erase(std::unique(list.begin(), list.end()), list.end());
+        }
+        order_candidates(m.around[0], m.around[1], candidates);
         for (size_t q = 0; q < m.parts.size(); ++q)
             for (uint32_t i = 0; i < count[q]; ++i) {
                 const uint32_t order = r.bits(order_bits), index = r.gamma() - 1;

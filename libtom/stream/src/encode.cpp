@@ -237,17 +237,20 @@ Connectivity connectivity(const MeshView& m) {
         for (uint32_t t : born) alive[t] = 0;
         prune(incident[v]);
         prune(incident[p]);
-        // the candidates for x: third corners of the triangles around p and v once v is split
+        // the candidates for x: the other corners of the triangles around p and v once v is split
         std::vector<uint32_t> candidates;
         if (!born.empty()) {
-            for (const std::vector<uint32_t>* list : {&incident[p], &incident[v]})
-                for (uint32_t g : *list)
+            std::vector<uint32_t> around[2];
+            for (int side = 0; side < 2; ++side) {
+                for (uint32_t g : incident[side ? v : p])
                     for (int k = 0; k < 3; ++k) {
                         const uint32_t u = cur[3 * size_t(g / 3) + k];
-                        if (u != p && u != v) candidates.push_back(u);
+                        if (u != p && u != v) around[side].push_back(u);
                     }
-            std::sort(candidates.begin(), candidates.end());
-            candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+                std::sort(around[side].begin(), around[side].end());
+                around[side].erase(std::unique(around[side].begin(), around[side].end()), around[side].end());
+            }
+            order_candidates(around[0], around[1], candidates);
         }
         for (uint32_t t : born) {
             const uint32_t* c = &cur[3 * size_t(t)];
@@ -259,8 +262,7 @@ Connectivity connectivity(const MeshView& m) {
             }
             uint8_t order = 0;
             while (!(born_orders[order][0] == role[0] && born_orders[order][1] == role[1] && born_orders[order][2] == role[2])) ++order;
-            const auto at = std::lower_bound(candidates.begin(), candidates.end(), x);
-            const uint32_t index = at != candidates.end() && *at == x ? uint32_t(at - candidates.begin()) : uint32_t(candidates.size());
+            const uint32_t index = uint32_t(std::find(candidates.begin(), candidates.end(), x) - candidates.begin());
             s.born.push_back({order, index, x, index == candidates.size()});
         }
         // v's other corners were p's before the split: p's list in order, marked
@@ -279,13 +281,21 @@ Connectivity connectivity(const MeshView& m) {
     return out;
 }
 
+/// A vertex's born triangles per part: for a mesh of one part, a 1 bit for the usual two (an
+/// interior split) or a 0 and gamma(count + 1); for several parts gamma(count + 1) each.
+void put_born_counts(BitWriter& w, const std::vector<uint32_t>& counts) {
+    if (counts.size() == 1 && counts[0] == 2) return w.put(1, 1);
+    if (counts.size() == 1) w.put(0, 1);
+    for (uint32_t count : counts) w.gamma(count + 1);
+}
+
 void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
     BitWriter w;
     for (uint32_t v = std::max(a, S); v < b; ++v) {
         const Split& s = conn.splits[v - S];
         w.put(s.p, index_bits(v));
         for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
-        for (uint32_t count : s.born_count) w.gamma(count + 1);
+        put_born_counts(w, s.born_count);
         for (const Split::Born& t : s.born) {
             w.put(t.order, order_bits);
             w.gamma(t.index + 1);
