@@ -365,5 +365,33 @@ check "plot-model.py draws the CSV" bash -c "/usr/bin/python3 '$src/scripts/plot
 check "tcrmodel --tom without a stored curve exits 1" expect_exit 1 "$tools/tcrmodel" --tom "$work/model-nc/fandisk.tom"
 check "and says why" grep -q "no mesh has a stored error curve" "$work/stderr"
 
+# streamed files (tombuild --stream): every tool reads them; tominfo lists the chunks;
+# tomextract --bytes writes what a prefix decodes to, the level of the ordinary file there
+"$tools/tombuild" "$data/meshes/bunny00.off" "$data/assimp/OBJ/spider.obj" -o "$work/streamed" -q --stream
+"$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/plain" -q
+check "tominfo --json lists a streamed file's chunks in file order" expect_exit 0 "$tools/tominfo" --json "$work/streamed/bunny00.tom"
+check "their end bytes rise to the file's size, their vertices and triangles to the mesh's" /usr/bin/python3 -c "
+import json, os
+d = json.load(open('$work/stdout'))
+c = d['stream']['chunks']
+assert len(c) >= 10 and all(a['end_byte'] < b['end_byte'] and a['vertices'] < b['vertices'] and a['triangles'] < b['triangles'] for a, b in zip(c, c[1:])), c
+assert c[-1]['end_byte'] == os.path.getsize('$work/streamed/bunny00.tom') == d['stream']['file_bytes']
+assert c[-1]['vertices'] == d['meshes'][0]['vertices'] and c[-1]['triangles'] == d['meshes'][0]['triangles']
+assert c[0]['end_byte'] < 0.05 * d['stream']['file_bytes'], c[0]
+open('$work/chunk5', 'w').write('%d %d %d' % (c[5]['end_byte'], c[5]['vertices'], c[5]['triangles']))
+"
+read -r end5 vertices5 triangles5 < "$work/chunk5"
+check "tomextract --bytes writes the mesh of the last whole chunk" expect_exit 0 "$tools/tomextract" "$work/streamed/bunny00.tom" --bytes $((end5 + 100)) -o "$work/prefix.obj"
+check "which has that chunk's vertices and triangles" grep -q "$vertices5 vertices, $triangles5 triangles" "$work/stdout"
+"$tools/tomextract" "$work/plain/bunny00.tom" --vertices "$vertices5" -o "$work/level.obj" > /dev/null
+check "and the ordinary file's level there, face for face" cmp <(grep '^f' "$work/prefix.obj") <(grep '^f' "$work/level.obj")
+check "tomextract --bytes on an ordinary file exits 1 and says why" expect_exit 1 "$tools/tomextract" "$work/plain/bunny00.tom" --bytes 1000 -o "$work/x.obj"
+check "(a byte limit applies only to streams)" grep -q "not a streamed .tom file" "$work/stderr"
+check "a streamed scene with parts extracts as a .glb" expect_exit 0 "$tools/tomextract" "$work/streamed/spider.tom" --fraction 0.5 -o "$work/spider.glb"
+check "a rerun of tombuild --stream finds the streamed outputs up to date" bash -c "'$tools/tombuild' '$data/meshes/bunny00.off' -o '$work/streamed' --stream 2>&1 | grep -q 'up to date'"
+head -c 5000 "$work/streamed/bunny00.tom" > "$work/cut.tom"
+check "a truncated streamed file exits 1" expect_exit 1 "$tools/tominfo" "$work/cut.tom"
+check "naming the file and the truncation" grep -q "cut.tom.*truncated" "$work/stderr"
+
 echo "$passed passed, $fail failed"
 [ "$fail" -eq 0 ]

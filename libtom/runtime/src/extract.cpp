@@ -266,7 +266,7 @@ Extracted extract_impl(const MeshView& m, uint32_t vertex_count, O* dst, size_t 
     if (n == m.vertex_count) {  // full resolution: every chain is empty
         const I* in = static_cast<const I*>(m.triangles);
         if (sizeof(I) == sizeof(O)) {
-            std::memcpy(dst, in, corners * sizeof(O));
+            if (corners) std::memcpy(dst, in, corners * sizeof(O));  // an empty mesh may have no buffers at all
             return r;
         }
 #ifdef TOM_HAVE_AVX2_PATH
