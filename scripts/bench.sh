@@ -4,8 +4,8 @@
 # generated 2M-triangle sphere, tcrbench (every selector at 100 to 100k objects), and the
 # conversion and report times of tombuild, one extraction through the C++, C and Python APIs
 # (scripts/bench-bindings.py), and tomextract -c's bytes against the current gltfpack's.
-# Stamped with the commit, the date and the CPU. The section "Real assets against gltfpack" is
-# scripts/real-assets.sh's, kept as that script last wrote it.
+# Stamped with the commit, the date and the CPU. The sections "Real assets against gltfpack" and
+# "Streaming" are scripts/real-assets.sh's and bench-stream.sh's, kept as they last wrote them.
 # Usage: scripts/bench.sh [--quick] [--walk] [--scale | --large-report] [OUT.md]
 #   --quick: bunny00 and fandisk only, fewer repeats; --walk: also the walkthrough at a 40 ms
 #   budget (scripts/walkthrough.sh, a few minutes), its table and the renderer's noise test;
@@ -188,18 +188,20 @@ L.append('')
 L.append(scale if scale else 'Not measured in this run (`scripts/bench.sh --scale`).')
 L.append('')
 walk = open(walk_table).read().strip()
-# the real-asset section is scripts/real-assets.sh's (minutes of gltfpack and tomerr runs): kept as it is
+# the real-asset and streaming sections are scripts/real-assets.sh's and bench-stream.sh's
+# (minutes of gltfpack and tomerr runs): kept as they are
 try:
     old = open(out).read()
 except OSError:
     old = ''
-start = old.find('## Real assets against gltfpack')
-if start >= 0:
-    end = old.find('\n## ', start + 1)
-    L.extend(old[start:end if end >= 0 else len(old)].rstrip('\n').split('\n'))
-    L.append('')
-else:
-    L.extend(['## Real assets against gltfpack', '', 'Not measured in this run (`scripts/real-assets.sh`).', ''])
+for title, script in (('## Real assets against gltfpack', 'scripts/real-assets.sh'), ('## Streaming', 'scripts/bench-stream.sh')):
+    start = old.find(title)
+    if start >= 0:
+        end = old.find('\n## ', start + 1)
+        L.extend(old[start:end if end >= 0 else len(old)].rstrip('\n').split('\n'))
+        L.append('')
+    else:
+        L.extend([title, '', 'Not measured in this run (`' + script + '`).', ''])
 L.append('## Walkthrough')
 L.append('')
 if walk:
