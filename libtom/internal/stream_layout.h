@@ -33,13 +33,11 @@ constexpr uint32_t q_position_bits = 0, q_normal_bits = 4, q_texcoord_bits = 8, 
 constexpr uint32_t r_mesh = 0, r_vertex_end = 4, r_triangle_end = 8, r_bytes = 16, r_checksum = 20;
 
 /// Element sizes of the quantized blocks (the meshopt vertex codec takes multiples of 4).
-constexpr uint32_t substitute_element = 4;   // u32 distance v - substitute[v]
 constexpr uint32_t position_element = 8;     // u16 x, y, z, 0: residuals against the prediction
 constexpr uint32_t normal_element = 4;       // i16 octahedral u, v: residuals
 constexpr uint32_t texcoord_element = 4;     // u16 u, v: residuals
 constexpr uint32_t color_element = 4;        // u8 r, g, b, a: residuals
 constexpr uint32_t tangent_element = 8;      // i16 octahedral u, v: residuals; i16 w (+1 or -1 as stored); 0
-constexpr uint32_t update_element = 8;       // u32 corner slot in the part, u32 new value
 constexpr uint32_t rotation_element = 4;     // u8 per triangle: turns of its decoded corners (0 to 2)
 
 /// Carried (XATT) elements travel raw, padded to a multiple of 4 bytes.
