@@ -27,11 +27,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-
 struct ExtractRow {
     double fraction;
     uint32_t vertices, triangles;
@@ -66,8 +61,8 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
         meshopt_times.push_back(seconds_since(t0));
         row.meshopt_triangles = uint32_t(count / 3);
     }
-    row.build_s = median(build_times);
-    row.meshopt_s = median(meshopt_times);
+    row.build_s = tools::median(build_times);
+    row.meshopt_s = tools::median(meshopt_times);
 
     // measure the form an engine maps: the serialized file (16-bit indices stored where they fit),
     // extracted into 32-bit index buffers, the same output for every mesh
@@ -106,8 +101,8 @@ Row bench(const tom::Mesh& mesh, const tom::BuildParams& params, int repeats) {
             }
             cpy.push_back(seconds_since(t0) / inner);
         }
-        e.extract_s = median(ext);
-        e.memcpy_s = median(cpy);
+        e.extract_s = tools::median(ext);
+        e.memcpy_s = tools::median(cpy);
         row.extract.push_back(e);
     }
     return row;

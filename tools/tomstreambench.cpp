@@ -25,11 +25,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
-
 std::vector<uint8_t> read_bytes(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw tom::IoError("cannot open " + path);
@@ -120,7 +115,7 @@ Figures measure(const std::string& path, int repeats) {
         }
         ref.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
     }
-    f.decode_s = median(decode), f.assemble_s = median(assemble), f.reference_s = median(ref);
+    f.decode_s = tools::median(decode), f.assemble_s = tools::median(assemble), f.reference_s = tools::median(ref);
     return f;
 }
 

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -55,6 +56,12 @@ bool is_terminal(int fd);
 /// A fraction written as a number ("0.005") or a percentage ("0.5%"), in [0, 1].
 /// \throw std::invalid_argument naming `option` and the text.
 double parse_fraction(const std::string& text, const std::string& option);
+
+/// The median of benchmark samples (the mean of the middle two for an even count; 0 for none).
+inline double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
 
 /// Bytes of a mesh in face-vertex form with positions and normals (floats) and 32-bit indices:
 /// the reference of the paper's Table 4.

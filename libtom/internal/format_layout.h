@@ -93,6 +93,27 @@ inline void store_f32(uint8_t* p, float f) {
     store_u32(p, bits);
 }
 
+/// A stream of f32 values as stored (POSI, NORM, ...).
+inline std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
+    std::vector<uint8_t> out(values.size() * 4);
+    for (size_t i = 0; i < values.size(); ++i) store_f32(&out[4 * i], values[i]);
+    return out;
+}
+
+/// Indices as stored, `index_size` (2 or 4) bytes each (SUBS, TRIS, COAR).
+inline std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uint32_t index_size) {
+    std::vector<uint8_t> out(values.size() * index_size);
+    for (size_t i = 0; i < values.size(); ++i) {
+        if (index_size == 2) {
+            out[2 * i] = uint8_t(values[i]);
+            out[2 * i + 1] = uint8_t(values[i] >> 8);
+        } else {
+            store_u32(&out[4 * i], values[i]);
+        }
+    }
+    return out;
+}
+
 /// One section of a file image being assembled: its type, its mesh (or file_level) and its data.
 struct PendingSection {
     uint32_t type, mesh;

@@ -110,6 +110,22 @@ inline uint32_t index_bits(uint32_t v) {
 constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
 constexpr uint32_t order_bits = 3;
 
+/// The vertices that share a triangle with vertex u, ascending without repeats, leaving out
+/// `skip_a` and `skip_b`: `incident` lists u's live corners (3 t + k in TRIS) and
+/// `triangle(g)` gives the three corners of the triangle holding corner g. The encoder and the
+/// decoder gather a vertex's ring and a split's candidates with it, so that both see one order.
+template <class Triangle>
+void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, std::vector<uint32_t>& out) {
+    out.clear();
+    for (const uint32_t g : incident) {
+        const uint32_t* c = triangle(g);
+        for (int k = 0; k < 3; ++k)
+            if (c[k] != skip_a && c[k] != skip_b) out.push_back(c[k]);
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
 /// The candidates for a born triangle's third corner x: the vertices that share a live triangle
 /// with both p and v (`around_p` and `around_v`: each one's neighbours, ascending, without p and
 /// v) first, where a manifold split's x lies, then the others; each group ascending.

@@ -24,25 +24,6 @@ namespace {
 
 using namespace layout;
 
-std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
-    std::vector<uint8_t> out(values.size() * 4);
-    for (size_t i = 0; i < values.size(); ++i) store_f32(&out[4 * i], values[i]);
-    return out;
-}
-
-std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uint32_t index_size) {
-    std::vector<uint8_t> out(values.size() * index_size);
-    for (size_t i = 0; i < values.size(); ++i) {
-        if (index_size == 2) {
-            out[2 * i] = uint8_t(values[i]);
-            out[2 * i + 1] = uint8_t(values[i] >> 8);
-        } else {
-            store_u32(&out[4 * i], values[i]);
-        }
-    }
-    return out;
-}
-
 void pad4(std::vector<uint8_t>& v) {
     while (v.size() % 4) v.push_back(0);
 }

@@ -52,10 +52,6 @@ struct MeshState {
     std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
 };
 
-bool splits_group(const std::vector<uint8_t>& bits, uint32_t n, uint32_t vertex_count) {
-    return (n - 1) / 8 < bits.size() && n > 0 && n < vertex_count && (bits[(n - 1) / 8] >> ((n - 1) % 8) & 1u);
-}
-
 /// A bounded view of the bytes of one chunk, read front to back.
 struct ChunkReader {
     const uint8_t* data;
@@ -363,13 +359,16 @@ void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset
         c.mesh = load_u32(r + r_mesh);
         if (c.mesh >= meshes.size()) fail(ro + r_mesh, field + " mesh", 33, "mesh " + std::to_string(c.mesh) + " does not exist");
         const MeshState& m = meshes[c.mesh];
+        MeshView groups;  // the mesh's groups of copies (PAIR, its size checked with the directory)
+        groups.vertex_count = m.vertex_count;
+        groups.pair_bits = m.pair_bits.empty() ? nullptr : m.pair_bits.data();
         c.vertex_begin = end[c.mesh];
         c.vertex_end = load_u32(r + r_vertex_end);
         c.triangles = load_u32(r + r_triangle_end);
         if (c.vertex_end <= c.vertex_begin || c.vertex_end > m.vertex_count)
             fail(ro + r_vertex_end, field + " vertex_end", 33, std::to_string(c.vertex_end) + " is not in (" + std::to_string(c.vertex_begin) + ", " + std::to_string(m.vertex_count) + "]");
         if (c.vertex_end < m.min_vertex_count) fail(ro + r_vertex_end, field + " vertex_end", 33, "the mesh's first chunk holds its " + std::to_string(m.min_vertex_count) + " survivors");
-        if (splits_group(m.pair_bits, c.vertex_end, m.vertex_count)) fail(ro + r_vertex_end, field + " vertex_end", 33, "ends inside a group of copies");
+        if (groups.splits_pair(c.vertex_end)) fail(ro + r_vertex_end, field + " vertex_end", 33, "ends inside a group of copies");
         if (c.triangles > m.triangle_count) fail(ro + r_triangle_end, field + " triangle_end", 33, "past the mesh's " + std::to_string(m.triangle_count) + " triangles");
         end[c.mesh] = c.vertex_end;
         c.begin_byte = at;
@@ -456,6 +455,9 @@ uint32_t* corner(MeshState& m, uint32_t g) {
     return slot < m.corners[p].size() ? &m.corners[p][slot] : nullptr;
 }
 
+/// The three corners of the live triangle holding corner `g`.
+const uint32_t* triangle_of(MeshState& m, uint32_t g) { return corner(m, g - g % 3); }
+
 /// Appends a triangle to part p and lists its corners at their vertices.
 void add_triangle(MeshState& m, size_t p, const uint32_t c[3]) {
     const uint32_t g = 3 * (m.parts[p].first_triangle + uint32_t(m.corners[p].size() / 3));
@@ -495,14 +497,7 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
     for (uint32_t v = a; v < b; ++v) {
         split_vertex(m, in, r, v, left, keep, candidates);
         if (v < m.min_vertex_count) continue;
-        std::vector<uint32_t>& ring = m.rings[v - a];
-        for (const uint32_t g : m.incident[v]) {
-            const uint32_t* c = corner(m, g - g % 3);
-            for (int k = 0; k < 3; ++k)
-                if (c[k] != v) ring.push_back(c[k]);
-        }
-        std::sort(ring.begin(), ring.end());
-        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        gather_neighbours(m.incident[v], [&](uint32_t g) { return triangle_of(m, g); }, v, v, m.rings[v - a]);
     }
     for (size_t q = 0; q < m.parts.size(); ++q)
         if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
@@ -512,66 +507,56 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
 // The split of vertex v: its substitute, the corners it takes, the triangles born with it.
 void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep,
                                        std::vector<uint32_t>& candidates) {
-    {
-        if (v < m.min_vertex_count) {
-            m.substitute.push_back(v);
-            return;
-        }
-        const uint32_t p = r.bits(index_bits(v));
-        if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
-        m.substitute.push_back(p);
-        std::vector<uint32_t>& around = m.incident[p];
-        std::sort(around.begin(), around.end());
-        keep.clear();
-        for (const uint32_t g : around) {
-            if (r.bits(1)) {
-                *corner(m, g) = v;
-                m.incident[v].push_back(g);
-            } else {
-                keep.push_back(g);
-            }
-        }
-        around.swap(keep);
-        std::vector<uint32_t> count(m.parts.size());
-        uint64_t births = 0;
-        const bool usual = m.parts.size() == 1 && r.bits(1);  // one part: a 1 bit for the usual two
-        for (size_t q = 0; q < m.parts.size(); ++q) {
-            count[q] = usual ? 2 : r.gamma() - 1;
-            if (count[q] > left[q]) in.fail("vertex " + std::to_string(v) + " bears more triangles in part " + std::to_string(q) + " than the chunk's count", 36);
-            left[q] -= count[q];
-            births += count[q];
-        }
-        if (!births) return;
-        for (int side = 0; side < 2; ++side) {
-            std::vector<uint32_t>& list = m.around[side];
-            list.clear();
-            for (const uint32_t g : m.incident[side ? v : p]) {
-                const uint32_t* c = corner(m, g - g % 3);
-                for (int k = 0; k < 3; ++k)
-                    if (c[k] != p && c[k] != v) list.push_back(c[k]);
-            }
-            std::sort(list.begin(), list.end());
-            list.erase(std::unique(list.begin(), list.end()), list.end());
-        }
-        order_candidates(m.around[0], m.around[1], candidates);
-        for (size_t q = 0; q < m.parts.size(); ++q)
-            for (uint32_t i = 0; i < count[q]; ++i) {
-                const uint32_t order = r.bits(order_bits), index = r.gamma() - 1;
-                if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
-                uint32_t x = 0;
-                if (index < candidates.size()) {
-                    x = candidates[index];
-                } else if (index == candidates.size()) {
-                    x = r.bits(index_bits(v));
-                    if (x >= v || x == p) in.fail("vertex " + std::to_string(v) + " born triangle corner " + std::to_string(x) + " is not another vertex below it", 36);
-                } else {
-                    in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates.size()), 36);
-                }
-                const uint32_t role[3] = {v, p, x};
-                const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
-                add_triangle(m, q, c);
-            }
+    if (v < m.min_vertex_count) {
+        m.substitute.push_back(v);
+        return;
     }
+    const uint32_t p = r.bits(index_bits(v));
+    if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
+    m.substitute.push_back(p);
+    std::vector<uint32_t>& around = m.incident[p];
+    std::sort(around.begin(), around.end());
+    keep.clear();
+    for (const uint32_t g : around) {
+        if (r.bits(1)) {
+            *corner(m, g) = v;
+            m.incident[v].push_back(g);
+        } else {
+            keep.push_back(g);
+        }
+    }
+    around.swap(keep);
+    std::vector<uint32_t> count(m.parts.size());
+    uint64_t births = 0;
+    const bool usual = m.parts.size() == 1 && r.bits(1);  // one part: a 1 bit for the usual two
+    for (size_t q = 0; q < m.parts.size(); ++q) {
+        count[q] = usual ? 2 : r.gamma() - 1;
+        if (count[q] > left[q]) in.fail("vertex " + std::to_string(v) + " bears more triangles in part " + std::to_string(q) + " than the chunk's count", 36);
+        left[q] -= count[q];
+        births += count[q];
+    }
+    if (!births) return;
+    const auto triangle = [&](uint32_t g) { return triangle_of(m, g); };
+    gather_neighbours(m.incident[p], triangle, p, v, m.around[0]);
+    gather_neighbours(m.incident[v], triangle, p, v, m.around[1]);
+    order_candidates(m.around[0], m.around[1], candidates);
+    for (size_t q = 0; q < m.parts.size(); ++q)
+        for (uint32_t i = 0; i < count[q]; ++i) {
+            const uint32_t order = r.bits(order_bits), index = r.gamma() - 1;
+            if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
+            uint32_t x = 0;
+            if (index < candidates.size()) {
+                x = candidates[index];
+            } else if (index == candidates.size()) {
+                x = r.bits(index_bits(v));
+                if (x >= v || x == p) in.fail("vertex " + std::to_string(v) + " born triangle corner " + std::to_string(x) + " is not another vertex below it", 36);
+            } else {
+                in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates.size()), 36);
+            }
+            const uint32_t role[3] = {v, p, x};
+            const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
+            add_triangle(m, q, c);
+        }
 }
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
@@ -630,16 +615,6 @@ std::vector<uint8_t> StreamDecoder::Impl::assemble() const {
 
 namespace {
 
-std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
-    std::vector<uint8_t> out(values.size() * 4);
-    for (size_t i = 0; i < values.size(); ++i) layout::store_f32(&out[4 * i], values[i]);
-    return out;
-}
-
-void put_index(std::vector<uint8_t>& out, uint32_t v, uint32_t index_size) {
-    for (uint32_t k = 0; k < index_size; ++k) out.push_back(uint8_t(v >> (8 * k)));
-}
-
 /// META with its usable floor lowered to the decoded resolution (a floor above it would make
 /// every decoded level "below the floor", and readers ignore a floor past the vertex count).
 std::vector<uint8_t> clamped_metadata(std::vector<uint8_t> meta, uint32_t resolution) {
@@ -673,12 +648,9 @@ std::vector<layout::PendingSection> StreamDecoder::Impl::mesh_sections(const Mes
         lo[k] = i < 3 ? positions[i] : std::min(lo[k], positions[i]);
         hi[k] = i < 3 ? positions[i] : std::max(hi[k], positions[i]);
     }
-    std::vector<uint8_t> tris;
-    uint32_t live = 0;
-    for (const std::vector<uint32_t>& c : m.corners) {
-        for (uint32_t v : c) put_index(tris, v, m.index_size);
-        live += uint32_t(c.size() / 3);
-    }
+    std::vector<uint32_t> tris;  // the parts' live triangles, one after another
+    for (const std::vector<uint32_t>& c : m.corners) tris.insert(tris.end(), c.begin(), c.end());
+    const uint32_t live = uint32_t(tris.size() / 3);
     std::vector<uint8_t> head = m.header;
     store_u32(&head[m_vertex_count], n);
     store_u32(&head[m_triangle_count], live);
@@ -712,10 +684,8 @@ std::vector<layout::PendingSection> StreamDecoder::Impl::mesh_sections(const Mes
         }
         out.push_back({sec_tangents, index, float_bytes(tangents)});
     }
-    std::vector<uint8_t> subs;
-    for (uint32_t v = 0; v < n; ++v) put_index(subs, m.substitute[v], m.index_size);
-    out.push_back({sec_substitute, index, std::move(subs)});
-    out.push_back({sec_triangles, index, std::move(tris)});
+    out.push_back({sec_substitute, index, index_bytes(m.substitute, m.index_size)});
+    out.push_back({sec_triangles, index, index_bytes(tris, m.index_size)});
     if (!m.metadata.empty()) out.push_back({sec_metadata, index, clamped_metadata(m.metadata, n)});
     if (!m.pair_bits.empty() && n > 0) {
         std::vector<uint8_t> bits(m.pair_bits.begin(), m.pair_bits.begin() + (n + 7) / 8);

@@ -205,6 +205,7 @@ Connectivity connectivity(const MeshView& m) {
     std::vector<std::vector<uint32_t>> incident(V);
     for (size_t g = 0; g < cur.size(); ++g) incident[cur[g]].push_back(uint32_t(g));
     std::vector<uint8_t> alive(T, 1);
+    const auto triangle = [&](uint32_t g) { return &cur[3 * size_t(g / 3)]; };
     auto prune = [&](std::vector<uint32_t>& list) { list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t g) { return !alive[g / 3]; }), list.end()); };
     Connectivity out;
     out.splits.resize(V - S);
@@ -215,12 +216,7 @@ Connectivity connectivity(const MeshView& m) {
         s.p = p;
         // born at v + 1: the live triangles holding both v and p, each part's last ones
         prune(incident[v]);
-        std::vector<uint32_t>& ring = out.rings[v - S];
-        for (uint32_t g : incident[v])
-            for (int k = 0; k < 3; ++k)
-                if (cur[3 * size_t(g / 3) + k] != v) ring.push_back(cur[3 * size_t(g / 3) + k]);
-        std::sort(ring.begin(), ring.end());
-        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        gather_neighbours(incident[v], triangle, v, v, out.rings[v - S]);
         std::vector<uint32_t> born;
         for (uint32_t g : incident[v]) {
             const uint32_t* c = &cur[3 * size_t(g / 3)];
@@ -241,15 +237,8 @@ Connectivity connectivity(const MeshView& m) {
         std::vector<uint32_t> candidates;
         if (!born.empty()) {
             std::vector<uint32_t> around[2];
-            for (int side = 0; side < 2; ++side) {
-                for (uint32_t g : incident[side ? v : p])
-                    for (int k = 0; k < 3; ++k) {
-                        const uint32_t u = cur[3 * size_t(g / 3) + k];
-                        if (u != p && u != v) around[side].push_back(u);
-                    }
-                std::sort(around[side].begin(), around[side].end());
-                around[side].erase(std::unique(around[side].begin(), around[side].end()), around[side].end());
-            }
+            gather_neighbours(incident[p], triangle, p, v, around[0]);
+            gather_neighbours(incident[v], triangle, p, v, around[1]);
             order_candidates(around[0], around[1], candidates);
         }
         for (uint32_t t : born) {
