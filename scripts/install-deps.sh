@@ -23,6 +23,7 @@ packages=(
   libxxhash-dev                        # tombuild's digests of inputs (incremental conversion)
   slurm-wlm munge                      # the Slurm job-array test starts a one-node cluster (tests/cli/slurm_test.sh)
   parallel                             # GNU parallel: the README's shard recipe, run by tests/cli/batch_test.sh
+  emscripten chromium                  # the browser runtime (scripts/build-web.sh) and its test in headless chromium
 )
 
 # node and npm run Khronos' glTF validator and gltfpack in the tests (from the npm registry, below)
@@ -39,13 +40,15 @@ install_validator() {
   # from the npm registry into the git-ignored .tools/: Khronos' glTF validator (checks
   # tomextract's .glb output), gltfpack 0.18, the version of Debian's meshoptimizer decoders
   # (writes the KHR_mesh_quantization / EXT_meshopt_compression inputs the tests decode), and
-  # the current gltfpack (1.3, as gltfpack-current), the yardstick of scripts/bench.sh
+  # the current gltfpack (1.3, as gltfpack-current), the yardstick of scripts/bench.sh; three.js
+  # and meshoptimizer's JavaScript decoder (1.3, gltfpack's) for the browser runtime and viewer
   local m="$root/.tools/node_modules"
-  if [ ! -f "$m/gltf-validator/package.json" ] || [ ! -f "$m/gltfpack/package.json" ] || [ ! -f "$m/gltfpack-current/package.json" ]; then
+  if [ ! -f "$m/gltf-validator/package.json" ] || [ ! -f "$m/gltfpack/package.json" ] || [ ! -f "$m/gltfpack-current/package.json" ] ||
+     [ ! -f "$m/three/package.json" ] || [ ! -f "$m/meshoptimizer/package.json" ]; then
     mkdir -p "$root/.tools"
-    npm install --silent --no-audit --no-fund --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 gltfpack@0.18.0 \
-      gltfpack-current@npm:gltfpack@1.3.0 >/dev/null
-    echo "install-deps: gltf-validator, gltfpack 0.18 and gltfpack 1.3 installed in .tools/"
+    npm install --silent --no-audit --no-fund --save-exact --prefix "$root/.tools" gltf-validator@2.0.0-dev.3.10 gltfpack@0.18.0 \
+      gltfpack-current@npm:gltfpack@1.3.0 three@0.187.0 meshoptimizer@1.3.0 >/dev/null
+    echo "install-deps: gltf-validator, gltfpack 0.18 and 1.3, three 0.187 and meshoptimizer 1.3 installed in .tools/"
   fi
 }
 if [ ${#missing[@]} -eq 0 ]; then

@@ -96,10 +96,12 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
     const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size(), options, what);
     CHECK(tom::encode_stream(image.data(), image.size(), options, what) == stream);  // deterministic
     tom::StreamDecoder decoder(tom::meshopt_codecs(), what);
+    CHECK(decoder.next_boundary() == 64);  // a range client asks for the header first
     decoder.append(stream.data(), 64);
     CHECK_FALSE(decoder.has_directory());
     uint64_t fed = 64;
     const uint64_t directory_end = 64 + [&] { tom::StreamDecoder d(tom::meshopt_codecs()); d.append(stream.data(), stream.size()); return d.chunks()[0].begin_byte - 64; }();
+    CHECK(decoder.next_boundary() == directory_end);  // then the directory
     decoder.append(stream.data() + fed, directory_end - fed);
     fed = directory_end;
     REQUIRE(decoder.has_directory());
@@ -111,6 +113,7 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
     for (size_t k = 0; k < chunks.size(); ++k) {
         // a chunk in two pieces: nothing is decoded until its last byte
         const uint64_t middle = (chunks[k].begin_byte + chunks[k].end_byte) / 2;
+        CHECK(decoder.next_boundary() == chunks[k].end_byte);  // then each chunk
         decoder.append(stream.data() + fed, middle - fed);
         CHECK(decoder.decoded_chunks() == k);
         decoder.append(stream.data() + middle, chunks[k].end_byte - middle);
@@ -124,6 +127,7 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
         for (uint32_t i = 0; i < original.mesh_count(); ++i) check_prefix_mesh(original.mesh(i), prefix.mesh(i), decoder.quantization(i));
     }
     CHECK(decoder.complete());
+    CHECK(decoder.next_boundary() == stream.size());
     CHECK(fed == stream.size());
 }
 

@@ -168,8 +168,18 @@ uint32_t StreamDecoder::mesh_count() const noexcept { return uint32_t(impl_->mes
 const std::vector<StreamChunk>& StreamDecoder::chunks() const noexcept { return impl_->chunks; }
 size_t StreamDecoder::decoded_chunks() const noexcept { return impl_->decoded; }
 bool StreamDecoder::complete() const noexcept { return impl_->directory && impl_->decoded == impl_->chunks.size(); }
+uint64_t StreamDecoder::next_boundary() const noexcept {
+    const Impl& d = *impl_;
+    if (!d.declared_bytes) return header_bytes;
+    if (!d.directory) return header_bytes + d.directory_bytes;
+    return d.decoded < d.chunks.size() ? d.chunks[d.decoded].end_byte : d.declared_bytes;
+}
 uint32_t StreamDecoder::vertex_count(uint32_t mesh) const noexcept { return mesh < impl_->meshes.size() ? impl_->meshes[mesh].resolution : 0; }
 const StreamQuantization& StreamDecoder::quantization(uint32_t mesh) const noexcept { return impl_->meshes[mesh].quantization; }
+void StreamDecoder::declared_bounds(uint32_t mesh, float min[3], float max[3]) const noexcept {
+    const std::vector<uint8_t>& h = impl_->meshes[mesh].header;  // at least the 64-byte header (rule 32)
+    for (int k = 0; k < 3; ++k) min[k] = layout::load_f32(&h[layout::m_bounds_min + 4 * k]), max[k] = layout::load_f32(&h[layout::m_bounds_max + 4 * k]);
+}
 
 std::vector<uint8_t> StreamDecoder::tom_bytes() const {
     if (!impl_->directory) impl_->fail(impl_->received, "directory", 31, "the directory has not arrived (" + std::to_string(impl_->received) + " bytes received)");

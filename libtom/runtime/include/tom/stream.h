@@ -73,8 +73,15 @@ public:
     const std::vector<StreamChunk>& chunks() const noexcept;  ///< the directory's (empty before it)
     size_t decoded_chunks() const noexcept;             ///< chunks()[0, decoded_chunks()) are decoded
     bool complete() const noexcept;                     ///< every chunk decoded
+    /// The byte count at which the next decoding step can run: the header's end before it is in,
+    /// the directory's end before that, then the next chunk's end; file_bytes() when complete.
+    /// A client fetching by ranges asks for the bytes up to it.
+    uint64_t next_boundary() const noexcept;
     uint32_t vertex_count(uint32_t mesh) const noexcept;      ///< decoded resolution of a mesh (0 before its first chunk)
     const StreamQuantization& quantization(uint32_t mesh) const noexcept;  ///< \pre mesh < mesh_count()
+    /// The full-detail mesh's bounds as the directory declares them (a viewer frames the whole
+    /// mesh from the first chunk on). \pre mesh < mesh_count()
+    void declared_bounds(uint32_t mesh, float min[3], float max[3]) const noexcept;
 
     /// The .tom image of what is decoded (FORMAT.md): every mesh at its decoded resolution with
     /// its levels below, and the file's scene, materials, images and metadata; a mesh before its
