@@ -314,7 +314,8 @@ void put_attribute(std::vector<uint8_t>& out, const std::vector<T>& values, cons
 
 /// One chunk of a mesh before it is placed in the file.
 struct Chunk {
-    uint32_t mesh = 0, round = 0, vertex_end = 0, triangles = 0;
+    uint32_t mesh = 0, vertex_end = 0, triangles = 0;
+    double start = 0;  // the share of its mesh's triangles live before it (-1 for a mesh's first chunk)
     std::vector<uint8_t> bytes;
 };
 
@@ -359,7 +360,8 @@ std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Quantize
     uint32_t a = 0;
     for (const uint32_t b : chunk_ends(m, o)) {
         Chunk c;
-        c.mesh = index, c.round = uint32_t(out.size()), c.vertex_end = b;
+        c.mesh = index, c.vertex_end = b;
+        c.start = out.empty() ? -1.0 : double(out.back().triangles) / double(std::max(1u, m.triangle_count));
         c.bytes = chunk_payload(m, q, conn, a, b, live);
         for (uint32_t t : live) c.triangles += t;
         out.push_back(std::move(c));
@@ -428,7 +430,8 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         directory.resize(directory.size() + 8);
         store_u64(&directory[directory.size() - 8], s.bytes.size());
     }
-    // chunks: every mesh's, in rounds (round k of every mesh before round k + 1 of any)
+    // chunks: every mesh's first, then the others by the share of their mesh's triangles live
+    // before them, so that the prefix a share of every mesh needs holds little else
     std::vector<Chunk> chunks;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         const MeshView& m = file.mesh(i);
@@ -437,7 +440,7 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         directory.insert(directory.end(), record.begin(), record.end());
         for (Chunk& c : mesh_chunks(m, i, q, options)) chunks.push_back(std::move(c));
     }
-    std::stable_sort(chunks.begin(), chunks.end(), [](const Chunk& x, const Chunk& y) { return x.round < y.round; });
+    std::stable_sort(chunks.begin(), chunks.end(), [](const Chunk& x, const Chunk& y) { return x.start < y.start; });
     for (const Chunk& c : chunks) {
         const size_t r = directory.size();
         directory.resize(r + chunk_record_bytes, 0);
