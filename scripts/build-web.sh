@@ -44,7 +44,7 @@ if [ ! -f "$site/tom_wasm.wasm" ] || [ -n "$(find "${objects[@]}" -newer "$site/
 fi
 
 # the modules, the viewer and the vendored-at-build npm files (copies into the git-ignored site)
-cp -u "$root"/libtom/web/*.mjs "$root"/libtom/web/*.d.ts "$root"/samples/web/*.html "$root"/samples/web/viewer.mjs "$root"/samples/web/*.css "$site/"
+cp -u "$root"/libtom/web/*.mjs "$root"/libtom/web/*.d.ts "$root"/samples/web/*.html "$root"/samples/web/viewer.mjs "$root"/samples/web/bench.mjs "$root"/samples/web/*.css "$site/"
 cp -u "$modules"/three/build/three.module.js "$modules"/three/build/three.core.js "$site/vendor/three/"
 cp -u "$modules"/three/examples/jsm/controls/OrbitControls.js "$site/vendor/three/"
 cp -u "$modules"/three/LICENSE "$site/vendor/three/LICENSE"

@@ -3,13 +3,16 @@
 // over every byte, then the .tom image of the whole), and as the reference the full-detail mesh
 // quantized the same way, vertex-cache and fetch optimized and encoded with meshoptimizer's index
 // and vertex codecs (what gltfpack -cc stores for one level), decoded by meshoptimizer.
-// Medians of --repeats runs.
+// Medians of --repeats runs. --reference-out DIR writes both sides' bytes for the browser's
+// measurement of the same (scripts/bench-web.sh): NAME.stream.tom, and NAME.meshopt.bin with
+// NAME.meshopt.json (per mesh its counts and where its index, position and normal blocks lie).
 
 #include <meshoptimizer.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
@@ -79,7 +82,29 @@ struct Figures {
     double reference_s = 0;
 };
 
-Figures measure(const std::string& path, int repeats) {
+/// The stream and the reference's blocks, for scripts/bench-web.sh.
+void write_reference(const std::string& dir, const std::string& path, const std::vector<uint8_t>& stream, const std::vector<Reference>& refs) {
+    const std::string name = std::filesystem::path(path).stem().string();
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir + "/" + name + ".stream.tom", std::ios::binary).write(reinterpret_cast<const char*>(stream.data()), std::streamsize(stream.size()));
+    std::ofstream bin(dir + "/" + name + ".meshopt.bin", std::ios::binary);
+    nlohmann::ordered_json meshes = nlohmann::json::array();
+    size_t at = 0;
+    for (const Reference& r : refs) {
+        nlohmann::ordered_json m{{"index_count", r.index_count}, {"vertex_count", r.vertex_count}};
+        for (const auto& [key, block] : {std::pair{"indices", &r.indices}, std::pair{"positions", &r.positions}, std::pair{"normals", &r.normals}}) {
+            m[key] = {at, block->size()};
+            bin.write(reinterpret_cast<const char*>(block->data()), std::streamsize(block->size()));
+            at += block->size();
+        }
+        meshes.push_back(m);
+    }
+    std::ofstream index(dir + "/" + name + ".meshopt.json");
+    index << nlohmann::ordered_json{{"stream", name + ".stream.tom"}, {"blocks", name + ".meshopt.bin"}, {"meshes", meshes}}.dump() << "\n";
+    if (!bin || !index) throw tom::IoError("cannot write the reference into " + dir);
+}
+
+Figures measure(const std::string& path, int repeats, const std::string& reference_out) {
     Figures f;
     f.file = path;
     std::vector<uint8_t> bytes = read_bytes(path);
@@ -103,6 +128,7 @@ Figures measure(const std::string& path, int repeats) {
     std::vector<Reference> refs;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) refs.push_back(reference(file.mesh(i)));
     for (const Reference& r : refs) f.reference_bytes += r.bytes();
+    if (!reference_out.empty()) write_reference(reference_out, path, bytes, refs);
     for (int k = 0; k < repeats; ++k) {
         const auto t0 = Clock::now();
         for (const Reference& r : refs) {
@@ -125,10 +151,12 @@ int main(int argc, char** argv) {
     std::vector<std::string> files;
     int repeats = 5;
     bool json = false;
+    std::string reference_out;
     CLI::App app{"Streamed .tom files against meshoptimizer's codecs on the same meshes: bytes and decode speed"};
     app.add_option("files", files, ".tom files, ordinary (streamed here with the default options) or streamed")->required();
     app.add_option("-r,--repeats", repeats, "Runs per figure; medians are reported (default 5)")->check(CLI::Range(1, 1000));
     app.add_flag("--json", json, "One JSON object per file (one per line) instead of the table");
+    app.add_option("--reference-out", reference_out, "Also write each file's stream and meshoptimizer blocks into this folder (for scripts/bench-web.sh)");
     app.footer("Exit codes: 0 ok, 1 a file could not be read, 2 usage error.\nExample: tomstreambench out/bunny00.tom");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
     if (!json)
@@ -136,7 +164,7 @@ int main(int argc, char** argv) {
                     "MB/s", "Mtri/s", "x meshopt");
     for (const std::string& path : files) {
         try {
-            const Figures f = measure(path, repeats);
+            const Figures f = measure(path, repeats, reference_out);
             const double total = f.decode_s + f.assemble_s;
             const double speed = f.triangles / total, ref_speed = f.triangles / f.reference_s;
             if (json) {

@@ -81,10 +81,14 @@ async function send(options, request, response) {
     if (options.exitOnReport) setTimeout(() => process.exit(0), 50);
     return;
   }
-  const file = resolve(options, request.url);
+  let file = resolve(options, request.url);
   let stat = null;
   try {
     stat = file && (await fs.stat(file));
+    if (stat && stat.isDirectory()) {
+      file = path.join(file, 'index.html'); // a folder: its page
+      stat = await fs.stat(file);
+    }
   } catch {
     stat = null;
   }

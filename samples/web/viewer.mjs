@@ -45,7 +45,7 @@ export class Viewer {
 
   resize() {
     const [w, h] = this.fixedSize || [this.canvas.clientWidth, this.canvas.clientHeight];
-    this.renderer.setSize(w, h, !this.fixedSize);
+    this.renderer.setSize(w, h, !!this.fixedSize); // a fixed size sets the canvas style; otherwise CSS sizes it
     this.camera.aspect = w / h;
     this.camera.updateProjectionMatrix();
   }
@@ -57,6 +57,7 @@ export class Viewer {
       if (this.scheduler) this.scheduler.add(object);
       object.addEventListener('refine', () => this.showStats());
       object.addEventListener('error', (event) => this.showError(event.error));
+      object.loaded.then(() => this.showStats(), () => {});
       this.objects.push(object);
       this.scene.add(object);
       this.frameAll();
@@ -135,6 +136,10 @@ window.viewer = viewer;
 const slider = document.getElementById('resolution');
 const automatic = document.getElementById('auto');
 automatic.checked = params.get('auto') === '1';
+if (params.has('resolution')) {
+  slider.value = params.get('resolution');
+  document.getElementById('fraction').textContent = `${(100 * Number(slider.value)).toFixed(1)}%`;
+}
 slider.addEventListener('input', () => {
   automatic.checked = false;
   document.getElementById('fraction').textContent = `${(100 * Number(slider.value)).toFixed(1)}%`;

@@ -1,0 +1,67 @@
+// Decode speed in the browser (scripts/bench-web.sh opens this page): a streamed .tom decoded by
+// the wasm runtime against meshoptimizer's npm decoder on the reference blocks tomstreambench
+// wrote for the same mesh (--reference-out), medians of `repeats` runs, as the native
+// tomstreambench measures them. ?reference=URL of NAME.meshopt.json [&repeats=7] [&report=1: POST
+// the figures to /report].
+import { MeshoptDecoder } from 'meshoptimizer/decoder';
+import { createRuntime } from './tom.mjs';
+
+const params = new URLSearchParams(location.search);
+const median = (values) => values.slice().sort((a, b) => a - b)[Math.floor(values.length / 2)];
+
+async function bytesOf(url) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  return new Uint8Array(await response.arrayBuffer());
+}
+
+async function measure() {
+  const referenceUrl = new URL(params.get('reference'), location.href);
+  const reference = await (await fetch(referenceUrl)).json();
+  const stream = await bytesOf(new URL(reference.stream, referenceUrl));
+  const blocks = await bytesOf(new URL(reference.blocks, referenceUrl));
+  const repeats = Number(params.get('repeats') || 7);
+  const runtime = await createRuntime();
+  await MeshoptDecoder.ready;
+  const decode = [], image = [], meshopt = [];
+  let triangles = 0;
+  for (let r = 0; r < repeats; ++r) {
+    const source = runtime.openSource('bench');
+    let t0 = performance.now();
+    source.append(stream);
+    decode.push(performance.now() - t0);
+    t0 = performance.now();
+    const snapshot = source.snapshot();
+    image.push(performance.now() - t0);
+    triangles = snapshot.meshes.reduce((sum, m) => sum + m.triangles, 0);
+    source.dispose();
+  }
+  for (let r = 0; r < repeats; ++r) {
+    const t0 = performance.now();
+    for (const m of reference.meshes) {
+      const block = ([at, n]) => blocks.subarray(at, at + n);
+      MeshoptDecoder.decodeIndexBuffer(new Uint8Array(4 * m.index_count), m.index_count, 4, block(m.indices));
+      MeshoptDecoder.decodeVertexBuffer(new Uint8Array(8 * m.vertex_count), m.vertex_count, 8, block(m.positions));
+      if (m.normals[1]) MeshoptDecoder.decodeVertexBuffer(new Uint8Array(4 * m.vertex_count), m.vertex_count, 4, block(m.normals));
+    }
+    meshopt.push(performance.now() - t0);
+  }
+  const total = median(decode) + median(image);
+  return {
+    stream: reference.stream, triangles, stream_bytes: stream.length, meshopt_bytes: blocks.length,
+    decode_ms: median(decode), image_ms: median(image), decode_mb_per_s: stream.length / total / 1e3,
+    decode_tris_per_s: (triangles / total) * 1e3, meshopt_decode_ms: median(meshopt), meshopt_tris_per_s: (triangles / median(meshopt)) * 1e3,
+    speed_over_meshopt: median(meshopt) / total, user_agent: navigator.userAgent,
+  };
+}
+
+measure().then(
+  async (figures) => {
+    document.getElementById('out').textContent = JSON.stringify(figures, null, 2);
+    if (params.get('report') === '1') await fetch('/report', { method: 'POST', body: JSON.stringify(figures) });
+  },
+  async (error) => {
+    document.getElementById('out').textContent = `error: ${error.message}`;
+    if (params.get('report') === '1') await fetch('/report', { method: 'POST', body: JSON.stringify({ error: error.message }) });
+  },
+);
