@@ -247,6 +247,22 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
             CHECK(e.offset() <= chunks[2].end_byte);
         }
         CHECK(d.decoded_chunks() == 2);
+        // a chunk that decodes whole and only then is found to lie (its live triangle count, the
+        // last check): its splits are undone, and what came before is the prefix it was
+        std::vector<uint8_t> late = stream;
+        const uint64_t record = chunk_record(late, 3);
+        tom::layout::store_u32(&late[record + 8], tom::layout::load_u32(&late[record + 8]) + 1);
+        reseal(late);
+        tom::StreamDecoder undone(tom::meshopt_codecs(), "late.tom");
+        CHECK_THROWS_WITH(undone.append(late.data(), late.size()), Catch::Contains("late.tom") && Catch::Contains("live triangles"));
+        REQUIRE(undone.decoded_chunks() == 3);
+        const tom::File kept = undone.file();  // validated by the reader
+        tom::StreamDecoder three(tom::meshopt_codecs());
+        three.append(stream.data(), chunks[2].end_byte);
+        const tom::File expected = three.file();
+        CHECK(kept.mesh(0).vertex_count == chunks[2].vertex_end);
+        CHECK(kept.mesh(0).triangle_count == chunks[2].triangles);
+        CHECK(undone.tom_bytes() == three.tom_bytes());
         // a chunk table entry past the mesh's vertices
         std::vector<uint8_t> table = stream;
         tom::layout::store_u32(&table[chunk_record(table, 1) + 4], 1u << 30);

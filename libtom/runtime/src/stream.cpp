@@ -50,6 +50,25 @@ struct MeshState {
     std::vector<std::vector<uint32_t>> incident; // per vertex: the live corners holding it (3 t + k in the file's TRIS)
     std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
     std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
+    std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
+};
+
+/// A mesh's decoded state before a chunk: the streams' lengths. With the corners the chunk
+/// rewrote (MeshState::rewritten) it puts the mesh back when the chunk turns out bad, so that what
+/// was decoded before stays a valid prefix. The incident lists are not put back: a failed decoder
+/// decodes nothing more, and assembling needs only the corners and streams.
+struct MeshUndo {
+    size_t substitute, positions, normals, tangents, texcoords[2], colors;
+    std::vector<size_t> corners, carried;
+
+    explicit MeshUndo(MeshState& m)
+        : substitute(m.substitute.size()), positions(m.positions.size()), normals(m.normals.size()), tangents(m.tangents.size()),
+          texcoords{m.texcoords[0].size(), m.texcoords[1].size()}, colors(m.colors.size()) {
+        for (const auto& c : m.corners) corners.push_back(c.size());
+        for (const Carried& c : m.carried) carried.push_back(c.data.size());
+        m.rewritten.clear();
+    }
+    void restore(MeshState& m) const;
 };
 
 /// A bounded view of the bytes of one chunk, read front to back.
@@ -132,6 +151,7 @@ struct StreamDecoder::Impl {
     void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
     void read_chunk_table(const uint8_t* table, uint64_t offset);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
+    void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
     void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep, std::vector<uint32_t>& candidates);
@@ -394,9 +414,21 @@ void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset
             fail(offset, "mesh " + std::to_string(m) + " chunks", 33, "reach vertex " + std::to_string(end[m]) + " of " + std::to_string(meshes[m].vertex_count));
 }
 
-// rules 35 and 36: a chunk's counts, its blocks and the values they decode to
+// rules 35 and 36: a chunk's counts, its blocks and the values they decode to; a bad chunk leaves
+// its mesh as it was
 void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
     MeshState& m = meshes[chunk.mesh];
+    const MeshUndo undo(m);
+    try {
+        decode_chunk_blocks(m, chunk, data, bytes);
+    } catch (...) {
+        undo.restore(m);
+        throw;
+    }
+    m.resolution = chunk.vertex_end;
+}
+
+void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
     const std::string field = "chunk " + std::to_string(&chunk - chunks.data());
     ChunkReader in{data, bytes, 0, chunk.begin_byte, &path, &field};
     // a block of count elements holds at least count / 16 bytes, a split at least a bit: a bound
@@ -421,7 +453,6 @@ void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* 
     uint64_t live = 0;
     for (const auto& c : m.corners) live += c.size() / 3;
     if (live != chunk.triangles) in.fail("decodes to " + std::to_string(live) + " live triangles where the chunk table says " + std::to_string(chunk.triangles), 36);
-    m.resolution = chunk.vertex_end;
 }
 
 namespace {
@@ -463,6 +494,16 @@ uint32_t* corner(MeshState& m, uint32_t g) {
     if (p >= m.parts.size()) return nullptr;
     const uint64_t slot = g - 3 * uint64_t(m.parts[p].first_triangle);
     return slot < m.corners[p].size() ? &m.corners[p][slot] : nullptr;
+}
+
+void MeshUndo::restore(MeshState& m) const {
+    m.substitute.resize(substitute), m.positions.resize(positions), m.normals.resize(normals), m.tangents.resize(tangents);
+    m.texcoords[0].resize(texcoords[0]), m.texcoords[1].resize(texcoords[1]), m.colors.resize(colors);
+    for (size_t p = 0; p < corners.size(); ++p) m.corners[p].resize(corners[p]);
+    for (size_t c = 0; c < carried.size(); ++c) m.carried[c].data.resize(carried[c]);
+    // latest first: a corner rewritten twice gets its oldest value; one of a new triangle is gone
+    for (auto r = m.rewritten.rbegin(); r != m.rewritten.rend(); ++r)
+        if (uint32_t* c = corner(m, r->first)) *c = r->second;
 }
 
 /// The three corners of the live triangle holding corner `g`.
@@ -529,7 +570,9 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     keep.clear();
     for (const uint32_t g : around) {
         if (r.bits(1)) {
-            *corner(m, g) = v;
+            uint32_t* c = corner(m, g);
+            m.rewritten.emplace_back(g, *c);
+            *c = v;
             m.incident[v].push_back(g);
         } else {
             keep.push_back(g);
