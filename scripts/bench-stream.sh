@@ -5,7 +5,7 @@
 # 100% of the triangles, each compressed by the current gltfpack's -cc, fetched coarsest first:
 # after B bytes the finest level wholly received; a level's bytes are its .gltf and .bin, the
 # images not counted) and against one gltfpack -cc level; then
-# tomstreambench's decode speeds. Writes the section "Streaming" of docs/PERFORMANCE.md (kept by
+# tomstreambench's decode speeds, natively and in headless chromium (scripts/bench-web.sh). Writes the section "Streaming" of docs/PERFORMANCE.md (kept by
 # scripts/bench.sh when it rewrites the file) with its plot docs/images/stream.png, and
 # out/stream/stream.json. TOM_PERFORMANCE=FILE writes the section there instead.
 # Usage: scripts/bench-stream.sh [MESH...]   (default: bunny00 and the textured spider)
@@ -48,6 +48,9 @@ for mesh in "${meshes[@]}"; do
   done > "$work/$name.chain.jsonl"
   "$tools/tomstreambench" "$work/stream/$name.tom" --json -r 5 > "$work/$name.speed.json"
 done
+# decode speed in the browser, beside the native on the same bytes
+bash "$root/scripts/bench-web.sh" "${meshes[@]}" > /dev/null
+cp "$out/web.jsonl" "$work/web.jsonl"
 
 /usr/bin/python3 - "$work" "$out" "${TOM_PERFORMANCE:-$root/docs/PERFORMANCE.md}" "$root/docs/images/stream.png" "${meshes[@]}" <<'EOF'
 import json, os, sys
@@ -90,6 +93,12 @@ for r in result:
     summary.append(f"| {r['mesh']} | {r['stream_bytes']} | {r['first_chunk_bytes']} ({100 * r['first_chunk_bytes'] / r['stream_bytes']:.1f}%) | {r['single_cc_bytes']} | "
                    f"{r['stream_bytes'] / r['single_cc_bytes']:.2f} | {r['chain_bytes']} | {'yes' if r['at_or_below_chain'] else 'no'} | "
                    f"{s['decode_tris_per_s'] / 1e6:.2f} | {s['speed_over_meshopt']:.3f} |")
+web = [json.loads(l) for l in open(f'{work}/web.jsonl')]
+speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (same mesh, its codecs) | stream / meshoptimizer |', '|---|---|---:|---:|---:|---:|']
+for w in web:
+    chromium = w['browser']['user_agent'].split('Chrome/')[-1].split(' ')[0]
+    for where, f in (('native (tomstreambench)', w['native']), (f'browser (chromium {chromium}, wasm)', w['browser'])):
+        speeds.append(f"| {w['mesh']} | {where} | {f['decode_mb_per_s']:.2f} | {f['decode_tris_per_s'] / 1e6:.2f} | {f['meshopt_tris_per_s'] / 1e6:.2f} | {f['speed_over_meshopt']:.3f} |")
 intro = ['## Streaming', '',
          '`scripts/bench-stream.sh`: each mesh streamed (`tombuild --stream`: positions 14 bits, normals 8, texture coordinates 12,',
          'as gltfpack\'s defaults) and, at every chunk boundary, the two-sided Metro mean (`tomerr`, % of the diagonal) of what',
@@ -97,8 +106,10 @@ intro = ['## Streaming', '',
          '(TOM\'s levels, each compressed by the current gltfpack\'s `-cc` into a `.gltf` and `.bin`, images not counted)',
          'fetched coarsest first, and one `-cc` level. The chain\'s errors are those of its unquantized levels. Decode speed:',
          '`tomstreambench` (every byte through `tom::StreamDecoder` and the `.tom` image of the whole, against meshoptimizer\'s',
-         'decoders on the same meshes encoded with its codecs).', '', '![Error against bytes received](images/stream.png)', '']
-text = '\n'.join(intro + summary + [''] + lines) + '\n'
+         'decoders on the same meshes encoded with its codecs), natively and in headless chromium (`scripts/bench-web.sh`: the',
+         'wasm runtime against meshoptimizer\'s npm decoder on the very bytes the native run decodes).', '',
+         '![Error against bytes received](images/stream.png)', '']
+text = '\n'.join(intro + summary + [''] + speeds + [''] + lines) + '\n'
 json.dump(result, open(f'{out}/stream.json', 'w'), indent=1)
 print(text)
 try:
