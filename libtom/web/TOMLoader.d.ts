@@ -20,6 +20,8 @@ export class TOMObject extends Group {
   readonly url: string;
   readonly bytesReceived: number;
   readonly fileBytes: number;
+  /** the bytes that had arrived when the first frame was drawn */
+  readonly firstFrameBytes: number;
   readonly complete: boolean;
   readonly drawnTriangles: number;
   readonly drawnVertices: number;

@@ -193,6 +193,9 @@ export class TOMObject extends Group {
     this.loaded.catch(() => {}); // also reported to onError
   }
 
+  /** The bytes that had arrived when the first frame was drawn. */
+  firstFrameBytes = 0;
+
   get bytesReceived() {
     return this.source ? this.source.bytesReceived : 0;
   }
@@ -363,8 +366,20 @@ export class TOMObject extends Group {
     if (this.error) throw this.error;
   }
 
-  // Appends a piece of the body; draws what new chunks made decodable.
+  // Appends a piece of the body; draws what new chunks made decodable. Until the first frame the
+  // piece is cut where the decoder can go on, so that frame is drawn from the fewest bytes even
+  // when the network hands over several chunks at once.
   take(bytes) {
+    while (!this.slots.length && this.source.isStream && !this.error) {
+      const cut = this.source.nextBoundary - this.source.bytesReceived;
+      if (cut <= 0 || cut >= bytes.length) break;
+      this.takePiece(bytes.subarray(0, cut));
+      bytes = bytes.subarray(cut);
+    }
+    if (!this.error) this.takePiece(bytes);
+  }
+
+  takePiece(bytes) {
     const before = this.source.decodedChunks;
     try {
       this.source.append(bytes);
@@ -421,7 +436,10 @@ export class TOMObject extends Group {
     for (let m = 0; m < this.slots.length; ++m) this.copyVertices(snapshot, m);
     this.snapshot = snapshot;
     this.redraw();
-    if (first) this.dispatchEvent({ type: 'firstframe' });
+    if (first) {
+      this.firstFrameBytes = this.source.bytesReceived;
+      this.dispatchEvent({ type: 'firstframe' });
+    }
   }
 
   build(snapshot) {

@@ -33,7 +33,7 @@ export async function attach(viewer, params) {
       const record = { url, frames: [] };
       const started = performance.now();
       const object = await viewer.load(url);
-      record.firstFrameBytes = object.bytesReceived;
+      record.firstFrameBytes = object.firstFrameBytes;
       record.firstFrameMs = performance.now() - started;
       checkFrame(object, record);
       object.addEventListener('refine', () => checkFrame(object, record));

@@ -51,6 +51,7 @@ struct MeshState {
     std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
     std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
     std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
+    std::vector<uint32_t> births;                // scratch: a split's born triangles per part
 };
 
 /// A mesh's decoded state before a chunk: the streams' lengths. With the corners the chunk
@@ -101,13 +102,15 @@ struct BitReader {
     const uint8_t* data;
     uint64_t bytes, at = 0;
     ChunkReader* in;
+    /// The next n <= 32 bits: the (at most five) bytes holding them, shifted into place.
     uint32_t bits(uint32_t n) {
-        uint32_t v = 0;
-        for (uint32_t i = 0; i < n; ++i, ++at) {
-            if (at >= 8 * bytes) fail("runs past the splits block");
-            v |= uint32_t(data[at / 8] >> (at % 8) & 1u) << i;
-        }
-        return v;
+        if (n == 0) return 0;
+        if (8 * bytes - at < n) fail("runs past the splits block");
+        const uint64_t first = at / 8, last = (at + n - 1) / 8;
+        uint64_t word = 0;
+        for (uint64_t i = first; i <= last; ++i) word |= uint64_t(data[i]) << (8 * (i - first));
+        at += n;
+        return uint32_t(word >> ((at - n) % 8)) & (n == 32 ? ~0u : (1u << n) - 1);
     }
     /// Elias gamma: n >= 1.
     uint32_t gamma() {
@@ -489,6 +492,7 @@ const std::vector<std::vector<uint32_t>>* predictor_of(ChunkReader& in, const Me
 
 /// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
 uint32_t* corner(MeshState& m, uint32_t g) {
+    if (m.parts.size() == 1) return g < m.corners[0].size() ? &m.corners[0][g] : nullptr;  // the usual mesh: no search
     const uint64_t t = g / 3;
     const size_t p = size_t(std::upper_bound(m.part_ends.begin(), m.part_ends.end(), t) - m.part_ends.begin());
     if (p >= m.parts.size()) return nullptr;
@@ -509,12 +513,21 @@ void MeshUndo::restore(MeshState& m) const {
 /// The three corners of the live triangle holding corner `g`.
 const uint32_t* triangle_of(MeshState& m, uint32_t g) { return corner(m, g - g % 3); }
 
+/// Lists corner g at vertex v. A list starts with room for 8 (most vertices hold 4 to 8 corners):
+/// one allocation instead of four; each corner listed cost a bit of the chunk, so the room is
+/// justified by the bytes received.
+void list_corner(MeshState& m, uint32_t v, uint32_t g) {
+    std::vector<uint32_t>& list = m.incident[v];
+    if (list.capacity() == 0) list.reserve(8);
+    list.push_back(g);
+}
+
 /// Appends a triangle to part p and lists its corners at their vertices.
 void add_triangle(MeshState& m, size_t p, const uint32_t c[3]) {
     const uint32_t g = 3 * (m.parts[p].first_triangle + uint32_t(m.corners[p].size() / 3));
     for (int k = 0; k < 3; ++k) {
         m.corners[p].push_back(c[k]);
-        m.incident[c[k]].push_back(g + uint32_t(k));
+        list_corner(m, c[k], g + uint32_t(k));
     }
 }
 
@@ -544,7 +557,9 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
     const auto [data, n] = in.block("splits");
     BitReader r{data, n, 0, &in};
     std::vector<uint32_t> left = born, keep, candidates;
-    m.rings.assign(b - a, {});
+    // each new vertex's ring, reusing the lists of the previous chunk
+    if (m.rings.size() < b - a) m.rings.resize(b - a);
+    for (uint32_t i = 0; i < b - a; ++i) m.rings[i].clear();
     for (uint32_t v = a; v < b; ++v) {
         split_vertex(m, in, r, v, left, keep, candidates);
         if (v < m.min_vertex_count) continue;
@@ -573,13 +588,14 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
             uint32_t* c = corner(m, g);
             m.rewritten.emplace_back(g, *c);
             *c = v;
-            m.incident[v].push_back(g);
+            list_corner(m, v, g);
         } else {
             keep.push_back(g);
         }
     }
     around.swap(keep);
-    std::vector<uint32_t> count(m.parts.size());
+    std::vector<uint32_t>& count = m.births;
+    count.assign(m.parts.size(), 0);
     uint64_t births = 0;
     const bool usual = m.parts.size() == 1 && r.bits(1);  // one part: a 1 bit for the usual two
     for (size_t q = 0; q < m.parts.size(); ++q) {
