@@ -8,10 +8,11 @@
 # tomstreambench's decode speeds, natively and in headless chromium (scripts/bench-web.sh). Writes the section "Streaming" of docs/PERFORMANCE.md (kept by
 # scripts/bench.sh when it rewrites the file) with its plot docs/images/stream.png, and
 # out/stream/stream.json. TOM_PERFORMANCE=FILE writes the section there instead.
-# Usage: scripts/bench-stream.sh [MESH...]   (default: bunny00 and the textured spider)
-# The chain's errors are measured on its uncompressed levels (gltfpack 1.3's -cc output uses
-# codecs newer than Debian's decoders that tomerr reads with), the stream's on what it decodes to,
-# quantization included.
+# Usage: scripts/bench-stream.sh [MESH...]   (default: bunny00, the textured spider and a generated
+# bumpy sphere of 2M triangles, tombench --write-generated)
+# The chain's errors are measured on its levels quantized by gltfpack as -cc quantizes them, but
+# without the codecs (gltfpack 1.3's -cc output uses codecs newer than Debian's decoders that
+# tomerr reads with), the stream's on what it decodes to: both with their quantization.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 tools="$root/build/tools"
@@ -20,8 +21,11 @@ tools="$root/build/tools"
 pack="$root/.tools/node_modules/gltfpack-current/cli.js"
 [ -f "$pack" ] || { echo "bench-stream: the current gltfpack is missing: run scripts/install-deps.sh" >&2; exit 1; }
 meshes=("$@")
-[ ${#meshes[@]} -gt 0 ] || meshes=("$root/data/meshes/bunny00.off" "$root/data/assimp/OBJ/spider.obj")
 out="$root/out/stream"; mkdir -p "$out"
+if [ ${#meshes[@]} -eq 0 ]; then
+  [ -f "$out/sphere2m.ply" ] || "$tools/tombench" "$root/data/meshes/bunny00.off" --generated 2000000 --write-generated "$out/sphere2m.ply" > /dev/null
+  meshes=("$root/data/meshes/bunny00.off" "$root/data/assimp/OBJ/spider.obj" "$out/sphere2m.ply")
+fi
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 
 for mesh in "${meshes[@]}"; do
@@ -43,8 +47,10 @@ for mesh in "${meshes[@]}"; do
     # stream refers to a source's image files)
     mkdir -p "$work/cc-$name-$pct"
     node "$pack" -i "$work/$name-$pct.glb" -o "$work/cc-$name-$pct/level.gltf" -cc > /dev/null
+    # its error: the same level quantized as -cc quantizes it (gltfpack's defaults), without the codecs
+    node "$pack" -i "$work/$name-$pct.glb" -o "$work/$name-$pct-q.glb" > /dev/null
     printf '{"percent": %s, "bytes": %s, "tomerr": %s}\n' "$pct" "$(cat "$work/cc-$name-$pct"/level.gltf "$work/cc-$name-$pct"/level.bin | wc -c)" \
-      "$("$tools/tomerr" "$mesh" "$work/$name-$pct.glb" --json | tr -d '\n')"
+      "$("$tools/tomerr" "$mesh" "$work/$name-$pct-q.glb" --json | tr -d '\n')"
   done > "$work/$name.chain.jsonl"
   "$tools/tomstreambench" "$work/stream/$name.tom" --json -r 5 > "$work/$name.speed.json"
 done
@@ -82,7 +88,7 @@ for mesh in meshes:
                    'single_cc_bytes': single['bytes'], 'chain_bytes': total, 'chain': [{'percent': c['percent'], 'bytes': c['bytes'],
                    'mean_percent': mean_of(c['tomerr'])} for c in chain], 'points': points, 'at_or_below_chain': at_or_below, 'speed': speed})
     for q in points:
-        ratio = f"{q['mean_percent'] / q['chain_mean_percent']:.2f}" if q['chain_mean_percent'] else 'nothing yet'
+        ratio = f"{q['mean_percent'] / q['chain_mean_percent']:.2f}" if q['chain_mean_percent'] else ('nothing yet' if q['chain_mean_percent'] is None else '-')
         chain_cell = f"{q['chain_level_percent']}%" if q['chain_level_percent'] else '-'
         chain_err = f"{q['chain_mean_percent']:.4f}" if q['chain_mean_percent'] is not None else '-'
         lines.append(f"| {name} | {q['bytes']} | {q['triangles']} | {q['mean_percent']:.4f} | {chain_cell} | {chain_err} | {ratio} |")
@@ -104,7 +110,8 @@ intro = ['## Streaming', '',
          'as gltfpack\'s defaults) and, at every chunk boundary, the two-sided Metro mean (`tomerr`, % of the diagonal) of what',
          'the bytes received decode to (`tomextract --bytes`), against a glTF LOD chain of 1, 5, 25 and 100% of the triangles',
          '(TOM\'s levels, each compressed by the current gltfpack\'s `-cc` into a `.gltf` and `.bin`, images not counted)',
-         'fetched coarsest first, and one `-cc` level. The chain\'s errors are those of its unquantized levels. Decode speed:',
+         'fetched coarsest first, and one `-cc` level. The chain\'s errors are measured on its levels quantized as `-cc` quantizes',
+         'them (gltfpack\'s defaults, without the codecs): both sides\' errors include their quantization. Decode speed:',
          '`tomstreambench` (every byte through `tom::StreamDecoder` and the `.tom` image of the whole, against meshoptimizer\'s',
          'decoders on the same meshes encoded with its codecs), natively and in headless chromium (`scripts/bench-web.sh`: the',
          'wasm runtime against meshoptimizer\'s npm decoder on the very bytes the native run decodes).', '',

@@ -30,6 +30,8 @@ export class TOMObject extends Group {
   readonly bounds: number[][];
   /** settles when what the object was asked for is in */
   readonly loaded: Promise<TOMObject>;
+  /** settles when every texture has been decoded or fetched (or failed, with a warning) */
+  texturesLoaded(): Promise<void[]>;
   setResolution(resolution: Resolution): void;
   setAutomatic(enabled: boolean, pixels?: number): void;
   update(camera: Camera, height: number): void;

@@ -196,6 +196,13 @@ export class TOMObject extends Group {
   /** The bytes that had arrived when the first frame was drawn. */
   firstFrameBytes = 0;
 
+  /** The textures being decoded or fetched; texturesLoaded() settles when they all have. */
+  textureLoads = [];
+
+  texturesLoaded() {
+    return Promise.all(this.textureLoads);
+  }
+
   get bytesReceived() {
     return this.source ? this.source.bytesReceived : 0;
   }
@@ -480,16 +487,18 @@ export class TOMObject extends Group {
     }
   }
 
-  // Per chunk, the error its mesh shows once it is decoded: the stored curve at the chunk's
-  // triangles; without a curve D = k / N, k set by the first chunk at 1% of the diagonal. A
-  // mesh's last chunk is its full detail: 0.
+  // Per chunk, the error its mesh shows once it is decoded: the stored curve's Hausdorff distance
+  // at the chunk's triangles (a bound on any point's deviation, as a screen-space error wants;
+  // the mean would let most of the surface sit within a pixel while a silhouette is off by
+  // several); without a curve D = k / N, k set by the first chunk at 1% of the diagonal. A mesh's
+  // last chunk is its full detail: 0.
   errorModel(snapshot) {
     const d = this.source.directory;
     if (!d) return;
     this.chunkError = d.chunks.map((c) => {
       const chunks = this.meshChunks[c.mesh];
       if (chunks[chunks.length - 1] === d.chunks.indexOf(c)) return 0;
-      const e = snapshot.estimateError(c.mesh, c.triangles);
+      const e = snapshot.estimateError(c.mesh, c.triangles, true);
       if (e !== null) return e;
       const b = this.bounds[c.mesh];
       const first = d.chunks[chunks[0]].triangles;
@@ -499,7 +508,7 @@ export class TOMObject extends Group {
 
   makeMaterial(snapshot, mat) {
     const base = mat ? mat.base_color : [0.7, 0.7, 0.7, 1];
-    const texture = mat && mat.textures.find((t) => t.role === 'base_color' && t.texcoord === 0);
+    const texture = mat && mat.textures.find((t) => t.role === 'baseColor' && t.texcoord === 0);
     const map = texture ? this.makeTexture(snapshot, texture) : null;
     if (this.options.shading === 'reference') {
       const m = new ShaderMaterial({
@@ -537,23 +546,25 @@ export class TOMObject extends Group {
     texture.colorSpace = SRGBColorSpace;
     if (ref.image >= 0) {
       const blob = new Blob([snapshot.image(ref.image)], { type: snapshot.images[ref.image].mime_type });
-      createImageBitmap(blob, { colorSpaceConversion: 'none' }).then(
+      const load = createImageBitmap(blob, { colorSpaceConversion: 'none' }).then(
         (bitmap) => {
           texture.image = bitmap;
           texture.needsUpdate = true;
         },
         (error) => console.warn(`${this.url}: image ${ref.image} does not decode (${error.message}); drawn without it`),
       );
+      this.textureLoads.push(load);
     } else if (ref.uri) {
-      new TextureLoader().load(
-        new URL(ref.uri.replace(/\\/g, '/'), this.url).href,
-        (loaded) => {
-          texture.image = loaded.image;
-          texture.needsUpdate = true;
-        },
-        undefined,
-        () => console.warn(`${this.url}: texture '${ref.uri}' is not beside the file; drawn without it`),
-      );
+      const load = new TextureLoader()
+        .loadAsync(new URL(ref.uri.replace(/\\/g, '/'), this.url).href)
+        .then(
+          (loaded) => {
+            texture.image = loaded.image;
+            texture.needsUpdate = true;
+          },
+          () => console.warn(`${this.url}: texture '${ref.uri}' is not beside the file; drawn without it`),
+        );
+      this.textureLoads.push(load);
     } else {
       return null;
     }

@@ -19,7 +19,7 @@ export interface StreamDirectory {
   chunks: StreamChunk[];
 }
 
-export interface TextureRef { role: string; texcoord: number; uri: string; image: number }
+export interface TextureRef { /** 'baseColor', 'metallicRoughness', 'normal', 'occlusion' or 'emissive' */ role: string; texcoord: number; uri: string; image: number }
 export interface MaterialInfo {
   name: string;
   base_color: [number, number, number, number];
@@ -88,6 +88,7 @@ export class TOMSnapshot {
   stream(mesh: number, name: 'position' | 'normal' | 'uv' | 'color'): Float32Array | null;
   image(index: number): Uint8Array | null;
   vertexCountForTriangles(mesh: number, triangles: number): number;
-  estimateError(mesh: number, triangles: number): number | null;
+  /** object units: the mean distance, or with `max` the Hausdorff distance; null without a stored curve */
+  estimateError(mesh: number, triangles: number, max?: boolean): number | null;
   extract(mesh: number, vertexCount: number): Extraction;
 }

@@ -173,9 +173,12 @@ export class TOMSnapshot {
     return this.wasm._tomw_vertex_count_for_triangles(this.source.handle, m, triangles);
   }
 
-  /** Mesh m's estimated error at `triangles` (object units; the stored curve, k / N beyond it), or null without a curve. */
-  estimateError(m, triangles) {
-    const e = this.wasm._tomw_estimate_error(this.source.handle, m, triangles);
+  /**
+   * Mesh m's estimated error at `triangles` in object units (the stored curve, k / N beyond it):
+   * the mean distance, or with `max` the Hausdorff distance; null without a curve.
+   */
+  estimateError(m, triangles, max = false) {
+    const e = this.wasm._tomw_estimate_error(this.source.handle, m, triangles, max ? 1 : 0);
     return e < 0 ? null : e;
   }
 

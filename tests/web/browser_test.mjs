@@ -5,7 +5,8 @@
 //   - the first frame is drawn after at most 5% of the bunny's bytes;
 //   - every frame is a valid mesh: no index past the vertices drawn, none drawn undecoded;
 //   - the final frame matches tomview's image of the full-detail ordinary .tom (SSIM >= 0.98,
-//     same camera, tomview's lighting);
+//     same camera, tomview's lighting), for the bunny, a multi-material scene and a textured box;
+//   - automatic mode fetches a few chunks for a far camera, everything near, within the link budget;
 //   - a fixed resolution fetches only a prefix and draws the level extraction gives;
 //   - a truncated, a corrupted and a missing file each give an error on the page naming the
 //     file and the problem, and the tab keeps rendering; no console error anywhere.
@@ -38,7 +39,11 @@ function run(command, argv) {
 function prepare() {
   rmSync(work, { recursive: true, force: true });
   for (const d of ['plain', 'stream', 'bad', 'quality']) mkdirSync(path.join(work, d), { recursive: true });
-  const inputs = { bunny00: path.join(args.data, 'meshes/bunny00.off'), '2CylinderEngine': path.join(args.data, 'assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb') };
+  const inputs = {
+    bunny00: path.join(args.data, 'meshes/bunny00.off'),
+    '2CylinderEngine': path.join(args.data, 'assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb'),
+    BoxTextured: path.join(args.data, 'assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb'),
+  };
   for (const input of Object.values(inputs)) {
     run(path.join(args.tools, 'tombuild'), [input, '-o', path.join(work, 'plain'), '-q']);
     run(path.join(args.tools, 'tombuild'), [input, '--stream', '-o', path.join(work, 'stream'), '-q']);
@@ -48,8 +53,8 @@ function prepare() {
   const corrupt = Buffer.from(stream);
   corrupt[Math.floor(corrupt.length * 0.6)] ^= 0x5a;
   writeFileSync(path.join(work, 'bad/bunny-corrupt.tom'), corrupt);
-  for (const name of Object.keys(inputs))
-    run(args.tomview, [path.join(work, 'plain', `${name}.tom`), '-o', path.join(work, 'quality', `reference-${name === 'bunny00' ? 0 : 1}.png`), '--width', '800', '--height', '600']);
+  Object.keys(inputs).forEach((name, i) =>
+    run(args.tomview, [path.join(work, 'plain', `${name}.tom`), '-o', path.join(work, 'quality', `reference-${i}.png`), '--width', '800', '--height', '600']));
 }
 
 async function startServer() {
@@ -144,6 +149,12 @@ async function main() {
     const s1 = ssim(1, engine.image);
     check(s1 >= 0.98, `2CylinderEngine: final frame against tomview's full detail, SSIM ${s1.toFixed(4)} (at least 0.98)`);
 
+    // a textured asset: its embedded image decoded in the page and sampled as tomview samples it
+    const box = await page(server, 'file=/data/stream/BoxTextured.tom');
+    judgePage(box, 'BoxTextured');
+    const s2 = ssim(2, box.image);
+    check(s2 >= 0.98, `BoxTextured: final frame against tomview's full detail, SSIM ${s2.toFixed(4)} (at least 0.98)`);
+
     // a fixed resolution: only a prefix is fetched (Range), and the level drawn is extraction's
     const tenth = await page(server, 'file=/data/stream/bunny00.tom&resolution=0.1');
     judgePage(tenth, 'bunny00 at 10%');
@@ -158,6 +169,22 @@ async function main() {
     const faces = readFileSync(obj, 'utf8').split('\n').filter((l) => l.startsWith('f ')).length;
     check(record.triangles === faces, `bunny00 at 10%: ${record.triangles} triangles drawn, tomextract --fraction 0.1 gives ${faces}`);
     check(record.frames.every((f) => !f.problems.length), 'bunny00 at 10%: every frame a valid mesh');
+
+    // automatic mode under a link budget of 60 kB/s: far away the first chunk, close every one;
+    // the scheduler keeps to the budget (one second of credit and one run of chunks beyond it)
+    // while the server could send the rest in under a second
+    const budget = 60000;
+    const auto = await page(server, `file=/data/stream/bunny00.tom&auto=1&budget=${budget}`);
+    judgePage(auto, 'bunny00 automatic');
+    const a = auto.cases[0].automatic;
+    check(a.far.bytes < 0.1 * a.fileBytes, `bunny00 automatic, far: ${a.far.bytes} bytes fetched, ${a.far.triangles} triangles drawn`);
+    check(a.near.bytes >= a.near.want && a.near.triangles > 4 * a.far.triangles && a.near.bytes === a.fileBytes,
+      `bunny00 automatic, near: ${a.near.bytes} bytes fetched (its targets, ${a.near.targets} of ${a.near.totals} vertices, need ${a.near.want}), ${a.near.triangles} triangles drawn`);
+    const seconds = (a.second.ms - a.far.ms) / 1000;
+    const allowed = budget * (seconds + 1) + 64 * 1024;
+    check(a.second.bytes - a.far.bytes <= allowed && a.second.bytes > a.far.bytes && a.second.bytes < a.fileBytes,
+      `bunny00 automatic: ${a.second.bytes - a.far.bytes} bytes in the first ${seconds.toFixed(2)} s near (budget allows ${Math.round(allowed)})`);
+    check(auto.cases[0].frames.every((f) => !f.problems.length), 'bunny00 automatic: every frame a valid mesh');
   } finally {
     server.server.kill();
   }

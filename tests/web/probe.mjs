@@ -4,6 +4,31 @@
 // it saw to /report for tests/web/browser_test.mjs to judge.
 
 const frame = () => new Promise((done) => requestAnimationFrame(() => done()));
+const sleep = (ms) => new Promise((done) => setTimeout(done, ms));
+
+// Automatic mode under the viewer's link budget: the camera far away, then close; what was
+// fetched and drawn at each, and the bytes the first second close took.
+async function automatic(viewer, object) {
+  const centre = viewer.controls.target.clone();
+  const framing = viewer.camera.position.clone();
+  const place = (distance) => {
+    viewer.camera.position.copy(centre).add(framing.clone().sub(centre).multiplyScalar(distance));
+    viewer.camera.far = 4 * distance * framing.distanceTo(centre);
+    viewer.camera.updateProjectionMatrix();
+    viewer.camera.updateMatrixWorld();
+  };
+  const state = () => ({ bytes: object.bytesReceived, triangles: object.drawnTriangles, ms: performance.now() });
+  place(200); // the bunny a few pixels tall
+  await sleep(1500);
+  const far = state();
+  place(0.35); // the camera inside the bunny's bounding sphere: full detail wanted
+  await sleep(1000);
+  const second = state();
+  // until what the near targets need is in
+  for (let waited = 0; waited < 15000 && object.bytesReceived < object.wantEnd; waited += 100) await sleep(100);
+  await sleep(300);
+  return { far, second, near: { ...state(), want: object.wantEnd, targets: object.targets.slice(), totals: object.totals.map((t) => t.vertices) }, fileBytes: object.fileBytes };
+}
 
 // Every mesh's drawn index buffer: indices below the drawn resolution, which is decoded.
 function checkFrame(object, record) {
@@ -37,7 +62,9 @@ export async function attach(viewer, params) {
       record.firstFrameMs = performance.now() - started;
       checkFrame(object, record);
       object.addEventListener('refine', () => checkFrame(object, record));
+      if (params.get('auto') === '1') record.automatic = await automatic(viewer, object);
       await object.loaded;
+      await object.texturesLoaded();
       record.loadMs = performance.now() - started;
       record.fileBytes = object.fileBytes;
       record.bytes = object.bytesReceived;

@@ -244,12 +244,13 @@ EMSCRIPTEN_KEEPALIVE uint32_t tomw_vertex_count_for_triangles(const tomw_source*
     return s->file && m < s->file->mesh_count() ? tom::vertex_count_for_triangles(s->file->mesh(m), triangles) : 0;
 }
 
-/// Mesh m's estimated mean error at `triangles` in object units (its stored curve's relative
-/// error times the diagonal); -1 when it stores no curve.
-EMSCRIPTEN_KEEPALIVE double tomw_estimate_error(const tomw_source* s, uint32_t m, double triangles) {
+/// Mesh m's estimated error at `triangles` in object units (its stored curve's relative error
+/// times the diagonal): the mean distance, or with `use_max` the Hausdorff distance; -1 when it
+/// stores no curve.
+EMSCRIPTEN_KEEPALIVE double tomw_estimate_error(const tomw_source* s, uint32_t m, double triangles, int use_max) {
     if (!s->file || m >= s->file->mesh_count()) return -1;
     const std::optional<tom::ErrorCurve> curve = tom::read_error_curve(s->file->mesh(m));
-    return curve ? tom::estimate_error(*curve, triangles) * curve->diagonal : -1;
+    return curve ? tom::estimate_error(*curve, triangles, use_max != 0) * curve->diagonal : -1;
 }
 
 /// Extracts mesh m at resolution n into the source's index buffer (tomw_indices) and its parts'
