@@ -316,10 +316,11 @@ export class TOMObject extends Group {
 
   // Where the current fetch should end: before a stream's directory, the whole file (full
   // detail) or the next boundary (header, then directory: a range client reads them first);
-  // then what the targets need, within what a scheduler granted.
+  // then what the targets need, within what a scheduler granted (automatic mode only: a fixed or
+  // full resolution is fetched as asked).
   fetchEnd() {
     const s = this.source;
-    if (s.directory) return Math.min(this.wantEnd, this.grantedEnd, s.directory.fileBytes);
+    if (s.directory) return Math.min(this.wantEnd, this.mode === 'auto' ? this.grantedEnd : Infinity, s.directory.fileBytes);
     if (this.mode === 'full' || (s.bytesReceived >= 8 && !s.isStream)) return Infinity;
     return s.nextBoundary;
   }
@@ -420,7 +421,7 @@ export class TOMObject extends Group {
     const d = this.source.directory;
     if (!d) throw new TOMError(`${this.url}: the stream ends after ${this.source.bytesReceived} bytes, before its directory`);
     const end = Math.min(this.wantEnd, d.fileBytes);
-    if (this.source.bytesReceived < end && this.grantedEnd >= end) throw this.truncated();
+    if (this.source.bytesReceived < end && this.fetchEnd() >= end) throw this.truncated();
     if (this.source.bytesReceived >= end) this.resolveLoaded(this);
   }
 
@@ -674,7 +675,7 @@ export class TOMStreamScheduler {
   // An object's next chunks up to the first one its targets need: their bytes and the pixels of
   // error that chunk removes.
   nextRun(o, camera, height) {
-    if (!o.source || !o.source.directory || !o.slots.length || o.error) return null;
+    if (o.mode !== 'auto' || !o.source || !o.source.directory || !o.slots.length || o.error) return null;
     const chunks = o.source.directory.chunks;
     const start = Math.max(o.grantedEnd, o.source.bytesReceived);
     for (let i = 0; i < chunks.length; ++i) {
