@@ -248,7 +248,7 @@ export class TOMObject extends Group {
    * scheduler grants the bytes).
    */
   update(camera, height) {
-    if (this.mode !== 'auto' || !this.slots.length) return;
+    if (this.mode !== 'auto' || !this.slots.length || !this.meshChunks) return; // an ordinary file: all of it is in
     const chunks = this.source.directory.chunks;
     for (let m = 0; m < this.slots.length; ++m) {
       const scale = this.pixelsPerUnit(m, camera, height);
@@ -321,7 +321,7 @@ export class TOMObject extends Group {
   fetchEnd() {
     const s = this.source;
     if (s.directory) return Math.min(this.wantEnd, this.mode === 'auto' ? this.grantedEnd : Infinity, s.directory.fileBytes);
-    if (this.mode === 'full' || (s.bytesReceived >= 8 && !s.isStream)) return Infinity;
+    if (this.mode === 'full' || (s.bytesReceived >= 8 && !s.isStream)) return this.contentLength || Infinity; // the whole, however long
     return s.nextBoundary;
   }
 
@@ -342,7 +342,7 @@ export class TOMObject extends Group {
         if (!response.ok) throw new TOMError(`${this.url}: HTTP ${response.status} ${response.statusText}`);
         // the object's size as the server has it: shorter than the stream declares is a truncation
         const size = response.status === 200 ? Number(response.headers.get('Content-Length')) : Number((response.headers.get('Content-Range') || '').split('/')[1]);
-        if (response.status === 200) this.contentLength = size || 0;
+        if (size) this.contentLength = size;
         if (size && this.source.directory && size < this.source.directory.fileBytes) throw this.truncated(size);
         let skip = response.status === 200 ? received : 0;
         const reader = response.body.getReader();

@@ -13,7 +13,7 @@
 //
 //   node browser_test.mjs --tools BUILD/tools --tomview BUILD/.../tomview --site SITE --data DATA --work DIR
 import { spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
+import { copyFileSync, existsSync, mkdirSync, readFileSync, rmSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
@@ -149,6 +149,15 @@ async function main() {
     const s1 = ssim(1, engine.image);
     check(s1 >= 0.98, `2CylinderEngine: final frame against tomview's full detail, SSIM ${s1.toFixed(4)} (at least 0.98)`);
 
+    // an ordinary .tom: drawn once its last byte is in, the same image as the stream's
+    const plain = await page(server, 'file=/data/plain/bunny00.tom&auto=1');
+    judgePage(plain, 'bunny00, ordinary file');
+    check(plain.cases[0].triangles === 75408 && plain.cases[0].frames.every((f) => !f.problems.length),
+      `bunny00, ordinary file: ${plain.cases[0].triangles} triangles drawn, every frame valid`);
+    copyFileSync(path.join(work, 'quality', 'reference-0.png'), path.join(work, 'quality', 'reference-3.png'));
+    const s3 = ssim(3, plain.image);
+    check(s3 >= 0.98, `bunny00, ordinary file: final frame against tomview's, SSIM ${s3.toFixed(4)} (at least 0.98)`);
+
     // a textured asset: its embedded image decoded in the page and sampled as tomview samples it
     const box = await page(server, 'file=/data/stream/BoxTextured.tom');
     judgePage(box, 'BoxTextured');
@@ -174,7 +183,7 @@ async function main() {
     // the scheduler keeps to the budget (one second of credit and one run of chunks beyond it)
     // while the server could send the rest in under a second
     const budget = 60000;
-    const auto = await page(server, `file=/data/stream/bunny00.tom&auto=1&budget=${budget}`);
+    const auto = await page(server, `file=/data/stream/bunny00.tom&auto=1&budget=${budget}&scenario=automatic`);
     judgePage(auto, 'bunny00 automatic');
     const a = auto.cases[0].automatic;
     check(a.far.bytes < 0.1 * a.fileBytes, `bunny00 automatic, far: ${a.far.bytes} bytes fetched, ${a.far.triangles} triangles drawn`);

@@ -6,8 +6,8 @@
 const frame = () => new Promise((done) => requestAnimationFrame(() => done()));
 const sleep = (ms) => new Promise((done) => setTimeout(done, ms));
 
-// Automatic mode under the viewer's link budget: the camera far away, then close; what was
-// fetched and drawn at each, and the bytes the first second close took.
+// ?scenario=automatic: automatic mode under the viewer's link budget, the camera far away, then
+// close; what was fetched and drawn at each, and the bytes the first second close took.
 async function automatic(viewer, object) {
   const centre = viewer.controls.target.clone();
   const framing = viewer.camera.position.clone();
@@ -62,7 +62,7 @@ export async function attach(viewer, params) {
       record.firstFrameMs = performance.now() - started;
       checkFrame(object, record);
       object.addEventListener('refine', () => checkFrame(object, record));
-      if (params.get('auto') === '1') record.automatic = await automatic(viewer, object);
+      if (params.get('scenario') === 'automatic') record.automatic = await automatic(viewer, object);
       await object.loaded;
       await object.texturesLoaded();
       record.loadMs = performance.now() - started;
