@@ -151,8 +151,6 @@ void main() {
 /** One mesh of a file: its geometry at full size and how far it is filled and drawn. */
 class MeshSlot {
   constructor(totalVertices, totalTriangles, streams) {
-    this.totalVertices = totalVertices;
-    this.totalTriangles = totalTriangles;
     this.copied = 0; // vertices copied from the decoded streams
     this.drawn = 0; // the resolution drawn
     this.triangles = 0; // the triangles drawn
@@ -496,9 +494,9 @@ export class TOMObject extends Group {
   errorModel(snapshot) {
     const d = this.source.directory;
     if (!d) return;
-    this.chunkError = d.chunks.map((c) => {
+    this.chunkError = d.chunks.map((c, i) => {
       const chunks = this.meshChunks[c.mesh];
-      if (chunks[chunks.length - 1] === d.chunks.indexOf(c)) return 0;
+      if (chunks[chunks.length - 1] === i) return 0;
       const e = snapshot.estimateError(c.mesh, c.triangles, true);
       if (e !== null) return e;
       const b = this.bounds[c.mesh];

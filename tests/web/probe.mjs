@@ -69,7 +69,7 @@ export async function attach(viewer, params) {
       record.fileBytes = object.fileBytes;
       record.bytes = object.bytesReceived;
       record.triangles = object.drawnTriangles;
-      record.fullTriangles = object.slots.reduce((sum, s) => sum + s.totalTriangles, 0);
+      record.fullTriangles = object.totals.reduce((sum, t) => sum + t.triangles, 0);
       report.cases.push(record);
     }
     for (let i = 0; i < 3; ++i) await frame();
