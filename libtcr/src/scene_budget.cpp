@@ -98,9 +98,23 @@ struct Polish {
             if (tom::active_triangle_count(m, k) > t[i]) return k;
         return 0;
     }
+    // mesh i's next coarser resolution with fewer triangles (not below its floor), or 0 at its floor
+    uint32_t previous(size_t i) const {
+        const tom::MeshView& m = *meshes[i].mesh;
+        const uint32_t floor = tom::floor_vertex_count(m, meshes[i].floor);
+        for (uint32_t k = n[i]; k-- > floor;)
+            if (tom::active_triangle_count(m, k) < t[i]) return k;
+        return 0;
+    }
+    double total_error() const {
+        double e = 0;
+        for (size_t i = 0; i < meshes.size(); ++i) e += error(i, t[i]);
+        return e;
+    }
     // Spends what rounding down and the menu's clamps left: the step to a finer resolution with
-    // the most error saved per triangle drawn that still fits, until none does.
-    void spend(double left) {
+    // the most error saved per triangle drawn that still fits, until none does. Returns what is
+    // left.
+    double spend(double left) {
         for (;;) {
             size_t best = meshes.size();
             uint32_t best_n = 0, best_t = 0;
@@ -113,9 +127,40 @@ struct Polish {
                 const double ratio = (error(i, t[i]) - error(i, tk)) / cost;
                 if (cost <= left && ratio > best_ratio) best = i, best_n = k, best_t = tk, best_ratio = ratio;
             }
-            if (best == meshes.size()) return;
+            if (best == meshes.size()) return left;
             left -= meshes[best].instances * (best_t - t[best]);
             n[best] = best_n, t[best] = best_t;
+        }
+    }
+    // Trades what spend() alone cannot: one mesh up to kSteps resolutions coarser and the
+    // triangles it frees spent again, kept when the summed error falls, until no such trade
+    // lowers it. (The curves are not convex between their measured points, so the greedy step
+    // can miss a better share by a few steps.)
+    void exchange(double left) {
+        constexpr int kSteps = 32;
+        for (bool improved = true; improved;) {
+            improved = false;
+            const double before = total_error();
+            const std::vector<uint32_t> kept_n = n, kept_t = t;
+            for (size_t i = 0; i < meshes.size() && !improved; ++i) {
+                double freed = left;
+                for (int step = 0; step < kSteps && !improved; ++step) {
+                    const uint32_t k = previous(i);
+                    if (k == 0) break;
+                    const uint32_t tk = tom::active_triangle_count(*meshes[i].mesh, k);
+                    freed += meshes[i].instances * (t[i] - tk);
+                    n[i] = k, t[i] = tk;
+                    const std::vector<uint32_t> coarse_n = n, coarse_t = t;
+                    const double rest = spend(freed);
+                    if (total_error() < before * (1 - 1e-12)) {
+                        left = rest;
+                        improved = true;
+                    } else {
+                        n = coarse_n, t = coarse_t;
+                    }
+                }
+                if (!improved) n = kept_n, t = kept_t;
+            }
         }
     }
 };
@@ -167,7 +212,7 @@ BudgetShare share_budget(const std::vector<BudgetMesh>& meshes, double budget, b
         polish.t.push_back(tom::active_triangle_count(*b.mesh, polish.n.back()));
         drawn += b.instances * polish.t.back();
     }
-    if (plan.feasible) polish.spend(budget - drawn);
+    if (plan.feasible) polish.exchange(polish.spend(budget - drawn));
     BudgetShare share;
     share.feasible = plan.feasible;
     share.vertex_counts = polish.n;
