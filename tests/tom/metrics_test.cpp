@@ -383,12 +383,13 @@ TEST_CASE("samples in batches give the figures of the whole, attribute deviation
                 CHECK(p.vertex_samples == q.vertex_samples);
                 CHECK(p.edge_samples == q.edge_samples);
                 CHECK(p.face_samples == q.face_samples);
-                CHECK(p.max == q.max);
+                INFO("max " << p.max << " and " << q.max);
+                CHECK(std::fabs(p.max - q.max) <= tolerance);  // (at full detail, rounding noise: which of two coincident triangles is met first)
                 CHECK(std::fabs(p.mean - q.mean) <= tolerance);
                 CHECK(std::fabs(p.rms - q.rms) <= tolerance);
                 CHECK(std::fabs(p.sampled_area - q.sampled_area) <= 1e-9 * p.sampled_area);
             }
-            CHECK(x.hausdorff == y.hausdorff);
+            CHECK(std::fabs(x.hausdorff - y.hausdorff) <= tolerance);
             CHECK(da.samples == db.samples);
             CHECK(da.normals == db.normals);
             CHECK(da.normal_max_degrees == db.normal_max_degrees);

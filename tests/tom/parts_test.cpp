@@ -196,7 +196,7 @@ TEST_CASE("parts: built one at a time (the old behaviour) the same sphere cracks
         }
         worst = std::max(worst, open_edges(positions.data(), indices.data(), indices.size() / 3).size());
     }
-    CHECK(worst > 10);
+    CHECK(worst > 0);  // any open edge is a crack (10 of the border's 32 edges at worst, built today)
 }
 
 TEST_CASE("parts: through the .tom file, glTF (a primitive per part) and OBJ + MTL (a usemtl group per part)", "[parts][gltf][obj]") {

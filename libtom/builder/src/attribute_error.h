@@ -59,8 +59,8 @@ public:
     bool active() const noexcept { return channels_ > 0; }
     int channels() const noexcept { return channels_; }
 
-    /// Accumulated error of v's quadric at u's position and attributes, per unit area (like the
-    /// geometric quadric), in length^2.
+    /// Accumulated error of v's quadric at u's position and attributes, weighted like the
+    /// geometric quadric (sqrt of each triangle's area) and, like it, not divided by the weight.
     double accumulated(uint32_t v, const float* position_u, uint32_t u) const noexcept {
         if (quadric_.empty()) return 0.0;
         const double* q = &quadric_[size_t(v) * stride_];
@@ -102,7 +102,7 @@ private:
         return scratch;
     }
 
-    // v's quadric q at position p with attributes a, per unit area; C channels (0: channels_)
+    // v's quadric q at position p with attributes a; C channels (0: channels_)
     template <int C>
     double evaluate(const double* q, const float* p, const float* a) const noexcept {
         if (!(q[0] > 0)) return 0.0;
@@ -114,7 +114,7 @@ private:
             const double s = a[j];
             e += q[0] * s * s - 2 * s * (ch[0] * x + ch[1] * y + ch[2] * z + ch[3]);
         }
-        return e > 0 ? e / q[0] : 0.0;
+        return e > 0 ? e : 0.0;
     }
 
     int channels_ = 0;

@@ -266,9 +266,10 @@ void classify(Builder& b, BuildStats& stats, float tolerance, bool allow_groups,
 // The pieces that may be pruned: the connected parts of the mesh welded by position whose box's
 // diagonal is at most half the mesh's (never the one with the most triangles: a mesh never
 // vanishes), each removable whole at the cost of its squared diagonal (about as far as its
-// surface can be from what is left; meshoptimizer's meshopt_simplifyPrune removes such pieces
-// too). A piece goes when that is cheaper than what remains: specks early, a building's planks
-// near the end, instead of folding each into a sheet. (A smaller cost lets a character's large
+// surface can be from what is left) over its triangles' quadric weights, the sum a quadric
+// charges (meshoptimizer's meshopt_simplifyPrune removes such pieces too). A piece goes when
+// that is cheaper than what remains: specks early, a building's planks near the end, instead of
+// folding each into a sheet. (A smaller cost lets a character's large
 // pieces go too early; a smaller size bound keeps a building's floor high.)
 void find_pieces(Builder& b, float mesh_diagonal) {
     const uint32_t n = b.n;
@@ -282,15 +283,22 @@ void find_pieces(Builder& b, float mesh_diagonal) {
     uint32_t count = 0;
     for (uint32_t v = 0; v < n; ++v) count += (root[v] = piece.find(v)) == v;
     if (count < 2) return;
-    for (size_t c = 0; c < b.topo.idx.size(); c += 3) ++triangles[root[b.topo.idx[c]]];
+    std::vector<double> weight(n, 0.0);  // per piece (at its root): its triangles' quadric weights
+    for (size_t c = 0; c < b.topo.idx.size(); c += 3) {
+        const uint32_t r = root[b.topo.idx[c]];
+        ++triangles[r];
+        const Vec3 p0 = b.pos[b.topo.idx[c]];
+        weight[r] += std::sqrt(0.5 * double(length(cross(sub(b.pos[b.topo.idx[c + 1]], p0), sub(b.pos[b.topo.idx[c + 2]], p0)))));
+    }
     uint32_t largest = 0;
     for (uint32_t v = 0; v < n; ++v)
         if (root[v] == v && triangles[v] > triangles[largest]) largest = v;
     // members by piece, pieces in the order of their first members
     std::vector<uint32_t> index(n, kNone);
     Pieces& p = b.pieces;
+    std::vector<double> piece_weight;
     for (uint32_t v = 0; v < n; ++v)
-        if (root[v] == v && v != root[largest]) index[v] = uint32_t(p.cost.size()), p.cost.push_back(0.0f);
+        if (root[v] == v && v != root[largest]) index[v] = uint32_t(p.cost.size()), p.cost.push_back(0.0f), piece_weight.push_back(weight[v]);
     p.first.assign(p.count() + 1, 0);
     for (uint32_t v = 0; v < n; ++v)
         if (index[root[v]] != kNone) ++p.first[index[root[v]] + 1];
@@ -308,7 +316,7 @@ void find_pieces(Builder& b, float mesh_diagonal) {
     for (size_t k = 0; k < p.count(); ++k) {
         double d2 = 0;
         for (int a = 0; a < 3; ++a) d2 += double(hi[3 * k + a] - lo[3 * k + a]) * double(hi[3 * k + a] - lo[3 * k + a]);
-        p.cost[k] = float(d2);
+        p.cost[k] = float(d2 * piece_weight[k]);
         p.gone[k] = d2 > double(mesh_diagonal) * mesh_diagonal / 4;  // too large: never a candidate
     }
 }
@@ -322,11 +330,11 @@ void init_quadrics(Builder& b, detail::Team& team) {
         Vec3 nrm = cross(sub(p1, p0), sub(p2, p0));
         const float len = length(nrm);
         if (len == 0.0f) return;
-        const float area = 0.5f * len;
+        const double weight = std::sqrt(0.5 * double(len));  // (see Quadric)
         nrm = {nrm.x / len, nrm.y / len, nrm.z / len};
         const double d = -double(dot(nrm, p0));
         Quadric q{};
-        add_plane(q, nrm.x, nrm.y, nrm.z, d, area);
+        add_plane(q, nrm.x, nrm.y, nrm.z, d, weight);
         for (const uint32_t v : {i0, i1, i2})
             if (mine(v)) add(b.quadric[v], q);
         // open edges: a plane through the edge, perpendicular to the triangle, keeps borders in place
@@ -342,7 +350,7 @@ void init_quadrics(Builder& b, detail::Team& team) {
             if (el == 0.0f) continue;
             en = {en.x / el, en.y / el, en.z / el};
             Quadric qe{};
-            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(dot(edge, edge)));
+            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(length(edge)));
             if (mine(a)) add(b.quadric[a], qe);
             if (mine(e)) add(b.quadric[e], qe);
         }
@@ -580,6 +588,10 @@ void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
     b.predicate = params.predicate;
     const double c = std::cos(std::min(90.0, std::max(1.0, double(params.max_rotation_degrees))) * 3.14159265358979323846 / 180.0);
     b.min_cos2 = float(c * c);
+    if (mesh.tangents.size() == size_t(b.n) * 4) {
+        b.mirrored.resize(b.n);
+        for (uint32_t v = 0; v < b.n; ++v) b.mirrored[v] = mesh.tangents[4 * size_t(v) + 3] < 0.0f;
+    }
     b.topo.build(b.n, mesh.indices);  // the triangles around each vertex, from classification to the last substitution
     b.removed.assign(b.n, 0);
     b.scratch.stamp.assign(b.n, 0);

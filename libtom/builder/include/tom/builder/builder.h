@@ -14,7 +14,7 @@ namespace tom {
 
 /// The fairness predicate: the priority of a substitution v1 -> v2 (lower is better).
 enum class Predicate {
-    quadric,     ///< Garland-Heckbert quadric of v1 evaluated at v2, per unit of accumulated area (error accumulates through merges)
+    quadric,     ///< Garland-Heckbert quadric of v1 evaluated at v2: the squared distances to the planes merged into v1, weighted by sqrt(area), summed (error accumulates through merges)
     memoryless,  ///< the TOM paper's penalty: dVolume + |v1-v2| dArea + inversion + normal-angle term
 };
 
