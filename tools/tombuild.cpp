@@ -220,8 +220,23 @@ void import_input(Conversion& c, Outcome& out) {
     c.import_seconds = seconds_since(c.start);
 }
 
+// Whether a texture of one of the mesh's materials (its own, its parts') is mapped through
+// TEXCOORD_0: only then do the coordinates weigh in the build (BuildParams::weigh_texcoords).
+bool samples_texcoord0(const tom::Mesh& mesh, const tom::Scene& scene) {
+    auto samples = [&](int32_t material) {
+        if (material < 0 || size_t(material) >= scene.materials.size()) return false;
+        for (const tom::TextureRef& texture : scene.materials[size_t(material)].textures)
+            if (texture.texcoord == 0) return true;
+        return false;
+    };
+    if (samples(mesh.material)) return true;
+    for (const tom::Part& part : mesh.parts)
+        if (samples(part.material)) return true;
+    return false;
+}
+
 // -v's line for a built mesh.
-std::string mesh_details(const tom::TomMesh& t, const tom::BuildStats& stats, const tom::CleanStats& clean, uint32_t floor) {
+std::string mesh_details(const tom::TomMesh& t, const tom::BuildStats& stats, const tom::CleanStats& clean, uint32_t floor, bool texcoords_weighed) {
     auto count = [](uint64_t n, const char* what) { return n ? ", " + std::to_string(n) + what : std::string(); };
     const std::string parts = t.parts.empty() ? "" : " (" + std::to_string(t.parts.size()) + " parts)";
     const std::string usable = floor ? ", usable floor " + std::to_string(floor) + " vertices / " +
@@ -230,12 +245,13 @@ std::string mesh_details(const tom::TomMesh& t, const tom::BuildStats& stats, co
     char line[512];
     std::snprintf(line, sizeof line,
                   "  mesh '%s'%s: %u vertices, %u triangles, coarsest %u vertices / %u triangles; %u substitutions, %u locked, "
-                  "%u border vertices, %u seam vertices, %u passes%s%s%s%s%s\n",
+                  "%u border vertices, %u seam vertices, %u passes%s%s%s%s%s%s\n",
                   t.name.c_str(), parts.c_str(), t.vertex_count(), t.triangle_count(), t.min_vertex_count,
                   tom::active_triangle_count(t.view(), t.min_vertex_count), stats.substitutions, stats.locked_vertices, stats.border_vertices,
                   stats.seam_vertices, stats.passes, usable.c_str(), count(stats.pruned_pieces, " small pieces pruned").c_str(),
                   count(clean.welded_vertices, " identical vertices welded").c_str(), count(clean.degenerate_triangles, " degenerate triangles dropped").c_str(),
-                  count(clean.unreferenced_vertices, " unused vertices dropped").c_str());
+                  count(clean.unreferenced_vertices, " unused vertices dropped").c_str(),
+                  texcoords_weighed ? "" : "; texture coordinates carried, not weighed: no texture samples them");
     return line;
 }
 
@@ -246,7 +262,10 @@ void build_mesh(Conversion& c, size_t mi, Outcome& out) {
     const auto build_start = std::chrono::steady_clock::now();
     c.stage_name = "build" + (c.imported.meshes.size() > 1 ? " mesh" + c.of_meshes(mi) : std::string());
     c.stage.show(c.stage_name, 0);
-    c.built.push_back(tom::build(std::move(c.imported.meshes[mi]), c.params, &stats));  // frees the input as it goes: a lower peak
+    tom::BuildParams params = c.params;
+    params.weigh_texcoords = samples_texcoord0(c.imported.meshes[mi], c.imported.scene);
+    const bool unweighed_texcoords = !params.weigh_texcoords && !c.imported.meshes[mi].texcoords.empty();
+    c.built.push_back(tom::build(std::move(c.imported.meshes[mi]), params, &stats));  // frees the input as it goes: a lower peak
     const double build_seconds = seconds_since(build_start);
     c.build_seconds += build_seconds;
 
@@ -278,7 +297,7 @@ void build_mesh(Conversion& c, size_t mi, Outcome& out) {
     c.vertices += t.vertex_count();
     c.triangles += t.triangle_count();
     c.fv_bytes += tools::face_vertex_bytes(t.vertex_count(), t.triangle_count());
-    if (c.opt.verbose > 0) c.details += mesh_details(t, stats, c.cleans[mi], floor);
+    if (c.opt.verbose > 0) c.details += mesh_details(t, stats, c.cleans[mi], floor, !unweighed_texcoords);
 }
 
 // The meshes and the file's scene serialized and written atomically.

@@ -146,6 +146,28 @@ TEST_CASE("the same input gives byte-identical files", "[builder][determinism]")
     }
 }
 
+TEST_CASE("texture coordinates no texture samples are carried but not weighed: the order of the mesh without them", "[builder][attributes][samples]") {
+    int textured = 0, changed = 0;
+    for (const test::NamedMesh& nm : test::real_meshes()) {
+        if (nm.mesh.texcoords.empty()) continue;
+        INFO(nm.name);
+        ++textured;
+        tom::BuildParams unweighed;
+        unweighed.weigh_texcoords = false;
+        const tom::TomMesh a = tom::build(nm.mesh, unweighed), weighed = tom::build(nm.mesh);
+        tom::Mesh bare = nm.mesh;
+        bare.texcoords.clear();
+        const tom::TomMesh b = tom::build(bare);
+        CHECK(a.original_index == b.original_index);
+        CHECK(a.substitute == b.substitute);
+        CHECK(a.triangles == b.triangles);
+        CHECK(a.texcoords.size() == nm.mesh.texcoords.size());  // carried, sorted as the vertices
+        changed += a.original_index != weighed.original_index;
+    }
+    CHECK(textured >= 2);
+    CHECK(changed >= 1);  // weighed, they change the order (not where every coordinate is 0)
+}
+
 TEST_CASE("the thread count does not change the result: real meshes, 1, 2 and 3 threads", "[builder][determinism][samples]") {
     for (const test::NamedMesh& nm : test::real_meshes()) {
         if (nm.mesh.vertex_count() < 2000) continue;  // a pass needs two blocks of 512 vertices to share

@@ -116,7 +116,7 @@ AnimationChannels AnimationChannels::of(const Mesh& mesh, float weight, const st
     return out;
 }
 
-void AttributeError::init(const Mesh& mesh, float weight, const AnimationChannels& animation, bool accumulate, Team& team) {
+void AttributeError::init(const Mesh& mesh, float weight, bool texcoords, const AnimationChannels& animation, bool accumulate, Team& team) {
     channels_ = 0;
     values_.clear();
     normals_ = nullptr;
@@ -124,7 +124,7 @@ void AttributeError::init(const Mesh& mesh, float weight, const AnimationChannel
     const uint32_t n = mesh.vertex_count(), m = mesh.triangle_count();
     if (n == 0 || m == 0) return;
     const bool attributes = weight > 0;
-    const bool normals = attributes && mesh.normals.size() == size_t(n) * 3, uv = attributes && mesh.texcoords.size() == size_t(n) * 2,
+    const bool normals = attributes && mesh.normals.size() == size_t(n) * 3, uv = attributes && texcoords && mesh.texcoords.size() == size_t(n) * 2,
                colors = attributes && mesh.colors.size() == size_t(n) * 4;
     const int animated = animation.values.size() == size_t(n) * size_t(animation.count) ? animation.count : 0;
     channels_ = (normals ? 3 : 0) + (uv ? 2 : 0) + (colors ? 4 : 0) + animated;

@@ -54,8 +54,9 @@ public:
     /// `team` shares the accumulation (bit-identical sums whatever its size). With normals alone
     /// the costs read `mesh.normals` (6 bytes a triangle less than a scaled copy), which must
     /// then stay as they are until release().
-    /// The `animation` channels follow the attributes'.
-    void init(const Mesh& mesh, float weight, const AnimationChannels& animation, bool accumulate, Team& team);
+    /// The `animation` channels follow the attributes'. Without `texcoords`, TEXCOORD_0 is not
+    /// weighed (BuildParams::weigh_texcoords).
+    void init(const Mesh& mesh, float weight, bool texcoords, const AnimationChannels& animation, bool accumulate, Team& team);
     bool active() const noexcept { return channels_ > 0; }
     int channels() const noexcept { return channels_; }
 

@@ -804,7 +804,7 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     // (not with locked borders: a tile's pieces all meet its neighbours)
     if (b.predicate == Predicate::quadric && params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f) && !params.lock_borders)
         find_pieces(b, diagonal_of(local));
-    b.attributes.init(local.mesh, params.attribute_weight, animation, b.predicate == Predicate::quadric, team);
+    b.attributes.init(local.mesh, params.attribute_weight, params.weigh_texcoords, animation, b.predicate == Predicate::quadric, team);
     animation = {};
     find_pairs(b, params.pair_threshold, stats);
     release_input_copy(local);
