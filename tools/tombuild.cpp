@@ -63,7 +63,13 @@ struct Options {
     std::string merge_dir;          // --merge OUTDIR
 };
 
-const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) + ")";
+// Raised whenever the same input and options give other bytes (the builder's order, the stream
+// encoder's layout): it is part of the version a .tom's provenance records, so a rerun after an
+// upgrade converts again instead of keeping outputs the new code would not write.
+// 2: integrated quadric costs, texture coordinates weighed only when sampled.
+constexpr int kOutputRevision = 2;
+const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) +
+                                 ", output revision " + std::to_string(kOutputRevision) + ")";
 
 // Every option that changes a .tom's bytes (its provenance records them): not the thread or
 // job count, and the error curve's sampling only when the curve is stored.

@@ -77,6 +77,7 @@ check "bad predicate exits 2" expect_exit 2 "$tools/tombuild" "$work/in" -o "$wo
 check "--help exits 0" expect_exit 0 "$tools/tombuild" --help
 check "--help documents the exit codes" grep -q "Exit codes" "$work/stdout"
 check "--version exits 0" expect_exit 0 "$tools/tombuild" --version
+check "the version a .tom records names the output revision" bash -c "'$tools/tombuild' --version | grep -q 'output revision [0-9]' && '$tools/tombuild' -q '$data/meshes/cross.off' -o '$work/rev' && grep -a -q 'output revision' '$work/rev/cross.tom'"
 
 check "a batch with bad inputs exits 1" expect_exit 1 "$tools/tombuild" "$work/in" -o "$work/o1" -j 1
 check "the bad glTF is reported with its reason" grep -q "IndexOutOfRange.gltf.*out of range" "$work/stderr"
