@@ -52,9 +52,8 @@ for mesh in "${meshes[@]}"; do
     printf '{"percent": %s, "bytes": %s, "tomerr": %s}\n' "$pct" "$(cat "$work/cc-$name-$pct"/level.gltf "$work/cc-$name-$pct"/level.bin | wc -c)" \
       "$("$tools/tomerr" "$mesh" "$work/$name-$pct-q.glb" --json | tr -d '\n')"
   done > "$work/$name.chain.jsonl"
-  "$tools/tomstreambench" "$work/stream/$name.tom" --json -r 5 > "$work/$name.speed.json"
 done
-# decode speed in the browser, beside the native on the same bytes
+# decode speed natively and in the browser on the same bytes (one tomstreambench run per mesh)
 bash "$root/scripts/bench-web.sh" "${meshes[@]}" > /dev/null
 cp "$out/web.jsonl" "$work/web.jsonl"
 
@@ -64,13 +63,15 @@ work, out, doc, plot, meshes = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4
 def mean_of(t):  # the two-sided Metro mean, % of the diagonal (tomerr's distances are in object units)
     return 100 * max(t['forward']['mean'], t['backward']['mean']) / t['bbox_diagonal']
 result, lines = [], []
+web = [json.loads(l) for l in open(f'{work}/web.jsonl')]
+native = {w['mesh']: w['native'] for w in web}
 lines.append('| mesh | bytes received | streamed: triangles | streamed: mean % | LOD chain (1/5/25/100%, gltfpack -cc): level | chain: mean % | stream / chain |')
 lines.append('|---|---:|---:|---:|---:|---:|---:|')
 for mesh in meshes:
     name = os.path.splitext(os.path.basename(mesh))[0]
     stream = [json.loads(l) for l in open(f'{work}/{name}.stream.jsonl')]
     chain = [json.loads(l) for l in open(f'{work}/{name}.chain.jsonl')]
-    speed = json.load(open(f'{work}/{name}.speed.json'))
+    speed = native[name]
     cumulative, total = [], 0
     for level in chain:
         total += level['bytes']
@@ -99,7 +100,6 @@ for r in result:
     summary.append(f"| {r['mesh']} | {r['stream_bytes']} | {r['first_chunk_bytes']} ({100 * r['first_chunk_bytes'] / r['stream_bytes']:.1f}%) | {r['single_cc_bytes']} | "
                    f"{r['stream_bytes'] / r['single_cc_bytes']:.2f} | {r['chain_bytes']} | {'yes' if r['at_or_below_chain'] else 'no'} | "
                    f"{s['decode_tris_per_s'] / 1e6:.2f} | {s['speed_over_meshopt']:.3f} |")
-web = [json.loads(l) for l in open(f'{work}/web.jsonl')]
 speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (same mesh, its codecs) | stream / meshoptimizer |', '|---|---|---:|---:|---:|---:|']
 for w in web:
     chromium = w['browser']['user_agent'].split('Chrome/')[-1].split(' ')[0]
