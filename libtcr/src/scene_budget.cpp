@@ -220,9 +220,9 @@ BudgetShare share_budget(const std::vector<BudgetMesh>& meshes, double budget, b
     double importance = 0;
     for (size_t i = 0; i < meshes.size(); ++i) {
         share.drawn += meshes[i].instances * polish.t[i];
-        share.error += polish.error(i, polish.t[i]);
         importance += p.importance[i];
     }
+    share.error = polish.total_error();
     share.lower_bound = std::isfinite(plan.upper_bound) ? std::max(0.0, importance - plan.upper_bound) : 0.0;
     share.gap = share.error > 0 ? std::max(0.0, (share.error - share.lower_bound) / share.error) : 0.0;
     return share;

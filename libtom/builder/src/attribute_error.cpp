@@ -203,7 +203,7 @@ void AttributeError::init(const Mesh& mesh, float weight, bool texcoords, const 
             const Frame f = frame(at(p, c[0]), at(p, c[1]), at(p, c[2]));
             if (!f.valid) return;
             double q[kMaxStride] = {};
-            const double w = std::sqrt(f.area);  // the geometric quadric's weight
+            const double w = quadric_weight(f.area);
             q[0] = w;
             float scaled[3][kMaxChannels];
             const float* a[3] = {values(c[0], scaled[0]), values(c[1], scaled[1]), values(c[2], scaled[2])};

@@ -10,6 +10,7 @@
 // attributes vary linearly (a smooth normal field, an undistorted UV chart) costs nothing, and
 // one across a crease, a UV fold or a colour edge costs what it smears.
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -18,6 +19,10 @@
 #include "platform.h"
 
 namespace tom::detail {
+
+/// The weight of a triangle's planes in the geometric and attribute quadrics (and of a pruned
+/// piece's triangles): the square root of its area (see Quadric in substitution.h).
+inline double quadric_weight(double area) noexcept { return std::sqrt(area); }
 
 /// The animation channels of a mesh (BuildParams::animation_weight), already scaled, `count` per
 /// vertex in the order the builder's vertices are numbered in.

@@ -269,8 +269,8 @@ void classify(Builder& b, BuildStats& stats, float tolerance, bool allow_groups,
 // surface can be from what is left) over its triangles' quadric weights, the sum a quadric
 // charges (meshoptimizer's meshopt_simplifyPrune removes such pieces too). A piece goes when
 // that is cheaper than what remains: specks early, a building's planks near the end, instead of
-// folding each into a sheet. (A smaller cost lets a character's large
-// pieces go too early; a smaller size bound keeps a building's floor high.)
+// folding each into a sheet. (A smaller cost lets a character's large pieces go too early; a
+// smaller size bound keeps a building's floor high.)
 void find_pieces(Builder& b, float mesh_diagonal) {
     const uint32_t n = b.n;
     FirstCopy piece(n);
@@ -288,7 +288,7 @@ void find_pieces(Builder& b, float mesh_diagonal) {
         const uint32_t r = root[b.topo.idx[c]];
         ++triangles[r];
         const Vec3 p0 = b.pos[b.topo.idx[c]];
-        weight[r] += std::sqrt(0.5 * double(length(cross(sub(b.pos[b.topo.idx[c + 1]], p0), sub(b.pos[b.topo.idx[c + 2]], p0)))));
+        weight[r] += detail::quadric_weight(0.5 * double(length(cross(sub(b.pos[b.topo.idx[c + 1]], p0), sub(b.pos[b.topo.idx[c + 2]], p0)))));
     }
     uint32_t largest = 0;
     for (uint32_t v = 0; v < n; ++v)
@@ -330,7 +330,7 @@ void init_quadrics(Builder& b, detail::Team& team) {
         Vec3 nrm = cross(sub(p1, p0), sub(p2, p0));
         const float len = length(nrm);
         if (len == 0.0f) return;
-        const double weight = std::sqrt(0.5 * double(len));  // (see Quadric)
+        const double weight = detail::quadric_weight(0.5 * double(len));
         nrm = {nrm.x / len, nrm.y / len, nrm.z / len};
         const double d = -double(dot(nrm, p0));
         Quadric q{};
