@@ -110,20 +110,46 @@ inline uint32_t index_bits(uint32_t v) {
 constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
 constexpr uint32_t order_bits = 3;
 
+/// Scratch of gather_neighbours: per vertex, the gathering that last listed it, so that each
+/// neighbour is listed once without sorting the repeats (a vertex's ~18 corners name ~6 others;
+/// sorting the repeats away cost most of a split's decoding).
+struct Seen {
+    std::vector<uint32_t> by;
+    uint32_t gathering = 0;
+    /// A new gathering over vertices below `vertices`.
+    void start(size_t vertices) {
+        if (by.size() < vertices) by.resize(vertices, 0);
+        if (++gathering == 0) std::fill(by.begin(), by.end(), 0), gathering = 1;
+    }
+    /// True the first time vertex u is seen in this gathering.
+    bool first(uint32_t u) {
+        if (by[u] == gathering) return false;
+        by[u] = gathering;
+        return true;
+    }
+};
+
 /// The vertices that share a triangle with vertex u, ascending without repeats, leaving out
-/// `skip_a` and `skip_b`: `incident` lists u's live corners (3 t + k in TRIS) and
-/// `triangle(g)` gives the three corners of the triangle holding corner g. The encoder and the
-/// decoder gather a vertex's ring and a split's candidates with it, so that both see one order.
+/// `skip_a` and `skip_b`: [first, last) lists u's live corners (3 t + k in TRIS),
+/// `triangle(g)` gives the three corners of the triangle holding corner g, all below `vertices`.
+/// The encoder and the decoder gather a vertex's ring and a split's candidates with it, so that
+/// both see one order.
 template <class Triangle>
-void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, std::vector<uint32_t>& out) {
+void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle triangle, uint32_t skip_a, uint32_t skip_b, size_t vertices, Seen& seen,
+                       std::vector<uint32_t>& out) {
     out.clear();
-    for (const uint32_t g : incident) {
-        const uint32_t* c = triangle(g);
+    seen.start(vertices);
+    for (const uint32_t* g = first; g != last; ++g) {
+        const uint32_t* c = triangle(*g);
         for (int k = 0; k < 3; ++k)
-            if (c[k] != skip_a && c[k] != skip_b) out.push_back(c[k]);
+            if (c[k] != skip_a && c[k] != skip_b && seen.first(c[k])) out.push_back(c[k]);
     }
     std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+template <class Triangle>
+void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, size_t vertices, Seen& seen,
+                       std::vector<uint32_t>& out) {
+    gather_neighbours(incident.data(), incident.data() + incident.size(), triangle, skip_a, skip_b, vertices, seen, out);
 }
 
 /// The candidates for a born triangle's third corner x: the vertices that share a live triangle

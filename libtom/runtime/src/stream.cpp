@@ -30,6 +30,52 @@ struct Carried {
     std::vector<uint8_t> data;
 };
 
+/// Per vertex, the live corners holding it (3 t + k in the file's TRIS). A split reads the lists
+/// of two vertices at random places, so each vertex has a line of 16 values in one array (its
+/// count, then up to 15 corners: one or two cache lines, no pointer to follow); a vertex with more
+/// corners, rare outside the coarsest levels, moves them to a list of its own, and its line then
+/// holds the count and that list's index.
+class CornerLists {
+public:
+    void resize(uint32_t vertices) { lines_.resize(size_t(vertices) * line, 0); }
+    uint32_t size(uint32_t v) const { return lines_[size_t(v) * line]; }
+    uint32_t* begin(uint32_t v) { return spilled(v) ? spill_[lines_[size_t(v) * line + 1]].data() : &lines_[size_t(v) * line + 1]; }
+    uint32_t* end(uint32_t v) { return begin(v) + size(v); }
+    void push(uint32_t v, uint32_t g) {
+        uint32_t* l = &lines_[size_t(v) * line];
+        if (l[0] < room) {
+            l[1 + l[0]++] = g;
+            return;
+        }
+        if (l[0] == room) {  // spill: the line's corners to a list of their own
+            spill_.emplace_back(l + 1, l + 1 + room);
+            l[1] = uint32_t(spill_.size() - 1);
+        }
+        spill_[l[1]].push_back(g);
+        ++l[0];
+    }
+    /// Keeps the first n corners of v's list (the caller moved the kept ones there).
+    void truncate(uint32_t v, uint32_t n) {
+        uint32_t* l = &lines_[size_t(v) * line];
+        if (spilled(v)) {
+            std::vector<uint32_t>& list = spill_[l[1]];
+            list.resize(n);
+            if (n <= room) {  // back into its line
+                std::copy(list.begin(), list.end(), l + 1);
+                std::vector<uint32_t>().swap(list);
+            }
+        }
+        l[0] = n;
+    }
+
+private:
+    static constexpr size_t line = 16;
+    static constexpr uint32_t room = line - 1;
+    bool spilled(uint32_t v) const { return lines_[size_t(v) * line] > room; }
+    std::vector<uint32_t> lines_;
+    std::vector<std::vector<uint32_t>> spill_;
+};
+
 /// A mesh as the directory declares it and as far as its chunks are decoded.
 struct MeshState {
     // declared
@@ -47,9 +93,10 @@ struct MeshState {
     std::vector<uint8_t> colors;           // 4 per vertex
     std::vector<std::vector<uint32_t>> corners;  // per part, 3 per live triangle, mapped to resolution
     std::vector<uint64_t> part_ends;             // per part, first_triangle + triangle_count
-    std::vector<std::vector<uint32_t>> incident; // per vertex: the live corners holding it (3 t + k in the file's TRIS)
+    CornerLists incident;                        // per vertex: the live corners holding it
     std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
     std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
+    Seen seen;                                   // scratch of gather_neighbours
     std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
     std::vector<uint32_t> births;                // scratch: a split's born triangles per part
 };
@@ -157,7 +204,7 @@ struct StreamDecoder::Impl {
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
-    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep, std::vector<uint32_t>& candidates);
+    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
@@ -513,21 +560,12 @@ void MeshUndo::restore(MeshState& m) const {
 /// The three corners of the live triangle holding corner `g`.
 const uint32_t* triangle_of(MeshState& m, uint32_t g) { return corner(m, g - g % 3); }
 
-/// Lists corner g at vertex v. A list starts with room for 8 (most vertices hold 4 to 8 corners):
-/// one allocation instead of four; each corner listed cost a bit of the chunk, so the room is
-/// justified by the bytes received.
-void list_corner(MeshState& m, uint32_t v, uint32_t g) {
-    std::vector<uint32_t>& list = m.incident[v];
-    if (list.capacity() == 0) list.reserve(8);
-    list.push_back(g);
-}
-
 /// Appends a triangle to part p and lists its corners at their vertices.
 void add_triangle(MeshState& m, size_t p, const uint32_t c[3]) {
     const uint32_t g = 3 * (m.parts[p].first_triangle + uint32_t(m.corners[p].size() / 3));
     for (int k = 0; k < 3; ++k) {
         m.corners[p].push_back(c[k]);
-        list_corner(m, c[k], g + uint32_t(k));
+        m.incident.push(c[k], g + uint32_t(k));
     }
 }
 
@@ -556,14 +594,14 @@ void StreamDecoder::Impl::decode_base(MeshState& m, ChunkReader& in, const std::
 void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born) {
     const auto [data, n] = in.block("splits");
     BitReader r{data, n, 0, &in};
-    std::vector<uint32_t> left = born, keep, candidates;
+    std::vector<uint32_t> left = born, candidates;
     // each new vertex's ring, reusing the lists of the previous chunk
     if (m.rings.size() < b - a) m.rings.resize(b - a);
     for (uint32_t i = 0; i < b - a; ++i) m.rings[i].clear();
     for (uint32_t v = a; v < b; ++v) {
-        split_vertex(m, in, r, v, left, keep, candidates);
+        split_vertex(m, in, r, v, left, candidates);
         if (v < m.min_vertex_count) continue;
-        gather_neighbours(m.incident[v], [&](uint32_t g) { return triangle_of(m, g); }, v, v, m.rings[v - a]);
+        gather_neighbours(m.incident.begin(v), m.incident.end(v), [&](uint32_t g) { return triangle_of(m, g); }, v, v, b, m.seen, m.rings[v - a]);
     }
     for (size_t q = 0; q < m.parts.size(); ++q)
         if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
@@ -571,8 +609,7 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
 }
 
 // The split of vertex v: its substitute, the corners it takes, the triangles born with it.
-void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& keep,
-                                       std::vector<uint32_t>& candidates) {
+void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates) {
     if (v < m.min_vertex_count) {
         m.substitute.push_back(v);
         return;
@@ -580,20 +617,23 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     const uint32_t p = r.bits(index_bits(v));
     if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
     m.substitute.push_back(p);
-    std::vector<uint32_t>& around = m.incident[p];
-    std::sort(around.begin(), around.end());
-    keep.clear();
-    for (const uint32_t g : around) {
+    // p's corners in TRIS order, a bit each: 1 moves it to v; the others stay, in order
+    uint32_t* around = m.incident.begin(p);
+    const uint32_t corners = m.incident.size(p);
+    if (!std::is_sorted(around, around + corners)) std::sort(around, around + corners);
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < corners; ++i) {
+        const uint32_t g = around[i];
         if (r.bits(1)) {
             uint32_t* c = corner(m, g);
             m.rewritten.emplace_back(g, *c);
             *c = v;
-            list_corner(m, v, g);
+            m.incident.push(v, g);
         } else {
-            keep.push_back(g);
+            around[kept++] = g;
         }
     }
-    around.swap(keep);
+    m.incident.truncate(p, kept);
     std::vector<uint32_t>& count = m.births;
     count.assign(m.parts.size(), 0);
     uint64_t births = 0;
@@ -606,8 +646,8 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     }
     if (!births) return;
     const auto triangle = [&](uint32_t g) { return triangle_of(m, g); };
-    gather_neighbours(m.incident[p], triangle, p, v, m.around[0]);
-    gather_neighbours(m.incident[v], triangle, p, v, m.around[1]);
+    gather_neighbours(m.incident.begin(p), m.incident.end(p), triangle, p, v, v + 1, m.seen, m.around[0]);
+    gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, p, v, v + 1, m.seen, m.around[1]);
     order_candidates(m.around[0], m.around[1], candidates);
     for (size_t q = 0; q < m.parts.size(); ++q)
         for (uint32_t i = 0; i < count[q]; ++i) {
