@@ -153,18 +153,29 @@ struct BitReader {
     uint32_t bits(uint32_t n) {
         if (n == 0) return 0;
         if (8 * bytes - at < n) fail("runs past the splits block");
-        const uint64_t first = at / 8, last = (at + n - 1) / 8;
-        uint64_t word = 0;
-        for (uint64_t i = first; i <= last; ++i) word |= uint64_t(data[i]) << (8 * (i - first));
+        const uint32_t value = uint32_t(window() >> (at % 8)) & (n == 32 ? ~0u : (1u << n) - 1);
         at += n;
-        return uint32_t(word >> ((at - n) % 8)) & (n == 32 ? ~0u : (1u << n) - 1);
+        return value;
     }
-    /// Elias gamma: n >= 1.
+    /// Elias gamma: n >= 1 (its zeros counted in the window, not a bit at a time).
     uint32_t gamma() {
-        uint32_t zeros = 0;
-        while (bits(1) == 0)
-            if (++zeros > 31) fail("holds a gamma code of more than 32 bits");
+        const uint64_t ahead = window() >> (at % 8);  // at least 57 bits, zero past the block's end
+        const uint32_t zeros = ahead ? uint32_t(__builtin_ctzll(ahead)) : 64;
+        if (zeros > 31) fail(8 * bytes - at < 32 ? "runs past the splits block" : "holds a gamma code of more than 32 bits");
+        at += zeros + 1;  // the zeros and the leading 1 (a 1 is never past the block)
         return (1u << zeros) | bits(zeros);
+    }
+    /// The eight bytes from the one holding bit `at`, least significant first; bytes past the
+    /// block read as zero.
+    uint64_t window() const {
+        const uint64_t first = at / 8;
+        uint64_t word = 0;
+        if (bytes - first >= 8) {
+            std::memcpy(&word, data + first, 8);  // little-endian hosts (x86, wasm, arm64)
+            return word;
+        }
+        for (uint64_t i = first; i < bytes; ++i) word |= uint64_t(data[i]) << (8 * (i - first));
+        return word;
     }
     [[noreturn]] void fail(const std::string& detail) const;
 };
@@ -204,7 +215,7 @@ struct StreamDecoder::Impl {
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
-    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates);
+    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates, std::vector<uint32_t>& ring);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
@@ -598,18 +609,16 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
     // each new vertex's ring, reusing the lists of the previous chunk
     if (m.rings.size() < b - a) m.rings.resize(b - a);
     for (uint32_t i = 0; i < b - a; ++i) m.rings[i].clear();
-    for (uint32_t v = a; v < b; ++v) {
-        split_vertex(m, in, r, v, left, candidates);
-        if (v < m.min_vertex_count) continue;
-        gather_neighbours(m.incident.begin(v), m.incident.end(v), [&](uint32_t g) { return triangle_of(m, g); }, v, v, b, m.seen, m.rings[v - a]);
-    }
+    for (uint32_t v = a; v < b; ++v) split_vertex(m, in, r, v, left, candidates, m.rings[v - a]);
     for (size_t q = 0; q < m.parts.size(); ++q)
         if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
     if ((r.at + 7) / 8 != n) in.fail("splits block has " + std::to_string(n - (r.at + 7) / 8) + " bytes after its last split");
 }
 
-// The split of vertex v: its substitute, the corners it takes, the triangles born with it.
-void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates) {
+// The split of vertex v: its substitute, the corners it takes, the triangles born with it; and
+// v's ring just after (the vertices it shares a triangle with), for the attributes' prediction.
+void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates,
+                                       std::vector<uint32_t>& ring) {
     if (v < m.min_vertex_count) {
         m.substitute.push_back(v);
         return;
@@ -644,8 +653,11 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
         left[q] -= count[q];
         births += count[q];
     }
-    if (!births) return;
     const auto triangle = [&](uint32_t g) { return triangle_of(m, g); };
+    if (!births) {  // v's triangles are the ones it took from p
+        gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, v, v, v + 1, m.seen, ring);
+        return;
+    }
     gather_neighbours(m.incident.begin(p), m.incident.end(p), triangle, p, v, v + 1, m.seen, m.around[0]);
     gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, p, v, v + 1, m.seen, m.around[1]);
     order_candidates(m.around[0], m.around[1], candidates);
@@ -665,7 +677,13 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
             const uint32_t role[3] = {v, p, x};
             const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
             add_triangle(m, q, c);
+            ring.push_back(x);
         }
+    // the ring: v's neighbours before the births (around it but p), p, the third corners born
+    ring.push_back(p);
+    ring.insert(ring.end(), m.around[1].begin(), m.around[1].end());
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
 }
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
