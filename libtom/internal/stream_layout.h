@@ -98,10 +98,18 @@ T unzigzag(T z) {
 }
 
 /// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.
-inline uint32_t index_bits(uint32_t v) {
-    uint32_t bits = 0;
-    while (v > 1 && (uint64_t(1) << bits) < v) ++bits;
-    return bits;
+inline uint32_t index_bits(uint32_t v) { return v <= 1 ? 0 : 32 - uint32_t(__builtin_clz(v - 1)); }
+
+/// Sorts a list ascending; a short one (a vertex's corners or neighbours: about 6, rarely past
+/// 20) by insertion, where std::sort's set-up cost more than the sorting.
+inline void sort_short(uint32_t* first, uint32_t* last) {
+    if (last - first > 32) return std::sort(first, last);  // (a crafted file's hub vertex)
+    for (uint32_t* i = first + (first != last); i < last; ++i) {
+        const uint32_t x = *i;
+        uint32_t* j = i;
+        for (; j != first && *(j - 1) > x; --j) *j = *(j - 1);
+        *j = x;
+    }
 }
 
 /// The six orders of a born triangle's corners: entry o gives, for each stored corner, which of
@@ -144,7 +152,7 @@ void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle tri
         for (int k = 0; k < 3; ++k)
             if (c[k] != skip_a && c[k] != skip_b && seen.first(c[k])) out.push_back(c[k]);
     }
-    std::sort(out.begin(), out.end());
+    sort_short(out.data(), out.data() + out.size());
 }
 template <class Triangle>
 void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, size_t vertices, Seen& seen,
@@ -160,25 +168,27 @@ inline void order_candidates(const std::vector<uint32_t>& around_p, const std::v
     std::set_intersection(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
     const size_t common = out.size();
     std::set_symmetric_difference(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
-    std::sort(out.begin() + common, out.end());
+    sort_short(out.data() + common, out.data() + out.size());
 }
 
-/// The prediction of lane k of vertex v's grid values: for positions (`ring` not null) the rounded
-/// mean of its neighbours' when it has any (the vertices it shares a triangle with just after its
-/// split, all below v); else its substitute's for a removed vertex (normals, texture coordinates
-/// and colours: across a hard edge or a seam the neighbours' mean is a poor guess, its copy's a
-/// good one), the previous vertex's for a survivor, zero for vertex 0. `values` holds `lanes`
-/// values per vertex; every vertex below v is decoded.
+/// The prediction of vertex v's grid values, its `lanes` lanes into `out`: for positions (`ring`
+/// not null) the rounded mean of its neighbours' when it has any (the vertices it shares a
+/// triangle with just after its split, all below v); else its substitute's for a removed vertex
+/// (normals, texture coordinates and colours: across a hard edge or a seam the neighbours' mean is
+/// a poor guess, its copy's a good one), the previous vertex's for a survivor, zero for vertex 0.
+/// `values` holds `lanes` values per vertex; every vertex below v is decoded.
 template <class T>
-T prediction(const std::vector<T>& values, int lanes, int k, uint32_t v, uint32_t substitute, const std::vector<uint32_t>* ring) {
+void prediction(const T* values, int lanes, uint32_t v, uint32_t substitute, const std::vector<uint32_t>* ring, T* out) {
     if (ring && !ring->empty()) {
-        int64_t sum = 0;
-        for (const uint32_t u : *ring) sum += int64_t(values[size_t(u) * lanes + k]);
+        int64_t sum[4] = {0, 0, 0, 0};  // (at most 4 lanes: colours)
+        for (const uint32_t u : *ring)
+            for (int k = 0; k < lanes; ++k) sum[k] += int64_t(values[size_t(u) * lanes + k]);
         const int64_t n = int64_t(ring->size());
-        return T(sum >= 0 ? (sum + n / 2) / n : -((-sum + n / 2) / n));
+        for (int k = 0; k < lanes; ++k) out[k] = T(sum[k] >= 0 ? (sum[k] + n / 2) / n : -((-sum[k] + n / 2) / n));
+        return;
     }
     const int64_t from = substitute < v ? int64_t(substitute) : int64_t(v) - 1;
-    return from < 0 ? T(0) : values[size_t(from) * lanes + k];
+    for (int k = 0; k < lanes; ++k) out[k] = from < 0 ? T(0) : values[size_t(from) * lanes + k];
 }
 
 } // namespace tom::stream_layout

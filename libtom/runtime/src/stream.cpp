@@ -530,12 +530,14 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
 template <class T>
 void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const std::vector<std::vector<uint32_t>>* rings, const uint8_t* residuals,
              uint32_t element, uint32_t a, uint32_t b, int lanes) {
+    values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
     for (uint32_t v = a; v < b; ++v) {
+        T* out = &values[size_t(v) * lanes];
+        prediction(values.data(), lanes, v, substitute[v], rings ? &(*rings)[v - a] : nullptr, out);
         for (int k = 0; k < lanes; ++k) {
             T r;
             std::memcpy(&r, residuals + size_t(v - a) * element + k * sizeof(T), sizeof(T));
-            r = unzigzag(r);
-            values.push_back(T(prediction(values, lanes, k, v, substitute[v], rings ? &(*rings)[v - a] : nullptr) + r));
+            out[k] = T(out[k] + unzigzag(r));
         }
     }
 }
@@ -548,9 +550,16 @@ const std::vector<std::vector<uint32_t>>* predictor_of(ChunkReader& in, const Me
     return p ? &m.rings : nullptr;
 }
 
+uint32_t* corner_in_parts(MeshState& m, uint32_t g);
+
 /// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
-uint32_t* corner(MeshState& m, uint32_t g) {
+inline uint32_t* corner(MeshState& m, uint32_t g) {
     if (m.parts.size() == 1) return g < m.corners[0].size() ? &m.corners[0][g] : nullptr;  // the usual mesh: no search
+    return corner_in_parts(m, g);
+}
+
+/// corner() of a mesh with several parts: the part's range first.
+uint32_t* corner_in_parts(MeshState& m, uint32_t g) {
     const uint64_t t = g / 3;
     const size_t p = size_t(std::upper_bound(m.part_ends.begin(), m.part_ends.end(), t) - m.part_ends.begin());
     if (p >= m.parts.size()) return nullptr;
@@ -629,7 +638,7 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     // p's corners in TRIS order, a bit each: 1 moves it to v; the others stay, in order
     uint32_t* around = m.incident.begin(p);
     const uint32_t corners = m.incident.size(p);
-    if (!std::is_sorted(around, around + corners)) std::sort(around, around + corners);
+    sort_short(around, around + corners);  // (already sorted unless the mesh has several parts)
     uint32_t kept = 0;
     for (uint32_t i = 0; i < corners; ++i) {
         const uint32_t g = around[i];
@@ -682,7 +691,7 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     // the ring: v's neighbours before the births (around it but p), p, the third corners born
     ring.push_back(p);
     ring.insert(ring.end(), m.around[1].begin(), m.around[1].end());
-    std::sort(ring.begin(), ring.end());
+    sort_short(ring.data(), ring.data() + ring.size());
     ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
 }
 
