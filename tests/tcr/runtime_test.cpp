@@ -30,9 +30,18 @@ void* operator new(size_t n, const std::nothrow_t&) noexcept {  // (Catch's; els
     ++g_allocations;
     return std::malloc(n ? n : 1);
 }
+// GCC 12 takes the malloc inside the replaced operator new for a `new` and warns that these
+// free() it (-Wmismatched-new-delete); here the two are replaced together and do match.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+#endif
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, size_t) noexcept { std::free(p); }
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 namespace {
 
