@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
     std::string path, output;
     double fraction = 1.0;
     uint32_t width = 800, height = 600;
-    bool lod_colors = false;
+    bool lod_colors = false, below_floor = false;
     CLI::App app{"tomview: render a .tom file's scene (materials, instances) at one resolution to a PNG"};
     app.set_version_flag("--version", "tomview 0.1.0");
     app.add_option("file", path, "A .tom file")->required();
@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
     app.add_option("--width", width, "Image width (default 800)")->check(CLI::Range(16u, 8192u));
     app.add_option("--height", height, "Image height (default 600)")->check(CLI::Range(16u, 8192u));
     app.add_flag("--lod-colors", lod_colors, "Colour each object by its drawn fraction instead of its material");
+    app.add_flag("--below-floor", below_floor,
+                 "Let --fraction go below each mesh's usable floor (tombuild --floor-error) to the coarsest level of its chain, as tomextract --below-floor");
     app.footer("Exit codes: 0 ok, 1 unreadable input, no OpenGL or unwritable output, 2 usage error.\n"
                "Example: tomview out/2CylinderEngine.tom --fraction 0.1 -o engine10.png");
     if (const int code = walk::parse_command_line(app, argc, argv); code >= 0) return code;
@@ -57,7 +59,7 @@ int main(int argc, char** argv) {
             first[i] = uint32_t(indices.size());
             indices.resize(indices.size() + size_t(m.triangle_count) * 3);
             parts[i].resize(tom::part_count(m));
-            const tom::Extracted e = tom::extract_parts(m, tom::vertex_count_for_fraction(m, fraction), indices.data() + first[i],
+            const tom::Extracted e = tom::extract_parts(m, tom::vertex_count_for_fraction(m, fraction, below_floor ? tom::Floor::coarsest : tom::Floor::usable), indices.data() + first[i],
                                                         size_t(m.triangle_count) * 3, parts[i].data());
             counts[i] = e.triangle_count * 3;
             indices.resize(first[i] + counts[i]);

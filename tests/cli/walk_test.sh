@@ -161,6 +161,19 @@ assert blue.sum() > 1000 and green.sum() > 1000, (blue.sum(), green.sum())
 rows = np.arange(a.shape[0])[:, None]
 assert (rows * blue).sum() / blue.sum() < (rows * green).sum() / green.sum(), 'the hills are above the sky'
 "
+# --fraction 0 stops at the usable floor (tombuild's stored 1% error bound); --below-floor goes on
+# to the coarsest level of the chain, as tominfo lists both
+"$tools/tombuild" "$data/assimp/OBJ/WusonOBJ.obj" -o "$work/wuson" -q
+check "tomview --fraction 0 draws the usable floor, with --below-floor the coarsest level" /usr/bin/python3 -c "
+import json, re, subprocess
+info = json.loads(subprocess.run(['$tools/tominfo', '$work/wuson/WusonOBJ.tom', '--json'], capture_output=True, text=True, check=True).stdout)['meshes'][0]
+def drawn(*extra):
+    out = subprocess.run(['$view', '$work/wuson/WusonOBJ.tom', '-f', '0', '-o', '$work/wuson.png', '--width', '160', '--height', '120', *extra], capture_output=True, text=True, check=True).stdout
+    return int(re.search(r'; (\d+) of \d+ triangles drawn', out).group(1))
+usable, coarsest = drawn(), drawn('--below-floor')
+assert info['min_triangles'] < info['usable_floor']['triangles'], info
+assert (usable, coarsest) == (info['usable_floor']['triangles'], info['min_triangles']), (usable, coarsest, info)
+"
 check "tomview on a file that is not a .tom exits 1" bash -c "'$view' '$data/meshes/fandisk.off' -o '$work/x.png'; test \$? -eq 1"
 check "the noise test draws one frame again and again and reports its spread" /usr/bin/python3 -c "
 import json, subprocess
