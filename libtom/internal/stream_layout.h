@@ -124,9 +124,12 @@ constexpr uint32_t order_bits = 3;
 struct Seen {
     std::vector<uint32_t> by;
     uint32_t gathering = 0;
-    /// A new gathering over vertices below `vertices`.
-    void start(size_t vertices) {
+    /// Room for the vertices below `vertices` (once per mesh or chunk, not per gathering).
+    void cover(size_t vertices) {
         if (by.size() < vertices) by.resize(vertices, 0);
+    }
+    /// A new gathering.
+    void start() {
         if (++gathering == 0) std::fill(by.begin(), by.end(), 0), gathering = 1;
     }
     /// True the first time vertex u is seen in this gathering.
@@ -139,14 +142,13 @@ struct Seen {
 
 /// The vertices that share a triangle with vertex u, ascending without repeats, leaving out
 /// `skip_a` and `skip_b`: [first, last) lists u's live corners (3 t + k in TRIS),
-/// `triangle(g)` gives the three corners of the triangle holding corner g, all below `vertices`.
-/// The encoder and the decoder gather a vertex's ring and a split's candidates with it, so that
-/// both see one order.
+/// `triangle(g)` gives the three corners of the triangle holding corner g, all vertices `seen`
+/// covers. The encoder and the decoder gather a vertex's ring and a split's candidates with it,
+/// so that both see one order.
 template <class Triangle>
-void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle triangle, uint32_t skip_a, uint32_t skip_b, size_t vertices, Seen& seen,
-                       std::vector<uint32_t>& out) {
+void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle triangle, uint32_t skip_a, uint32_t skip_b, Seen& seen, std::vector<uint32_t>& out) {
     out.clear();
-    seen.start(vertices);
+    seen.start();
     for (const uint32_t* g = first; g != last; ++g) {
         const uint32_t* c = triangle(*g);
         for (int k = 0; k < 3; ++k)
@@ -155,9 +157,8 @@ void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle tri
     sort_short(out.data(), out.data() + out.size());
 }
 template <class Triangle>
-void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, size_t vertices, Seen& seen,
-                       std::vector<uint32_t>& out) {
-    gather_neighbours(incident.data(), incident.data() + incident.size(), triangle, skip_a, skip_b, vertices, seen, out);
+void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle, uint32_t skip_a, uint32_t skip_b, Seen& seen, std::vector<uint32_t>& out) {
+    gather_neighbours(incident.data(), incident.data() + incident.size(), triangle, skip_a, skip_b, seen, out);
 }
 
 /// The candidates for a born triangle's third corner x: the vertices that share a live triangle

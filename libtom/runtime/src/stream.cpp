@@ -507,6 +507,7 @@ void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& c
         if (base[p] > plausible || born[p] > plausible) in.fail("part " + std::to_string(p) + "'s counts cannot fit in " + std::to_string(bytes) + " bytes");
     }
     m.incident.resize(chunk.vertex_end);
+    m.seen.cover(chunk.vertex_end);
     decode_base(m, in, base);
     decode_splits(m, in, chunk.vertex_begin, chunk.vertex_end, born);
     decode_vertices(m, in, chunk.vertex_begin, chunk.vertex_end);
@@ -550,21 +551,19 @@ const std::vector<std::vector<uint32_t>>* predictor_of(ChunkReader& in, const Me
     return p ? &m.rings : nullptr;
 }
 
-uint32_t* corner_in_parts(MeshState& m, uint32_t g);
-
-/// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
-inline uint32_t* corner(MeshState& m, uint32_t g) {
-    if (m.parts.size() == 1) return g < m.corners[0].size() ? &m.corners[0][g] : nullptr;  // the usual mesh: no search
-    return corner_in_parts(m, g);
-}
-
-/// corner() of a mesh with several parts: the part's range first.
+/// corner() below, of a mesh with several parts: the part's range first.
 uint32_t* corner_in_parts(MeshState& m, uint32_t g) {
     const uint64_t t = g / 3;
     const size_t p = size_t(std::upper_bound(m.part_ends.begin(), m.part_ends.end(), t) - m.part_ends.begin());
     if (p >= m.parts.size()) return nullptr;
     const uint64_t slot = g - 3 * uint64_t(m.parts[p].first_triangle);
     return slot < m.corners[p].size() ? &m.corners[p][slot] : nullptr;
+}
+
+/// The live corner `g` (3 t + k in the file's TRIS) of a mesh; null when no live triangle has it.
+inline uint32_t* corner(MeshState& m, uint32_t g) {
+    if (m.parts.size() == 1) return g < m.corners[0].size() ? &m.corners[0][g] : nullptr;  // the usual mesh: no search
+    return corner_in_parts(m, g);
 }
 
 void MeshUndo::restore(MeshState& m) const {
@@ -664,11 +663,11 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     }
     const auto triangle = [&](uint32_t g) { return triangle_of(m, g); };
     if (!births) {  // v's triangles are the ones it took from p
-        gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, v, v, v + 1, m.seen, ring);
+        gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, v, v, m.seen, ring);
         return;
     }
-    gather_neighbours(m.incident.begin(p), m.incident.end(p), triangle, p, v, v + 1, m.seen, m.around[0]);
-    gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, p, v, v + 1, m.seen, m.around[1]);
+    gather_neighbours(m.incident.begin(p), m.incident.end(p), triangle, p, v, m.seen, m.around[0]);
+    gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, p, v, m.seen, m.around[1]);
     order_candidates(m.around[0], m.around[1], candidates);
     for (size_t q = 0; q < m.parts.size(); ++q)
         for (uint32_t i = 0; i < count[q]; ++i) {

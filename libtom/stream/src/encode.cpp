@@ -210,6 +210,7 @@ Connectivity connectivity(const MeshView& m) {
     auto prune = [&](std::vector<uint32_t>& list) { list.erase(std::remove_if(list.begin(), list.end(), [&](uint32_t g) { return !alive[g / 3]; }), list.end()); };
     Connectivity out;
     Seen seen;
+    seen.cover(V);
     out.splits.resize(V - S);
     out.rings.resize(V - S);
     for (uint32_t v = V; v-- > S;) {
@@ -218,7 +219,7 @@ Connectivity connectivity(const MeshView& m) {
         s.p = p;
         // born at v + 1: the live triangles holding both v and p, each part's last ones
         prune(incident[v]);
-        gather_neighbours(incident[v], triangle, v, v, V, seen, out.rings[v - S]);
+        gather_neighbours(incident[v], triangle, v, v, seen, out.rings[v - S]);
         std::vector<uint32_t> born;
         for (uint32_t g : incident[v]) {
             const uint32_t* c = &cur[3 * size_t(g / 3)];
@@ -239,8 +240,8 @@ Connectivity connectivity(const MeshView& m) {
         std::vector<uint32_t> candidates;
         if (!born.empty()) {
             std::vector<uint32_t> around[2];
-            gather_neighbours(incident[p], triangle, p, v, V, seen, around[0]);
-            gather_neighbours(incident[v], triangle, p, v, V, seen, around[1]);
+            gather_neighbours(incident[p], triangle, p, v, seen, around[0]);
+            gather_neighbours(incident[v], triangle, p, v, seen, around[1]);
             order_candidates(around[0], around[1], candidates);
         }
         for (uint32_t t : born) {
