@@ -67,7 +67,8 @@ struct Options {
 // encoder's layout): it is part of the version a .tom's provenance records, so a rerun after an
 // upgrade converts again instead of keeping outputs the new code would not write.
 // 2: integrated quadric costs, texture coordinates weighed only when sampled.
-constexpr int kOutputRevision = 2;
+// 3: chains where parts meet move along them; joins of two sheets ranked behind manifold moves.
+constexpr int kOutputRevision = 3;
 const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) +
                                  ", output revision " + std::to_string(kOutputRevision) + ")";
 

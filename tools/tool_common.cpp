@@ -52,6 +52,10 @@ void BuildOptions::add_to(CLI::App& app, const std::string& group) {
                  "Never move vertices on open borders (of the mesh welded by position), so tiles and modular pieces keep meeting their "
                  "neighbours at every resolution (meshoptimizer's LockBorder, gltfpack -slb)")
         ->group(group);
+    app.add_flag("--keep-topology", numbers.keep_topology,
+                 "Never join two sheets (a thin wall's faces, a handle closing): closed manifolds keep their genus and stop at a "
+                 "tetrahedron; by default such a join is taken where it costs far less than what the topology leaves, as meshoptimizer does")
+        ->group(group);
     app.add_flag("--no-weld", no_weld,
                  "Keep the file's vertices as they are; by default identical vertices (same position and the same value in every "
                  "stream, joints, weights and morph deltas included) are merged first, so unindexed files simplify")
@@ -79,6 +83,7 @@ nlohmann::ordered_json build_params_json(const tom::BuildParams& params) {
             {"animation_weight", params.animation_weight},
             {"max_rotation_degrees", params.max_rotation_degrees},
             {"lock_borders", params.lock_borders},
+            {"keep_topology", params.keep_topology},
             {"copy_tolerance", params.copy_tolerance}};
 }
 

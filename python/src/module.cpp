@@ -420,7 +420,7 @@ void add_building(py::module_& m) {
 
     m.def("build", [](py::object positions, py::object triangles, py::object normals, py::object uv, const std::string& name, const std::string& predicate,
                       const std::string& strategy, float pair_threshold, float attribute_weight, float max_rotation_degrees, unsigned threads, bool foresight,
-                      bool lock_borders, float animation_weight, bool weld) {
+                      bool lock_borders, float animation_weight, bool weld, bool keep_topology) {
         const std::shared_ptr<tom::Mesh> source = py::isinstance<SourceMesh>(positions) ? positions.cast<SourceMesh>().mesh : make_mesh(positions, triangles, normals, uv, name);
         tom::BuildParams p;
         p.predicate = parse_predicate(predicate);
@@ -431,12 +431,13 @@ void add_building(py::module_& m) {
         p.threads = threads;
         p.foresight = foresight;
         p.lock_borders = lock_borders;
+        p.keep_topology = keep_topology;
         p.animation_weight = animation_weight;
         return build_mesh(*source, p, tom::CleanOptions{weld});
     }, py::arg("positions"), py::arg("triangles") = py::none(), py::arg("normals") = py::none(), py::arg("uv") = py::none(), py::kw_only(), py::arg("name") = "mesh",
        py::arg("predicate") = "quadric", py::arg("strategy") = "passes", py::arg("pair_threshold") = 0.0f, py::arg("attribute_weight") = 1.0f,
        py::arg("max_rotation_degrees") = 60.0f, py::arg("threads") = 0u, py::arg("foresight") = true, py::arg("lock_borders") = false,
-       py::arg("animation_weight") = 1.0f, py::arg("weld") = true,
+       py::arg("animation_weight") = 1.0f, py::arg("weld") = true, py::arg("keep_topology") = false,
        "Simplifies a mesh into TOM order: positions (n, 3) and triangles (t, 3), or a tom.Mesh as the first argument\n"
        "(which keeps its parts: an OBJ's usemtl groups, a glTF mesh's primitives).\n"
        "The keywords are tombuild's options (docs/TOOLS.md); the result is the same for any thread count.");

@@ -228,6 +228,15 @@ def test_an_obj_with_usemtl_builds_with_its_parts_and_locked_borders_stay():
     assert locked.min_vertex_count >= border > free.min_vertex_count
 
 
+def test_keep_topology_stops_a_closed_mesh_at_a_tetrahedron():
+    """cross.off is a closed manifold: kept, it ends as a tetrahedron; by default its last step joins two sheets."""
+    src = tom.import_file(f"{DATA}/meshes/cross.off")[0]
+    joined = tom.build(src, threads=1)
+    kept = tom.build(src, threads=1, keep_topology=True)
+    assert kept.min_vertex_count == 4 and kept.active_triangles(4) == 4
+    assert joined.min_vertex_count < 4 and joined.active_triangles(joined.min_vertex_count) == 2
+
+
 def test_an_unindexed_mesh_is_welded_unless_asked_and_simplifies_either_way():
     """Every triangle its own three vertices: welded on import by default, kept with weld=False."""
     positions, triangles = grid(20)

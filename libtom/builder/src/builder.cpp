@@ -10,8 +10,9 @@
 //   by cost, and of classifying vertices (manifold, border, locked) to restrict their targets.
 //
 // Algorithm (both strategies):
-//   classify vertices: interior (any edge neighbour), border (only along its border loop),
-//   locked (non-manifold, border corners, coincident copies: never removed, may be a target)
+//   classify vertices: interior (any edge neighbour), border (only along its border loop, or
+//   along the chain of edges where parts meet), locked (other non-manifold points, border
+//   corners: never removed, may be a target); coincident copies move as groups
 //   repeat: pick the legal substitution v1 -> v2 of lowest penalty, rewrite v1's triangles to v2,
 //           the ones containing v2 die; record (v1, v2)
 //   until no legal substitution is left. Sort: survivors first, then removed vertices from the
@@ -41,8 +42,16 @@ namespace {
 
 using detail::thread_count;
 
-// Each vertex's kind from the edges of its fan in `topo` (n vertices): interior, border (one
-// open edge out and one in, whose ends become its loop neighbours) or locked.
+// Each vertex's kind from the edges of its fan in `topo` (n vertices): interior, border (its
+// loop neighbours the ends of its two special edges) or locked. An edge is special when it is
+// open (no reverse) or non-manifold (used twice in a direction: more than two triangles, or
+// sheets of opposite orientation). A vertex with one open edge out and one in is on a border; a
+// vertex whose only special edges are two, one of them non-manifold, is on a chain where parts
+// meet (a wall standing on a floor, parts of several materials welded by position): each part's
+// fan at it runs from one chain edge to the other, so it moves along the chain as a border
+// vertex along its loop, and every part keeps meeting the others there. Its links are the two
+// chain neighbours, in no particular direction (VertexClasses::other_link). Any other vertex
+// with a special edge is locked.
 void classify_by_edges(const Topology& topo, uint32_t n, VertexClasses& cl, detail::Team& team) {
     cl.kind.assign(n, kInterior);
     cl.border_next.assign(n, kNone);
@@ -50,8 +59,7 @@ void classify_by_edges(const Topology& topo, uint32_t n, VertexClasses& cl, deta
     // Per vertex v, from its triangles in order: outs = the vertices following v (its outgoing
     // edges v -> e), ins = those preceding it (incoming w -> v). The multiplicity of the directed
     // edge v -> e is e's count in outs, that of e -> v is e's count in ins: every edge is counted
-    // from one vertex's own corners. An edge used twice in a direction (non-manifold, or
-    // inconsistently oriented) locks both ends; an edge without its reverse is open.
+    // from one vertex's own corners.
     // each vertex writes only its own class and border links: blocks of vertices on the team.
     // The counts sit in the worker's array, zero between vertices: tally[2x] = x's count in outs,
     // tally[2x + 1] in ins, held at 2 (only 0, 1 and more than 1 matter)
@@ -78,27 +86,40 @@ void classify_by_edges(const Topology& topo, uint32_t n, VertexClasses& cl, deta
             const uint32_t valence = uint32_t(outs.size());
             const uint32_t* out = outs.data();
             const uint32_t* in = ins.data();
-            uint32_t open_out = 0, open_in = 0;
-            bool locked = false;
+            uint32_t open_out = 0, open_in = 0, open_out_to = kNone, open_in_from = kNone;
+            uint32_t special[3], specials = 0;  // distinct ends of special edges, up to 3
+            bool non_manifold = false;
             // the edge between v and x, x taken from outs (mine = 0) or ins (1): its multiplicity
             // in that direction is x's count there, the reverse's x's count in the other list
-            auto edge = [&](uint32_t x, size_t mine, uint32_t& link, uint32_t& open) {
+            auto edge = [&](uint32_t x, size_t mine) {
                 const uint32_t fwd = tally[2 * size_t(x) + mine], rev = tally[2 * size_t(x) + (1 - mine)];
                 if (fwd > 1 || rev > 1) {
-                    locked = true;
+                    non_manifold = true;
                 } else if (rev == 0) {
-                    link = x;
-                    ++open;
+                    (mine == 0 ? open_out_to : open_in_from) = x;
+                    ++(mine == 0 ? open_out : open_in);
+                } else {
+                    return;
                 }
+                if (specials < 3 && std::find(special, special + specials, x) == special + specials) special[specials++] = x;
             };
             for (uint32_t i = 0; i < valence; ++i) {
-                edge(out[i], 0, cl.border_next[v], open_out);
-                edge(in[i], 1, cl.border_prev[v], open_in);
+                edge(out[i], 0);
+                edge(in[i], 1);
             }
-            if (locked || !((open_out == 0 && open_in == 0) || (open_out == 1 && open_in == 1)))
-                cl.kind[v] = kLocked;
-            else if (open_out == 1)
+            // (a locked vertex keeps a link along an open edge: its planes in init_quadrics)
+            cl.border_next[v] = open_out_to;
+            cl.border_prev[v] = open_in_from;
+            if (!non_manifold) {
+                const bool loop = open_out == 1 && open_in == 1;
+                cl.kind[v] = loop ? kBorder : open_out == 0 && open_in == 0 ? kInterior : kLocked;
+            } else if (specials == 2) {
                 cl.kind[v] = kBorder;
+                cl.border_next[v] = special[0];
+                cl.border_prev[v] = special[1];
+            } else {
+                cl.kind[v] = kLocked;
+            }
             for (uint32_t i = 0; i < valence; ++i) tally[2 * size_t(out[i])] = tally[2 * size_t(in[i]) + 1] = 0;
         }
     });
@@ -337,12 +358,13 @@ void init_quadrics(Builder& b, detail::Team& team) {
         add_plane(q, nrm.x, nrm.y, nrm.z, d, weight);
         for (const uint32_t v : {i0, i1, i2})
             if (mine(v)) add(b.quadric[v], q);
-        // open edges: a plane through the edge, perpendicular to the triangle, keeps borders in place
+        // open and chain edges: a plane through the edge, perpendicular to the triangle, keeps
+        // borders and the chains where parts meet in place
         const uint32_t c[3] = {i0, i1, i2};
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = c[k], e = c[(k + 1) % 3];
             const uint32_t pa_ = b.classes.wedge[a], pe_ = b.classes.wedge[e];  // open in the welded mesh
-            if ((!mine(a) && !mine(e)) || b.classes.border_next[pa_] != pe_ || b.classes.border_prev[pe_] != pa_) continue;
+            if ((!mine(a) && !mine(e)) || !b.classes.linked(pa_, pe_)) continue;
             const Vec3 pa = b.pos[a], pe = b.pos[e];
             const Vec3 edge = sub(pe, pa);
             Vec3 en = cross(edge, nrm);
@@ -588,6 +610,7 @@ void set_up(Builder& b, LocalMesh& local, const BuildParams& params) {
     b.predicate = params.predicate;
     const double c = std::cos(std::min(90.0, std::max(1.0, double(params.max_rotation_degrees))) * 3.14159265358979323846 / 180.0);
     b.min_cos2 = float(c * c);
+    b.keep_topology = params.keep_topology;
     if (mesh.tangents.size() == size_t(b.n) * 4) {
         b.mirrored.resize(b.n);
         for (uint32_t v = 0; v < b.n; ++v) b.mirrored[v] = mesh.tangents[4 * size_t(v) + 3] < 0.0f;

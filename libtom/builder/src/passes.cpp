@@ -330,7 +330,8 @@ private:
     // (Builder::group_move); one step of the order, whatever its number of copies.
     void collapse_group(const Candidate& c) {
         GroupMove& move = group_;
-        bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch);
+        bool joins = false;
+        bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch, joins_allowed(c.v, joins));
         for (uint32_t i = 0; ok && i < move.count; ++i) ok = s_.pass_mark[move.from[i]] != s_.pass && s_.pass_mark[move.to[i]] != s_.pass;
         if (!ok) {
             reject(c.v);
@@ -388,7 +389,9 @@ private:
     // A single substitution v -> u, when the oracle allows it.
     void collapse(const Candidate& c, size_t ci) {
         const uint8_t known = foreseen_verdict(c, ci);
-        if (b_.removed[c.u] || !b_.border_move_allowed(c.v, c.u) || (known == kUnknown ? b_.illegal(c.v, c.u, b_.scratch) : known == kIllegal)) {
+        bool joins = false;
+        if (b_.removed[c.u] || !b_.border_move_allowed(c.v, c.u) ||
+            (known == kUnknown ? b_.illegal(c.v, c.u, b_.scratch, true, joins_allowed(c.v, joins)) : known == kIllegal)) {
             reject(c.v);
             return;
         }
@@ -404,6 +407,11 @@ private:
         s_.pass_mark[c.v] = s_.pass_mark[c.u] = s_.pass;
         ++c_.executed;
     }
+
+    // Where a join (Builder::illegal) is legal: for a candidate the oracle chose, its cost already
+    // carries kJoinPenalty; one costed without the oracle is refused, and v looks again next pass
+    // through the oracle, which ranks the join with the penalty
+    bool* joins_allowed(uint32_t v, bool& joins) const { return s_.needs_oracle[v] ? &joins : nullptr; }
 
     // v's candidate failed: look again next pass, through the oracle
     void reject(uint32_t v) {
@@ -551,7 +559,8 @@ private:
         f.ring = f.fan = kRingUnknown;
         if (e.u == kNone || s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].as_group || b_.removed[e.u])
             return;
-        f.verdict = b_.illegal(e.v, e.u, sc) ? kIllegal : kLegal;
+        bool joins = false;
+        f.verdict = b_.illegal(e.v, e.u, sc, true, joins_allowed(e.v, joins)) ? kIllegal : kLegal;
         if (f.verdict == kIllegal || b_.predicate != Predicate::quadric) return;
         uint32_t ring = 0, fan = 0;
         b_.each_distinct_corner(

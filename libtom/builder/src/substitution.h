@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <utility>
 #include <vector>
 
@@ -79,6 +80,12 @@ constexpr CollapseRule kCollapseRules[kKindCount] = {
 
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr float kBoundaryWeight = 4.0f;  // border edge planes (x edge length) vs. face planes (x sqrt(area))
+// A substitution that joins two sheets (it fails the link condition: a thin wall's two faces, a
+// box's sides, a handle) is legal unless BuildParams::keep_topology, and ranks as if it cost this
+// many times more: it is taken where the manifold moves left cost far more (a building's walls
+// flatten before its roof folds onto its gables), not instead of a manifold move of about the
+// same cost (the scanned meshes keep their levels).
+constexpr float kJoinPenalty = 8.0f;
 
 struct Candidate {
     float cost;
@@ -194,9 +201,22 @@ struct VertexClasses {
     std::vector<uint8_t> kind;
     // a border point's loop neighbours, in the welded mesh: position classes (their first
     // copies), held at the class's first copy
+    // (on a border, next follows the open edge out; on a chain where parts meet, no direction)
     std::vector<uint32_t> border_next, border_prev;
     std::vector<uint32_t> wedge;       // the position class of a vertex: its first coincident copy
     std::vector<uint32_t> next_copy;   // circular list of a class's copies (a singleton points to itself)
+
+    // point v's loop neighbour other than w
+    uint32_t other_link(uint32_t v, uint32_t w) const { return border_next[v] == w ? border_prev[v] : border_next[v]; }
+    // points a and e are each other's loop neighbours: their edge is open or a chain
+    bool linked(uint32_t a, uint32_t e) const {
+        return (border_next[a] == e || border_prev[a] == e) && (border_next[e] == a || border_prev[e] == a);
+    }
+    // point p's link to `from` now goes to `to`
+    void relink(uint32_t p, uint32_t from, uint32_t to) {
+        if (border_next[p] == from) border_next[p] = to;
+        else if (border_prev[p] == from) border_prev[p] = to;
+    }
 };
 
 // The mesh's connected pieces (of the surface welded by position) that may vanish whole: each
@@ -210,6 +230,28 @@ struct Pieces {
     size_t count() const { return cost.size(); }
 };
 
+// The best legal target of one vertex, its candidates offered cheapest first: the first one that
+// keeps the topology, unless a join (Builder::illegal) costs less even times kJoinPenalty.
+struct JoinRanking {
+    Candidate best{0.0f, kNone, kNone};  // the winner, or the cheapest join with its cost times the penalty
+    // no later (costlier) candidate can win
+    bool settled(float cost) const { return best.v != kNone && cost >= best.cost; }
+    // a legal candidate; true when it wins (it keeps the topology)
+    bool offer(const Candidate& c, bool joins) {
+        if (!joins) {
+            best = c;
+            return true;
+        }
+        if (best.v == kNone) best = {c.cost * kJoinPenalty, c.v, c.u};
+        return false;
+    }
+    bool result(Candidate& out) const {
+        if (best.v == kNone) return false;
+        out = best;
+        return true;
+    }
+};
+
 // Shared state of one build: the mesh, the current triangles, the vertex classes, the costs'
 // quadrics and the record of substitutions.
 struct Builder {
@@ -218,6 +260,7 @@ struct Builder {
     const Vec3* vnormal = nullptr;
     Predicate predicate = Predicate::quadric;
     detail::AttributeError attributes;  // the predicates' attribute term (inactive without attributes)
+    bool keep_topology = false;  // joins are never legal (BuildParams::keep_topology)
     float min_cos2 = 0.0f;  // cos^2 of the largest rotation a surviving triangle's normal may take (0: flips only)
     Topology topo;
     VertexClasses classes;
@@ -244,7 +287,7 @@ struct Builder {
         const uint32_t wu = classes.wedge[u];
         if (wu != classes.border_next[v] && wu != classes.border_prev[v])
             return !pairs.empty() && std::find(pairs[v].begin(), pairs[v].end(), u) != pairs[v].end();
-        return classes.border_next[classes.border_next[v]] != classes.border_prev[v];
+        return classes.other_link(classes.border_next[v], v) != classes.border_prev[v];
     }
 
     // The group substitution of v's point onto the point `target` (a class): each copy p goes to
@@ -253,7 +296,7 @@ struct Builder {
     // False when a copy shares triangles with two copies of the target (the one left would keep
     // a zero-area triangle), when the target has no copy of its tangent's handedness, or, with
     // check_legal, when the oracle refuses a copy's move.
-    bool group_move(uint32_t v, uint32_t target, bool check_legal, GroupMove& move, Scratch& sc) const {
+    bool group_move(uint32_t v, uint32_t target, bool check_legal, GroupMove& move, Scratch& sc, bool* joins = nullptr) const {
         move.count = 0;
         move.cost = 0;
         uint32_t p = v;
@@ -290,29 +333,33 @@ struct Builder {
             move.cost += c;
             p = classes.next_copy[p];
         } while (p != v);
-        return !check_legal || group_legal(move, sc);
+        return !check_legal || group_legal(move, sc, joins);
     }
     // The oracle on each copy's move; the link condition, a property of the two points, once.
-    bool group_legal(const GroupMove& move, Scratch& sc) const {
+    bool group_legal(const GroupMove& move, Scratch& sc, bool* joins = nullptr) const {
         for (uint32_t i = 0; i < move.count; ++i)
-            if (illegal(move.from[i], move.to[i], sc, i == 0)) return false;
+            if (illegal(move.from[i], move.to[i], sc, i == 0, joins)) return false;
         return true;
     }
 
     // The binary oracle's geometric and topological tests for v -> u:
     // - no surviving triangle of v flips (or becomes zero-area), nor turns its normal by more
     //   than the maximum rotation (BuildParams::max_rotation_degrees);
-    // - link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
-    //   otherwise edges v-w and u-w merge into a non-manifold edge;
-    // - no rewritten triangle duplicates one of u's (closed surfaces stop at a tetrahedron).
-    // The last two concern the points (position classes) of v and u, the same for every copy:
-    // with `points` false only v's own fan is checked (a group's other copies).
-    bool illegal(uint32_t v, uint32_t u, Scratch& sc, bool points = true) const {
+    // - u keeps a live triangle: a piece never vanishes through substitutions (a double-sided
+    //   triangle is as far as a closed piece goes; pruning removes small pieces whole);
+    // - the link condition: every vertex w adjacent to both v and u forms a triangle (v, u, w),
+    //   otherwise edges v-w and u-w merge into a non-manifold edge (two sheets join: a thin
+    //   wall's faces, a handle's sides); and no rewritten triangle duplicates one of u's (a
+    //   closed surface stops at a tetrahedron). A move that fails only these joins sheets: legal
+    //   when the caller passes `joins` (set true) and keep_topology is off (kJoinPenalty).
+    // All but the first concern the points (position classes) of v and u, the same for every
+    // copy: with `points` false only v's own fan is checked (a group's other copies).
+    bool illegal(uint32_t v, uint32_t u, Scratch& sc, bool points = true, bool* joins = nullptr) const {
         std::vector<uint32_t>& stamp = sc.stamp;
         const Vec3 pv = pos[v], pu = pos[u];
         uint32_t opposite[8];
         size_t co = 0;
-        bool bad = false;
+        bool bad = false, join = false, kept = false;  // kept: a triangle of v's or u's point survives
         const uint32_t wv = classes.wedge[v], wu = classes.wedge[u];
         // link condition on the surface welded by position (seam copies are one point): every
         // class adjacent to both v's and u's must be opposite a triangle joining them, otherwise
@@ -325,6 +372,7 @@ struct Builder {
         };
         auto link = [&](uint32_t a, uint32_t c) {
             const uint32_t wa = classes.wedge[a], wc = classes.wedge[c];
+            kept |= wa != wu && wc != wu;
             stamp[wa] = mark;
             stamp[wc] = mark;
             if (wa == wu || wc == wu) {
@@ -371,12 +419,14 @@ struct Builder {
                 uint32_t a, c;
                 topo.others(t, y, a, c);
                 const uint32_t wa = classes.wedge[a], wc = classes.wedge[c];
-                if (wa != wv && stamp[wa] == mark && !is_opposite(wa)) bad = true;
-                if (wc != wv && stamp[wc] == mark && !is_opposite(wc)) bad = true;
+                kept |= wa != wv && wc != wv;
+                if (join) return;
+                if (wa != wv && stamp[wa] == mark && !is_opposite(wa)) join = true;
+                if (wc != wv && stamp[wc] == mark && !is_opposite(wc)) join = true;
                 // a tetrahedron folds flat: u's point's triangle (u, a, c) with both a and c
                 // opposite would be duplicated by v's (v, a, c) rewritten to u (points: a copy of
                 // v's point may hold it)
-                if (!bad && co == 2 && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
+                if (!join && wa != wv && wc != wv && is_opposite(wa) && is_opposite(wc)) {
                     auto holds = [&](uint32_t s2, uint32_t w) {
                         const uint32_t* corner = &topo.idx[3 * s2];
                         return classes.wedge[corner[0]] == w || classes.wedge[corner[1]] == w || classes.wedge[corner[2]] == w;
@@ -384,15 +434,17 @@ struct Builder {
                     uint32_t x = v;
                     do {
                         topo.each(x, [&](uint32_t s2) {
-                            if (!bad && !holds(s2, wu) && holds(s2, wa) && holds(s2, wc)) bad = true;
+                            if (!join && !holds(s2, wu) && holds(s2, wa) && holds(s2, wc)) join = true;
                         });
                         x = classes.next_copy[x];
-                    } while (x != v && !bad);
+                    } while (x != v && !join);
                 }
             });
             y = classes.next_copy[y];
-        } while (y != u && !bad);
-        return bad;
+        } while (y != u && (!join || !kept));
+        if (join && (!joins || keep_topology)) return true;
+        if (join) *joins = true;
+        return !kept;
     }
 
     // f(w) for every corner w of x's live triangles (x among them; a neighbour once per
@@ -556,12 +608,13 @@ struct Builder {
         std::sort(targets.begin(), targets.end(), [](const Candidate& a, const Candidate& b) {
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
-        for (const Candidate& c : targets)
-            if (!illegal(v, c.u, sc)) {
-                best = c;
-                return true;
-            }
-        return false;
+        JoinRanking ranking;
+        for (const Candidate& c : targets) {
+            if (ranking.settled(c.cost)) break;
+            bool joins = false;
+            if (!illegal(v, c.u, sc, true, &joins) && ranking.offer(c, joins)) break;
+        }
+        return ranking.result(best);
     }
 
     // best_target() for a group's first copy v: the neighbouring points (the classes of its copies'
@@ -599,12 +652,13 @@ struct Builder {
             const Candidate &a = targets[i], &b = targets[j];
             return a.cost < b.cost || (a.cost == b.cost && a.u < b.u);
         });
-        for (const uint32_t i : sc.order)
-            if (!check_legal || group_legal(sc.moves[i], sc)) {
-                best = targets[i];
-                return true;
-            }
-        return false;
+        JoinRanking ranking;
+        for (const uint32_t i : sc.order) {
+            if (ranking.settled(targets[i].cost)) break;
+            bool joins = false;
+            if ((!check_legal || group_legal(sc.moves[i], sc, &joins)) && ranking.offer(targets[i], joins)) break;
+        }
+        return ranking.result(best);
     }
 
     // v's geometric and attribute quadrics into u's (v -> u); nothing without quadrics
@@ -664,15 +718,13 @@ struct Builder {
         removed_target.push_back(u);
         if (kCollapseRules[classes.kind[v]].along_border) {  // (links are points: u's class)
             const uint32_t p = classes.border_prev[v], q = classes.border_next[v], wu = classes.wedge[u];
-            if (wu == q) {
-                classes.border_prev[wu] = p;
-                classes.border_next[p] = wu;
-            } else if (wu == p) {
-                classes.border_next[wu] = q;
-                classes.border_prev[q] = wu;
+            if (wu == q || wu == p) {
+                const uint32_t far = wu == q ? p : q;
+                classes.relink(wu, v, far);
+                classes.relink(far, v, wu);
             } else {  // a pair contraction joined this border to another part
-                classes.border_next[p] = wu;
-                classes.border_prev[q] = wu;
+                classes.relink(p, v, wu);
+                classes.relink(q, v, wu);
                 if (classes.kind[u] != kLocked) classes.kind[u] = kLocked;
             }
         }

@@ -155,6 +155,7 @@ tom_status build_image(const tom_build_mesh* meshes, uint32_t mesh_count, const 
     bp.threads = p.threads;
     bp.foresight = p.foresight != 0;
     bp.lock_borders = p.lock_borders != 0;
+    bp.keep_topology = p.keep_topology != 0;
     bp.animation_weight = p.animation_weight;
     std::vector<tom::TomMesh> built;
     for (uint32_t i = 0; i < mesh_count; ++i) {
@@ -410,6 +411,7 @@ void tom_build_params_default(tom_build_params* params) {
     params->foresight = d.foresight ? 1 : 0;
     params->index_size = 0;
     params->lock_borders = d.lock_borders ? 1 : 0;
+    params->keep_topology = d.keep_topology ? 1 : 0;
     params->animation_weight = d.animation_weight;
     params->weld = tom::CleanOptions{}.weld ? 1 : 0;
 }

@@ -287,6 +287,7 @@ typedef struct tom_build_params {
     int lock_borders;    /* non-zero: vertices on open borders are never removed (tombuild --lock-borders) */
     float animation_weight; /* weight of the skinning and morph-target terms (tombuild --animation-weight) */
     int weld;            /* non-zero (the default): identical vertices are merged first (0: tombuild --no-weld) */
+    int keep_topology;   /* non-zero: no level joins two sheets; closed manifolds keep their genus (tombuild --keep-topology) */
 } tom_build_params;
 
 void tom_build_params_default(tom_build_params* params);

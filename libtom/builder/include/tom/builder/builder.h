@@ -64,6 +64,14 @@ struct BuildParams {
     /// (terrain tiles, modular kits) keeps its outline at every resolution (meshoptimizer's
     /// LockBorder, gltfpack's -slb).
     bool lock_borders = false;
+    /// Every level keeps the input's topology: a substitution that would join two sheets (the
+    /// link condition fails: a thin wall's faces, a box's sides, a torus's hole closing) is
+    /// refused, so closed manifolds stay closed manifolds of the same genus and a closed piece
+    /// stops at a tetrahedron. Off by default: such a join is taken, as meshoptimizer takes it,
+    /// when even at 8 times its cost it is cheaper than what the topology leaves (a building's
+    /// walls flatten into double-sided sheets before its roof folds); the scanned meshes' levels
+    /// above their last few percent are the same either way.
+    bool keep_topology = false;
     /// Vertices closer than this share of the bounding box's diagonal are copies of one point
     /// (split by a seam, a hard edge or a pole's fan, or never indexed): with Strategy::passes the
     /// copies of a point inside the surface move together, each onto a copy of the same
