@@ -447,6 +447,40 @@ int main(int argc, char** argv) {
         CHECK(strstr(tom_last_error(), "parts is NULL") != NULL);
     }
 
+    /* a closed octahedron: kept, its topology stops at a tetrahedron (4 vertices, 4 triangles);
+     * by default its last step joins two sheets (a double-sided triangle) */
+    {
+        static const float octahedron[18] = {1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1};
+        static const uint16_t faces[24] = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+        tom_build_mesh closed;
+        tom_build_params kept = params;
+        uint32_t floors[2] = {0, 0};
+        int k;
+        memset(&closed, 0, sizeof closed);
+        closed.vertex_count = 6;
+        closed.triangle_count = 8;
+        closed.positions = octahedron;
+        closed.position_stride = 3 * sizeof(float);
+        closed.indices = faces;
+        closed.index_size = 2;
+        closed.material = -1;
+        CHECK(params.keep_topology == 0);
+        for (k = 0; k < 2; ++k) {
+            void* image = NULL;
+            size_t image_size = 0;
+            tom_file* of = NULL;
+            tom_mesh_view om;
+            kept.keep_topology = k;
+            CHECK(tom_build_memory(&closed, 1, &kept, NULL, &image, &image_size) == TOM_OK);
+            CHECK(tom_file_open_memory(image, image_size, "octahedron", &of) == TOM_OK);
+            if (of && tom_file_mesh(of, 0, &om) == TOM_OK) floors[k] = tom_active_triangle_count(&om, om.min_vertex_count) * 10 + om.min_vertex_count;
+            tom_file_close(of);
+            free(image);
+        }
+        CHECK(floors[1] == 44);           /* 4 triangles on 4 vertices */
+        CHECK(floors[0] == 23);           /* 2 triangles on 3 vertices */
+    }
+
     /* a changed byte is a format error naming the buffer and the rule; the file stays unopened */
     {
         unsigned char* copy = malloc(size);
