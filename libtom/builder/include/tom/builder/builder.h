@@ -70,7 +70,8 @@ struct BuildParams {
     /// stops at a tetrahedron. Off by default: such a join is taken, as meshoptimizer takes it,
     /// when even at 8 times its cost it is cheaper than what the topology leaves (a building's
     /// walls flatten into double-sided sheets before its roof folds); the scanned meshes' levels
-    /// above their last few percent are the same either way.
+    /// are the same either way down to 10% of their triangles (bunny00's and fandisk's all the
+    /// way down); below, the cow and the elephant lose less, a 4-triangle cross more.
     bool keep_topology = false;
     /// Vertices closer than this share of the bounding box's diagonal are copies of one point
     /// (split by a seam, a hard edge or a pole's fan, or never indexed): with Strategy::passes the
