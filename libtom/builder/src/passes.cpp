@@ -331,7 +331,8 @@ private:
     void collapse_group(const Candidate& c) {
         GroupMove& move = group_;
         bool joins = false;
-        bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch, joins_allowed(c.v, joins));
+        bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch, &joins) &&
+                  (!joins || c.cost >= kJoinPenalty * move.cost);
         for (uint32_t i = 0; ok && i < move.count; ++i) ok = s_.pass_mark[move.from[i]] != s_.pass && s_.pass_mark[move.to[i]] != s_.pass;
         if (!ok) {
             reject(c.v);
@@ -389,9 +390,7 @@ private:
     // A single substitution v -> u, when the oracle allows it.
     void collapse(const Candidate& c, size_t ci) {
         const uint8_t known = foreseen_verdict(c, ci);
-        bool joins = false;
-        if (b_.removed[c.u] || !b_.border_move_allowed(c.v, c.u) ||
-            (known == kUnknown ? b_.illegal(c.v, c.u, b_.scratch, true, joins_allowed(c.v, joins)) : known == kIllegal)) {
+        if (b_.removed[c.u] || !b_.border_move_allowed(c.v, c.u) || (known == kUnknown ? refused(c, b_.scratch) : known == kIllegal)) {
             reject(c.v);
             return;
         }
@@ -408,10 +407,15 @@ private:
         ++c_.executed;
     }
 
-    // Where a join (Builder::illegal) is legal: for a candidate the oracle chose, its cost already
-    // carries kJoinPenalty; one costed without the oracle is refused, and v looks again next pass
-    // through the oracle, which ranks the join with the penalty
-    bool* joins_allowed(uint32_t v, bool& joins) const { return s_.needs_oracle[v] ? &joins : nullptr; }
+    // The oracle on a candidate as the pass applies it. A join of two sheets (Builder::illegal)
+    // is taken only at the cost the oracle's ranking gave it, kJoinPenalty times its own
+    // (JoinRanking; the factor is a power of two: the product is exact); costed without the
+    // oracle (v's first evaluation, a neighbour's update) it is refused, and v looks again next
+    // pass through the oracle. (Groups: collapse_group, the same on the move's summed cost.)
+    bool refused(const Candidate& c, Scratch& sc) const {
+        bool joins = false;
+        return b_.illegal(c.v, c.u, sc, true, &joins) || (joins && !(c.cost >= kJoinPenalty * b_.cost(c.v, c.u)));
+    }
 
     // v's candidate failed: look again next pass, through the oracle
     void reject(uint32_t v) {
@@ -559,8 +563,7 @@ private:
         f.ring = f.fan = kRingUnknown;
         if (e.u == kNone || s_.pass_mark[e.v] == s_.pass || s_.pass_mark[e.u] == s_.pass || kCollapseRules[b_.classes.kind[e.v]].as_group || b_.removed[e.u])
             return;
-        bool joins = false;
-        f.verdict = b_.illegal(e.v, e.u, sc, true, joins_allowed(e.v, joins)) ? kIllegal : kLegal;
+        f.verdict = refused(e, sc) ? kIllegal : kLegal;
         if (f.verdict == kIllegal || b_.predicate != Predicate::quadric) return;
         uint32_t ring = 0, fan = 0;
         b_.each_distinct_corner(

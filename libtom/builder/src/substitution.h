@@ -84,7 +84,8 @@ constexpr float kBoundaryWeight = 4.0f;  // border edge planes (x edge length) v
 // box's sides, a handle) is legal unless BuildParams::keep_topology, and ranks as if it cost this
 // many times more: it is taken where the manifold moves left cost far more (a building's walls
 // flatten before its roof folds onto its gables), not instead of a manifold move of about the
-// same cost (the scanned meshes keep their levels).
+// same cost (the scanned meshes keep their levels). A power of two: the penalized cost is exact,
+// so the pass can tell a candidate the oracle ranked (passes.cpp, refused()).
 constexpr float kJoinPenalty = 8.0f;
 
 struct Candidate {
