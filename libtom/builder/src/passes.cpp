@@ -332,7 +332,7 @@ private:
         GroupMove& move = group_;
         bool joins = false;
         bool ok = !b_.removed[c.v] && !b_.removed[c.u] && b_.group_move(c.v, c.u, true, move, b_.scratch, &joins) &&
-                  (!joins || c.cost >= kJoinPenalty * move.cost);
+                  (!joins || JoinRanking::ranked(c.cost, move.cost));
         for (uint32_t i = 0; ok && i < move.count; ++i) ok = s_.pass_mark[move.from[i]] != s_.pass && s_.pass_mark[move.to[i]] != s_.pass;
         if (!ok) {
             reject(c.v);
@@ -414,7 +414,7 @@ private:
     // pass through the oracle. (Groups: collapse_group, the same on the move's summed cost.)
     bool refused(const Candidate& c, Scratch& sc) const {
         bool joins = false;
-        return b_.illegal(c.v, c.u, sc, true, &joins) || (joins && !(c.cost >= kJoinPenalty * b_.cost(c.v, c.u)));
+        return b_.illegal(c.v, c.u, sc, true, &joins) || (joins && !JoinRanking::ranked(c.cost, b_.cost(c.v, c.u)));
     }
 
     // v's candidate failed: look again next pass, through the oracle

@@ -234,6 +234,10 @@ struct Pieces {
 // keeps the topology, unless a join (Builder::illegal) costs less even times kJoinPenalty.
 struct JoinRanking {
     Candidate best{0.0f, kNone, kNone};  // the winner, or the cheapest join with its cost times the penalty
+    // a join's rank from its own cost (exact: the penalty is a power of two), and whether a
+    // candidate's cost is that rank (the pass takes a join only from this ranking)
+    static float penalized(float cost) { return cost * kJoinPenalty; }
+    static bool ranked(float candidate_cost, float own_cost) { return candidate_cost >= penalized(own_cost); }
     // no later (costlier) candidate can win
     bool settled(float cost) const { return best.v != kNone && cost >= best.cost; }
     // a legal candidate; true when it wins (it keeps the topology)
@@ -242,7 +246,7 @@ struct JoinRanking {
             best = c;
             return true;
         }
-        if (best.v == kNone) best = {c.cost * kJoinPenalty, c.v, c.u};
+        if (best.v == kNone) best = {penalized(c.cost), c.v, c.u};
         return false;
     }
     bool result(Candidate& out) const {
