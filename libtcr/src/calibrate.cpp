@@ -218,15 +218,12 @@ CostSample quad_sample(Session& s, uint32_t slot, uint32_t textures, float side_
     return out;
 }
 
-// Refreshes: 16 captures of the first mesh's level `fraction` into the slots 0 to 15 of
-// `side`, in one frame; the time per capture above the model's time of drawing that level into
-// that many pixels: the render target's switch and clear (CostModel::refresh_t_setup_ms), and
-// with a `grid`, a meshed imposter's depth read back and its mesh made too. < 0 without imposters.
-double refresh_overhead(Session& s, double fraction, uint32_t side, const CostModel& model, uint32_t grid = 0) {
-    const tom::MeshView& mesh = *s.meshes[0];
-    const uint32_t n = s.extract_level(mesh, fraction);
-    const uint32_t tris = uint32_t(s.indices.size() / 3);
-    const MeshFrame mf = frame_of(mesh);
+// Captures: 16 of the `index_count` indices in `s.indices` (0: an empty capture) into the slots
+// 0 to 15 of `side` texels a side (with depth meshes of `grid` cells a side when `grid`), in one
+// frame, the first mesh seen from 4 radii; the time per capture above the empty frame's, the
+// median of 7 frames. < 0 without imposters.
+double capture_ms(Session& s, uint32_t index_count, uint32_t side, uint32_t grid) {
+    const MeshFrame mf = frame_of(*s.meshes[0]);
     ImposterState state;
     state.valid = true;
     for (int k = 0; k < 3; ++k) state.centre[k] = float(mf.centre[k]);
@@ -243,14 +240,31 @@ double refresh_overhead(Session& s, double fraction, uint32_t side, const CostMo
         cap.grid = grid;
         imposter_camera(state, cap.view, cap.projection);
         cap.draw.indices = s.indices.data();
-        cap.draw.index_count = tris * 3;
+        cap.draw.index_count = index_count;
         translation_scale(0, 0, 0, 1, cap.draw.model);  // the object where it is
         s.captures.push_back(cap);
     }
     const std::vector<double> times = s.time_imposter_frames(7);
-    if (times.empty()) return -1.0;
-    const double per_capture = std::max(0.0, median(times) - s.empty_ms) / count;
-    return std::max(0.0, per_capture - model.object_ms(tris, referenced_vertices(s.indices, n, s.used), 0.5 * double(side) * side));
+    return times.empty() ? -1.0 : std::max(0.0, median(times) - s.empty_ms) / count;
+}
+
+// A refresh's fixed part (CostModel::refresh_t_setup_ms), measured directly: empty captures,
+// the render target's switch, its clear and the wait for the captures, above the model's draw
+// set-up. Not the difference between whole captures and the model's time of their draws: with a
+// fit 40% off on a noisy machine, that difference came out 0. < 0 without imposters.
+double refresh_setup(Session& s, uint32_t side, const CostModel& model) {
+    const double per_capture = capture_ms(s, 0, side, 0);
+    return per_capture < 0 ? -1.0 : std::max(0.0, per_capture - model.object_ms(0, 0, 0));
+}
+
+// A meshed refresh beyond a simple one (CostModel::meshed_refresh_t_setup_ms): captures of the
+// first mesh's level `fraction` with depth meshes of 8 x 8 cells, above the model's refresh of
+// that level (its depth read back, its mesh made).
+double meshed_refresh_overhead(Session& s, double fraction, uint32_t side, const CostModel& model) {
+    const uint32_t n = s.extract_level(*s.meshes[0], fraction);
+    const uint32_t tris = uint32_t(s.indices.size() / 3);
+    const double per_capture = capture_ms(s, tris * 3, side, 8);
+    return per_capture - model.refresh_ms(tris, referenced_vertices(s.indices, n, s.used), 0.5 * double(side) * side);
 }
 
 // Meshed imposters' draws: 16 captures of the first mesh's level 0.1, placed 10 m ahead at
@@ -304,28 +318,27 @@ bool fit_way(Session& s, Representation way, double& t_tri, double& t_vert, doub
     return true;
 }
 
-// The imposters' coefficients: a refresh's overhead (the median over two levels and two texture
-// sides), a meshed refresh's beyond it, a depth mesh's triangle (from draws of 16 x 16 and 4 x 4
+// The imposters' coefficients: a refresh's fixed part (empty captures into two texture sides),
+// a meshed refresh's beyond it (the median over two levels and two sides), a depth mesh's triangle (from draws of 16 x 16 and 4 x 4
 // grids of the same captures), and the quad's draw and fill by least squares on relative errors
 // over five quad sizes. Leaves `m` without imposters when the renderer has none.
 void fit_imposters(Session& s, CostModel& m) {
-    std::vector<double> overheads, meshed_overheads, per_triangle;
+    std::vector<double> setups, meshed_overheads, per_triangle;
+    for (uint32_t side : {64u, 256u}) {
+        const double setup = refresh_setup(s, side, m);
+        if (setup < 0) return;
+        setups.push_back(setup);
+    }
+    m.refresh_t_setup_ms = median(setups);
     for (double fraction : {0.4, 0.05})
-        for (uint32_t side : {64u, 256u}) {
-            const double simple = refresh_overhead(s, fraction, side, m);
-            if (simple < 0) return;
-            overheads.push_back(simple);
-        }
-    m.refresh_t_setup_ms = median(overheads);
-    for (double fraction : {0.4, 0.05})
-        for (uint32_t side : {64u, 256u}) meshed_overheads.push_back(refresh_overhead(s, fraction, side, m, 8));
+        for (uint32_t side : {64u, 256u}) meshed_overheads.push_back(meshed_refresh_overhead(s, fraction, side, m));
     for (float side_px : {32.0f, 96.0f}) {
         const double coarse = meshed_draw_ms(s, 16, 4, side_px);
         const double fine = meshed_draw_ms(s, 32, 16, side_px);
         per_triangle.push_back((fine - coarse) / (2.0 * 16 * 16 - 2.0 * 4 * 4));
     }
     // at least 1e-9 ms and 1e-6 ms: a measured 0 would read as not calibrated
-    m.meshed_refresh_t_setup_ms = std::max(1e-6, median(meshed_overheads) - m.refresh_t_setup_ms);
+    m.meshed_refresh_t_setup_ms = std::max(1e-6, median(meshed_overheads));
     m.meshed_t_tri_ms = std::max(1e-9, median(per_triangle));
     // t = a + b P by weighted least squares, weights 1 / t^2 (relative residuals); the quads show
     // the refreshes' 16 textures

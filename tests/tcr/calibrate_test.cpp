@@ -63,7 +63,8 @@ public:
         if (!all_ways_) return -1;
         double t = m_.t_init_ms + m_.t_final_ms;
         for (const tcr::CalibrationCapture& c : captures) {
-            t += m_.refresh_ms(c.draw.index_count / 3, vertices(c.draw), 0.5 * double(c.side) * c.side);
+            // the object covers half the texture; an empty capture, none of it
+            t += m_.refresh_ms(c.draw.index_count / 3, vertices(c.draw), c.draw.index_count ? 0.5 * double(c.side) * c.side : 0.0);
             if (c.grid) t += m_.meshed_refresh_t_setup_ms, grid_[c.slot] = c.grid;
         }
         for (const tcr::CalibrationImposter& q : imposters) {
