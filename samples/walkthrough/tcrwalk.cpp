@@ -81,11 +81,13 @@ struct PathRun {
         add_objects(rt, w);
     }
 
-    // "none" draws full detail: a budget no frame reaches. A simulated renderer's noise is the
-    // calibration's: the allowance stays the calibrated one.
+    // "none" draws full detail: a budget no frame reaches, and a planning reserve of what its
+    // planning takes (a share of that budget would be the simulated frame's time). A simulated
+    // renderer's noise is the calibration's: the allowance stays the calibrated one.
     static tcr::GovernorParams governor_params(const Options& o, bool none, bool rendered) {
         tcr::GovernorParams g;
         g.budget_ms = none ? 1e12 : o.budget_ms;
+        if (none) g.min_planning_share = 0.0;
         g.safety_sigma = o.safety_sigma;
         g.follow_noise = rendered && !none;
         g.optimize_share = o.optimize_share;
