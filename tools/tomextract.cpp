@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "tcr/scene_budget.h"
+#include "tom/builder/refit.h"
 #include "tom/error_curve.h"
 #include "tom/errors.h"
 #include "tom/io/export.h"
@@ -127,7 +128,7 @@ struct Options {
     std::vector<std::string> lods_error_text;
     std::optional<double> max_error_px, distance, fov_deg;
     std::optional<uint32_t> height;
-    bool below_floor = false, embed_images = false, compress = false;
+    bool below_floor = false, embed_images = false, compress = false, refit = false;
     std::vector<double> error_bounds;  // --max-error, --lods-error: fractions of each mesh's diagonal
 
     bool by_error() const { return !error_bounds.empty() || max_error_px.has_value(); }
@@ -185,6 +186,10 @@ int parse_options(Options& o, int argc, char** argv) {
                    "tombuild wrote beside the .tom); they are rewritten relative to the output");
     app.add_flag("--embed-images", o.embed_images,
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
+    app.add_flag("--refit", o.refit,
+                 "Move each level's vertices to where they best stand for the full mesh's surface (the quadric of the triangles they "
+                 "replaced, as gltfpack -sv): for a level written on its own, no longer a prefix of the .tom's vertex array; open edges, "
+                 "edges where parts meet and coincident copies stay joined. One level per mesh");
     app.add_flag("-c,--compress", o.compress,
                  "For .glb: quantize the vertex streams (KHR_mesh_quantization) and compress vertex and index data "
                  "(EXT_meshopt_compression), as gltfpack -c does; both extensions are then required");
@@ -222,6 +227,8 @@ int check_options(Options& o) {
     if (!o.lods_error_text.empty() && !o.glb()) return usage_error("--lods-error writes a .glb (MSFT_lod); " + not_glb);
     if (o.scene_budgets.size() > 1 && !o.glb()) return usage_error("several --scene-budget values write a .glb (MSFT_lod); " + not_glb);
     if (!o.lods.empty() && !o.glb()) return usage_error("--lods writes a .glb (MSFT_lod); " + not_glb);
+    if (o.refit && (o.lods.size() > 1 || o.lods_error_text.size() > 1 || o.scene_budgets.size() > 1))
+        return usage_error("--refit writes one level per mesh: a chain's levels share one vertex array, which re-fitted positions would differ in");
     return -1;
 }
 
@@ -297,8 +304,36 @@ std::vector<std::vector<uint32_t>> choose_levels(const tom::File& file, const Op
     return levels;
 }
 
+// The meshes as written: the file's, or with --refit each wanted mesh with its level's
+// re-fitted positions and normals.
+struct Meshes {
+    std::vector<tom::MeshView> views;
+    std::vector<tom::RefitLevel> refits;  // --refit: per mesh (empty for the others)
+};
+
+Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+    Meshes out;
+    out.views.reserve(file.mesh_count());
+    out.refits.resize(file.mesh_count());
+    tom::RefitStats total;
+    for (uint32_t i = 0, k = 0; i < file.mesh_count(); ++i) {
+        out.views.push_back(file.mesh(i));
+        if (!o.wanted(i)) continue;
+        const uint32_t n = levels[k++].front();
+        if (!o.refit) continue;
+        tom::RefitLevel& r = out.refits[i] = tom::refit_level(out.views.back(), n);
+        out.views.back().positions = r.positions.data();
+        if (!r.normals.empty()) out.views.back().normals = r.normals.data();
+        total.moved += r.stats.moved, total.fixed += r.stats.fixed, total.reverted += r.stats.reverted;
+    }
+    if (o.refit)
+        std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
+                    total.moved, total.fixed, total.reverted);
+    return out;
+}
+
 // A .glb of the wanted meshes at their levels (MSFT_lod for a chain), with the scene.
-void write_glb(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
     std::vector<tom::GlbMesh> glb;
     uint64_t written = 0;
     tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
@@ -312,7 +347,7 @@ void write_glb(const tom::File& file, const Options& o, const std::vector<std::v
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (!o.wanted(i)) continue;
         tom::GlbMesh g;
-        g.mesh = &file.mesh(i);
+        g.mesh = &meshes.views[i];
         g.vertex_counts = levels[glb.size()];
         written += tom::active_triangle_count(*g.mesh, g.vertex_counts.front());
         glb.push_back(g);
@@ -326,12 +361,12 @@ void write_glb(const tom::File& file, const Options& o, const std::vector<std::v
 }
 
 // An OBJ or PLY of the wanted meshes, each at its (first) level.
-void write_meshes(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+void write_meshes(const tom::File& file, const Meshes& meshes, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
     std::vector<tom::ExportPart> parts;
     uint64_t out_tris = 0, out_verts = 0, total_tris = 0;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (!o.wanted(i)) continue;
-        const tom::MeshView& m = file.mesh(i);
+        const tom::MeshView& m = meshes.views[i];
         const uint32_t n = levels[parts.size()].front();
         total_tris += m.triangle_count;
         tom::ExportPart part;
@@ -367,10 +402,11 @@ int main(int argc, char** argv) {
             std::filesystem::create_directories(parent, ec);  // a failure shows when the file is written
         }
         const std::vector<std::vector<uint32_t>> levels = choose_levels(file, o);
+        const Meshes meshes = meshes_to_write(file, o, levels);
         if (o.glb())
-            write_glb(file, o, levels);
+            write_glb(file, meshes, o, levels);
         else
-            write_meshes(file, o, levels);
+            write_meshes(file, meshes, o, levels);
         return tools::exit_ok;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

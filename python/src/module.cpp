@@ -18,6 +18,7 @@
 #include "tom/builder/mesh.h"
 #include "tom/builder/writer.h"
 #include "tom/errors.h"
+#include "tom/builder/refit.h"
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/io/import.h"
@@ -293,7 +294,21 @@ void mesh_properties(Class& c, ViewOf view_of) {
              "[(first_row, row_count, material)] per part: where each part's triangles lie in what extract() returns for the same level.")
         .def("extract", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles, py::object out) {
                  return extract(view_of(self), fraction, vertices, triangles, out);
-             }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc);
+             }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc)
+        .def("refit", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles) {
+                 const tom::MeshView v = view_of(self);
+                 const uint32_t n = std::min(std::max(resolution(v, fraction, vertices, triangles), v.min_vertex_count), v.vertex_count);
+                 const tom::RefitLevel r = tom::refit_level(v, n);
+                 auto rows = [n](const std::vector<float>& x) {
+                     py::array_t<float> a(std::vector<py::ssize_t>{py::ssize_t(n), 3});
+                     std::copy(x.begin(), x.begin() + 3 * ptrdiff_t(n), a.mutable_data());
+                     return a;
+                 };
+                 return py::make_tuple(rows(r.positions), r.normals.empty() ? py::object(py::none()) : py::object(rows(r.normals)));
+             }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(),
+             "(positions, normals) of one level re-fitted to be written on its own, as tomextract --refit: (n, 3) float32 arrays for the "
+             "n vertices extract() draws at the same level (normals None without normals). Its vertices move to where they best stand for "
+             "the surface they replaced; seams, hard edges, open edges and where parts meet stay joined.");
 }
 
 // tom.Error and one subclass per kind the library throws, with its message.

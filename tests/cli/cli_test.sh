@@ -123,6 +123,20 @@ check "tomextract to an unknown type exits 1" expect_exit 1 "$tools/tomextract" 
 # glTF out: one level, or levels through MSFT_lod; Khronos' validator; back through our importer
 check "tomextract a level to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.2 -o "$work/cow20.glb"
 check "tomextract --lods to .glb" expect_exit 0 "$tools/tomextract" "$work/o1/fandisk.tom" --lods 100,50,25,10 -o "$work/fandisk-lods.glb"
+# --refit: the level written on its own, its vertices moved to fit the surface they replaced:
+# closer to the source by tomerr's two-sided mean, to OBJ and to a compressed .glb alike; a chain
+# (whose levels share one vertex array) is a usage error
+check "tomextract --refit to OBJ" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.25 --refit -o "$work/cow25-refit.obj"
+check "tomextract --refit to a compressed .glb" expect_exit 0 "$tools/tomextract" "$work/o1/cow.tom" --fraction 0.25 --refit -c -o "$work/cow25-refit.glb"
+"$tools/tomextract" "$work/o1/cow.tom" --fraction 0.25 -o "$work/cow25.obj" > /dev/null
+check "a re-fitted level is closer to the source than the plain one, and has its triangles" /usr/bin/python3 -c "
+import json, subprocess
+def err(f): return json.loads(subprocess.run(['$tools/tomerr', '$data/meshes/cow.off', f, '--json'], capture_output=True, text=True, check=True).stdout)
+plain, refit, glb = err('$work/cow25.obj'), err('$work/cow25-refit.obj'), err('$work/cow25-refit.glb')
+assert refit['simplified_triangles'] == plain['simplified_triangles'] == glb['simplified_triangles'], (plain, refit, glb)
+assert refit['mean'] < 0.9 * plain['mean'] and glb['mean'] < 0.9 * plain['mean'], (plain['mean'], refit['mean'], glb['mean'])
+"
+check "--refit with a chain of levels exits 2" expect_exit 2 "$tools/tomextract" "$work/o1/cow.tom" --lods 100,50 --refit -o "$work/x.glb"
 "$tools/tombuild" "$data/assimp/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb" -o "$work/engine" -q
 check "a 34-primitive glTF to .glb" expect_exit 0 "$tools/tomextract" "$work/engine/2CylinderEngine.tom" --fraction 0.25 -o "$work/engine25.glb"
 # parts: 29 meshes, four of several primitives; every level of them keeps every part's primitive

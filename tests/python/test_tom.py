@@ -75,6 +75,23 @@ def test_levels_are_tomextracts_index_for_index(bunny, tmp_path, fraction):
     assert indices.max() < n and len(indices) == mesh.active_triangles(n)
 
 
+def test_refit_is_tomextract_refits_level_and_moves_within_it(bunny, tmp_path):
+    mesh = tom.open(str(bunny)).meshes[0]
+    indices, n = mesh.extract(fraction=0.1)
+    positions, normals = mesh.refit(fraction=0.1)
+    assert positions.shape == (n, 3) and positions.dtype == np.float32
+    assert normals is None if mesh.normals is None else normals.shape == (n, 3)
+    obj = tmp_path / "refit.obj"
+    subprocess.run([f"{TOOLS}/tomextract", str(bunny), "--fraction", "0.1", "--refit", "-o", str(obj)], check=True, capture_output=True)
+    written = np.array([[float(x) for x in line.split()[1:4]] for line in obj.read_text().splitlines() if line.startswith("v ")], np.float32)
+    assert np.allclose(written, positions, rtol=0, atol=1e-6 * np.abs(positions).max())
+    # most live points stand for removed vertices and move; none by more than a few of the level's edges
+    plain = np.asarray(mesh.positions[:n])
+    moved = np.linalg.norm(positions - plain, axis=1)
+    edges = np.linalg.norm(plain[indices[:, 0]] - plain[indices[:, 1]], axis=1)
+    assert (moved > 0).mean() > 0.5 and moved.max() < 3 * edges.mean(), (moved.max(), edges.mean())
+
+
 def test_selections_stop_at_the_usable_floor_unless_asked(bunny, tmp_path):
     """tombuild stores where the mean error leaves 1% of the diagonal; a fraction or a triangle
     count stops there, as tomextract does, and goes on to the chain's last level when asked."""

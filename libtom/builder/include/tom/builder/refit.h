@@ -1,0 +1,42 @@
+// Re-fitted positions and normals for one level exported on its own.
+//
+// A TOM's levels share one vertex array: a vertex that survives to a coarse level keeps the
+// position and normal it has at full detail, which is what lets any prefix be a level. A level
+// written out alone (tomextract to OBJ, PLY or a one-level .glb) needs no such sharing, and can
+// move its vertices to where they best stand for the surface they replaced, as gltfpack's -sv
+// and meshoptimizer's simplifyWithUpdate do.
+#pragma once
+
+#include "tom/view.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace tom {
+
+struct RefitStats {
+    uint32_t moved = 0;     ///< points (coincident copies count once) given a new position
+    uint32_t fixed = 0;     ///< live points left in place: on an open edge or where parts meet
+    uint32_t reverted = 0;  ///< points put back because a triangle of theirs would turn over
+};
+
+struct RefitLevel {
+    std::vector<float> positions;  ///< xyz * vertex_count
+    std::vector<float> normals;    ///< xyz * vertex_count; empty when the mesh has none
+    RefitStats stats;
+};
+
+/// The level of `m` at resolution `n` (<= vertex_count; its triangles are extract(m, n)'s) with
+/// each live point moved to the minimum of the quadric of the full mesh's triangles around every
+/// vertex it stands for (itself and the vertices whose substitution chains end at it), held
+/// near its own position along the directions the quadric leaves free, and each live vertex's
+/// normal the area-weighted mean of the normals of the vertices it stands for. A point is a
+/// vertex with its coincident copies and the group of copies the builder removes together
+/// (seams, hard edges, poles): they move as one. Points on open edges or on edges where more
+/// than two triangles meet stay, so that borders and the chains where parts meet do not open;
+/// a point whose move would turn one of the level's triangles by more than 78 degrees stays.
+/// Vertices >= n keep their positions and normals; tangents and the other streams are kept.
+/// Deterministic.
+RefitLevel refit_level(const MeshView& m, uint32_t n);
+
+} // namespace tom
