@@ -188,8 +188,9 @@ int parse_options(Options& o, int argc, char** argv) {
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
     app.add_flag("--refit", o.refit,
                  "Move each level's vertices to where they best stand for the full mesh's surface (the quadric of the triangles they "
-                 "replaced, as gltfpack -sv): for a level written on its own, no longer a prefix of the .tom's vertex array; open edges, "
-                 "edges where parts meet and coincident copies stay joined. One level per mesh");
+                 "replaced, as gltfpack -sv): each level written with positions and normals of its own, no longer a prefix of the .tom's "
+                 "vertex array (in a .glb chain, the other streams stay shared); open edges, edges where parts meet and coincident copies "
+                 "stay joined");
     app.add_flag("-c,--compress", o.compress,
                  "For .glb: quantize the vertex streams (KHR_mesh_quantization) and compress vertex and index data "
                  "(EXT_meshopt_compression), as gltfpack -c does; both extensions are then required");
@@ -227,8 +228,6 @@ int check_options(Options& o) {
     if (!o.lods_error_text.empty() && !o.glb()) return usage_error("--lods-error writes a .glb (MSFT_lod); " + not_glb);
     if (o.scene_budgets.size() > 1 && !o.glb()) return usage_error("several --scene-budget values write a .glb (MSFT_lod); " + not_glb);
     if (!o.lods.empty() && !o.glb()) return usage_error("--lods writes a .glb (MSFT_lod); " + not_glb);
-    if (o.refit && (o.lods.size() > 1 || o.lods_error_text.size() > 1 || o.scene_budgets.size() > 1))
-        return usage_error("--refit writes one level per mesh: a chain's levels share one vertex array, which re-fitted positions would differ in");
     return -1;
 }
 
@@ -304,11 +303,11 @@ std::vector<std::vector<uint32_t>> choose_levels(const tom::File& file, const Op
     return levels;
 }
 
-// The meshes as written: the file's, or with --refit each wanted mesh with its level's
-// re-fitted positions and normals.
+// The meshes as written: the file's, or with --refit each wanted mesh's levels with their
+// re-fitted positions and normals (`views`: with its first level's, for OBJ and PLY).
 struct Meshes {
     std::vector<tom::MeshView> views;
-    std::vector<tom::RefitLevel> refits;  // --refit: per mesh (empty for the others)
+    std::vector<std::vector<tom::RefitLevel>> refits;  // --refit: per mesh, per level (empty for the others)
 };
 
 Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
@@ -319,12 +318,15 @@ Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vecto
     for (uint32_t i = 0, k = 0; i < file.mesh_count(); ++i) {
         out.views.push_back(file.mesh(i));
         if (!o.wanted(i)) continue;
-        const uint32_t n = levels[k++].front();
+        const std::vector<uint32_t>& counts = levels[k++];
         if (!o.refit) continue;
-        tom::RefitLevel& r = out.refits[i] = tom::refit_level(out.views.back(), n);
-        out.views.back().positions = r.positions.data();
-        if (!r.normals.empty()) out.views.back().normals = r.normals.data();
-        total.moved += r.stats.moved, total.fixed += r.stats.fixed, total.reverted += r.stats.reverted;
+        for (const uint32_t n : counts) {
+            out.refits[i].push_back(tom::refit_level(file.mesh(i), n));
+            const tom::RefitStats& s = out.refits[i].back().stats;
+            total.moved += s.moved, total.fixed += s.fixed, total.reverted += s.reverted;
+        }
+        out.views.back().positions = out.refits[i].front().positions.data();
+        if (!out.refits[i].front().normals.empty()) out.views.back().normals = out.refits[i].front().normals.data();
     }
     if (o.refit)
         std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
@@ -347,8 +349,12 @@ void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, co
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (!o.wanted(i)) continue;
         tom::GlbMesh g;
-        g.mesh = &meshes.views[i];
+        g.mesh = &file.mesh(i);
         g.vertex_counts = levels[glb.size()];
+        for (const tom::RefitLevel& r : meshes.refits[i]) {  // --refit: each level its own positions
+            g.level_positions.push_back(r.positions.data());
+            g.level_normals.push_back(r.normals.empty() ? nullptr : r.normals.data());
+        }
         written += tom::active_triangle_count(*g.mesh, g.vertex_counts.front());
         glb.push_back(g);
     }

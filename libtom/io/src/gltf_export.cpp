@@ -242,6 +242,23 @@ MeshStreams write_streams(Writer& w, const MeshView& m, uint32_t n, const std::v
     return s;
 }
 
+// A level's own POSITION (and NORMAL when `normals`) in `shared`'s vertex order, written as
+// write_streams writes the mesh's; `dequantize` gets their grid's.
+json level_geometry(Writer& w, const MeshView& m, const float* positions, const float* normals, const MeshStreams& shared, bool grid, json& dequantize) {
+    MeshView own = m;
+    own.positions = positions;
+    own.normals = normals;
+    own.texcoords = own.colors = own.texcoords1 = own.tangents = nullptr;
+    MeshStreams s;
+    s.order = shared.order;
+    if (w.compress)
+        write_quantized_streams(w, own, grid, s);
+    else
+        write_float_streams(w, own, uint32_t(s.order.order.size()), s);
+    dequantize = s.dequantize;
+    return s.attributes;
+}
+
 // KHR_mesh_quantization's positions lie on a grid whose offset and scale the node that draws
 // the mesh applies. A node without children, animation or a translation/rotation/scale takes
 // the dequantization into its matrix; any other hands its mesh to a new child that carries it
@@ -680,6 +697,13 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
             const Extracted e = extract_parts(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size(), draws.data());
             if (e.triangle_count == 0) continue;
+            // a level with positions of its own (re-fitted): its POSITION and NORMAL, the rest shared
+            json level_attributes = attributes, level_dequantize = streams.dequantize;
+            if (level < gm.level_positions.size() && gm.level_positions[level]) {
+                const float* normals = level < gm.level_normals.size() && gm.level_normals[level] ? gm.level_normals[level] : m.normals;
+                const json own = level_geometry(w, m, gm.level_positions[level], normals, streams, !keep_float[mi], level_dequantize);
+                for (const auto& [key, accessor] : own.items()) level_attributes[key] = accessor;
+            }
             // one primitive per part that has triangles at this level, with the streams its source had
             json primitives = json::array();
             for (uint32_t p = 0; p < draws.size(); ++p) {
@@ -698,7 +722,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
                     view_index = w.index_view(part_indices, d.index_count, 4);
                     component = kUint32;
                 }
-                json own = attributes;
+                json own = level_attributes;
                 if (m.parts) {
                     const uint32_t part_streams = part_at(m, p).attributes;
                     const std::pair<const char*, uint32_t> optional[] = {{"TEXCOORD_0", 2}, {"COLOR_0", 4}, {"TEXCOORD_1", 8}, {"TANGENT", 16}};
@@ -714,7 +738,7 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
                 primitives.push_back(primitive);
             }
             level_mesh[mi][level] = int(gltf_meshes.size());
-            dequantize.push_back(streams.dequantize);
+            dequantize.push_back(level_dequantize);
             const std::string name(m.name);
             gltf_meshes.push_back({{"name", levels > 1 ? name + " level " + std::to_string(level) : name}, {"primitives", primitives}});
         }
