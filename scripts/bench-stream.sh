@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The error against bytes received: for each mesh, the two-sided Metro mean (tomerr, % of the
 # diagonal) of what the first B bytes of its streamed .tom decode to (tombuild --stream,
-# tomextract --bytes B) at every chunk boundary, against a glTF LOD chain (levels of 1, 5, 25 and
-# 100% of the triangles, each compressed by the current gltfpack's -cc, fetched coarsest first:
-# after B bytes the finest level wholly received; a level's bytes are its .gltf and .bin, the
-# images not counted) and against one gltfpack -cc level; then
+# tomextract --bytes B), against a glTF LOD chain (levels of 1, 5, 25 and 100% of the triangles,
+# each compressed by the current gltfpack's -cc, fetched coarsest first: after B bytes the finest
+# level wholly received; a level's bytes are its .gltf and .bin, the images not counted), at
+# every chunk boundary of the stream and every level boundary of the chain, and against one
+# gltfpack -cc level; then
 # tomstreambench's decode speeds, natively and in headless chromium (scripts/bench-web.sh). Writes the section "Streaming" of docs/PERFORMANCE.md (kept by
 # scripts/bench.sh when it rewrites the file) with its plot docs/images/stream.png, and
 # out/stream/stream.json. TOM_PERFORMANCE=FILE writes the section there instead.
@@ -65,8 +66,8 @@ def mean_of(t):  # the two-sided Metro mean, % of the diagonal (tomerr's distanc
 result, lines = [], []
 web = [json.loads(l) for l in open(f'{work}/web.jsonl')]
 native = {w['mesh']: w['native'] for w in web}
-lines.append('| mesh | bytes received | streamed: triangles | streamed: mean % | LOD chain (1/5/25/100%, gltfpack -cc): level | chain: mean % | stream / chain |')
-lines.append('|---|---:|---:|---:|---:|---:|---:|')
+lines.append('| mesh | bytes received | boundary of | streamed: triangles | streamed: mean % | LOD chain (1/5/25/100%, gltfpack -cc): level | chain: mean % | stream / chain |')
+lines.append('|---|---:|---|---:|---:|---:|---:|---:|')
 for mesh in meshes:
     name = os.path.splitext(os.path.basename(mesh))[0]
     stream = [json.loads(l) for l in open(f'{work}/{name}.stream.jsonl')]
@@ -77,28 +78,44 @@ for mesh in meshes:
         total += level['bytes']
         cumulative.append((total, level))
     single = chain[-1]
+    # both are step functions of the bytes received: compared at every boundary of either, so
+    # that the bytes where the chain has a level and the stream not yet (or a coarser one) count
+    steps = [(p['bytes'], p) for p in stream]
+    def last(seq, b):
+        got = [v for (at, v) in seq if at <= b]
+        return got[-1] if got else None
     points = []
-    for p in stream:
-        got = [lv for (b, lv) in cumulative if b <= p['bytes']]
-        chain_err = mean_of(got[-1]['tomerr']) if got else None
-        points.append({'bytes': p['bytes'], 'triangles': p['tomerr']['simplified_triangles'], 'mean_percent': mean_of(p['tomerr']),
-                       'chain_level_percent': got[-1]['percent'] if got else None, 'chain_mean_percent': chain_err,
-                       'single_mean_percent': mean_of(single['tomerr']) if p['bytes'] >= single['bytes'] else None})
-    at_or_below = all(q['chain_mean_percent'] is None or q['mean_percent'] <= q['chain_mean_percent'] for q in points)
-    result.append({'mesh': name, 'stream_bytes': points[-1]['bytes'], 'first_chunk_bytes': points[0]['bytes'],
+    for b in sorted({at for (at, _) in steps} | {at for (at, _) in cumulative}):
+        p, lv = last(steps, b), last(cumulative, b)
+        points.append({'bytes': b, 'boundary': 'stream chunk' if any(at == b for (at, _) in steps) else 'chain level',
+                       'triangles': p['tomerr']['simplified_triangles'] if p else 0, 'mean_percent': mean_of(p['tomerr']) if p else None,
+                       'chain_level_percent': lv['percent'] if lv else None, 'chain_mean_percent': mean_of(lv['tomerr']) if lv else None,
+                       'single_mean_percent': mean_of(single['tomerr']) if b >= single['bytes'] else None})
+    at_or_below = all(q['chain_mean_percent'] is None or (q['mean_percent'] is not None and q['mean_percent'] <= q['chain_mean_percent'])
+                      for q in points)
+    worse = [q['bytes'] for q in points if q['chain_mean_percent'] is not None and (q['mean_percent'] is None or q['mean_percent'] > q['chain_mean_percent'])]
+    result.append({'mesh': name, 'stream_bytes': stream[-1]['bytes'], 'first_chunk_bytes': stream[0]['bytes'],
                    'single_cc_bytes': single['bytes'], 'chain_bytes': total, 'chain': [{'percent': c['percent'], 'bytes': c['bytes'],
-                   'mean_percent': mean_of(c['tomerr'])} for c in chain], 'points': points, 'at_or_below_chain': at_or_below, 'speed': speed})
+                   'mean_percent': mean_of(c['tomerr'])} for c in chain], 'points': points, 'at_or_below_chain': at_or_below,
+                   'bytes_where_worse': worse, 'speed': speed})
     for q in points:
-        ratio = f"{q['mean_percent'] / q['chain_mean_percent']:.2f}" if q['chain_mean_percent'] else ('nothing yet' if q['chain_mean_percent'] is None else '-')
+        stream_err = f"{q['mean_percent']:.4f}" if q['mean_percent'] is not None else 'nothing yet'
+        if q['chain_mean_percent'] is None: ratio = 'chain: nothing yet'
+        elif q['mean_percent'] is None: ratio = 'stream: nothing yet'
+        else: ratio = f"{q['mean_percent'] / q['chain_mean_percent']:.2f}"
         chain_cell = f"{q['chain_level_percent']}%" if q['chain_level_percent'] else '-'
         chain_err = f"{q['chain_mean_percent']:.4f}" if q['chain_mean_percent'] is not None else '-'
-        lines.append(f"| {name} | {q['bytes']} | {q['triangles']} | {q['mean_percent']:.4f} | {chain_cell} | {chain_err} | {ratio} |")
+        lines.append(f"| {name} | {q['bytes']} | {q['boundary']} | {q['triangles']} | {stream_err} | {chain_cell} | {chain_err} | {ratio} |")
+def at_or_below_cell(r):
+    if r['at_or_below_chain']: return 'yes'
+    w = r['bytes_where_worse']
+    return f"no: {len(w)} of {len(r['points'])} boundaries ({', '.join(str(b) for b in w[:3])}{', ...' if len(w) > 3 else ''})"
 summary = ['| mesh | stream bytes | first chunk | gltfpack -cc, one level | stream / one level | LOD chain bytes | streamed error at or below the chain at every byte count | decode Mtri/s | x meshoptimizer |',
            '|---|---:|---:|---:|---:|---:|---|---:|---:|']
 for r in result:
     s = r['speed']
     summary.append(f"| {r['mesh']} | {r['stream_bytes']} | {r['first_chunk_bytes']} ({100 * r['first_chunk_bytes'] / r['stream_bytes']:.1f}%) | {r['single_cc_bytes']} | "
-                   f"{r['stream_bytes'] / r['single_cc_bytes']:.2f} | {r['chain_bytes']} | {'yes' if r['at_or_below_chain'] else 'no'} | "
+                   f"{r['stream_bytes'] / r['single_cc_bytes']:.2f} | {r['chain_bytes']} | {at_or_below_cell(r)} | "
                    f"{s['decode_tris_per_s'] / 1e6:.2f} | {s['speed_over_meshopt']:.3f} |")
 speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (same mesh, its codecs) | stream / meshoptimizer |', '|---|---|---:|---:|---:|---:|']
 for w in web:
@@ -107,11 +124,13 @@ for w in web:
         speeds.append(f"| {w['mesh']} | {where} | {f['decode_mb_per_s']:.2f} | {f['decode_tris_per_s'] / 1e6:.2f} | {f['meshopt_tris_per_s'] / 1e6:.2f} | {f['speed_over_meshopt']:.3f} |")
 intro = ['## Streaming', '',
          '`scripts/bench-stream.sh`: each mesh streamed (`tombuild --stream`: positions 14 bits, normals 8, texture coordinates 12,',
-         'as gltfpack\'s defaults) and, at every chunk boundary, the two-sided Metro mean (`tomerr`, % of the diagonal) of what',
-         'the bytes received decode to (`tomextract --bytes`), against a glTF LOD chain of 1, 5, 25 and 100% of the triangles',
+         'as gltfpack\'s defaults) and the two-sided Metro mean (`tomerr`, % of the diagonal) of what the bytes received decode',
+         'to (`tomextract --bytes`), against a glTF LOD chain of 1, 5, 25 and 100% of the triangles',
          '(TOM\'s levels, each compressed by the current gltfpack\'s `-cc` into a `.gltf` and `.bin`, images not counted)',
          'fetched coarsest first, and one `-cc` level. The chain\'s errors are measured on its levels quantized as `-cc` quantizes',
-         'them (gltfpack\'s defaults, without the codecs): both sides\' errors include their quantization. Decode speed:',
+         'them (gltfpack\'s defaults, without the codecs): both sides\' errors include their quantization. Both are step',
+         'functions of the bytes received, compared at every chunk boundary of the stream and every level boundary of the',
+         'chain (a row each). Decode speed:',
          '`tomstreambench` (every byte through `tom::StreamDecoder` and the `.tom` image of the whole, against meshoptimizer\'s',
          'decoders on the same meshes encoded with its codecs), natively and in headless chromium (`scripts/bench-web.sh`: the',
          'wasm runtime against meshoptimizer\'s npm decoder on the very bytes the native run decodes).', '',
@@ -137,7 +156,8 @@ try:
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, len(result), figsize=(6 * len(result), 4.5), squeeze=False)
     for ax, r in zip(axes[0], result):
-        ax.step([q['bytes'] / 1e3 for q in r['points']], [q['mean_percent'] for q in r['points']], where='post', label='streamed .tom')
+        shown = [q for q in r['points'] if q['mean_percent'] is not None]
+        ax.step([q['bytes'] / 1e3 for q in shown], [q['mean_percent'] for q in shown], where='post', label='streamed .tom')
         xs, ys, total = [], [], 0
         for c in r['chain']:
             total += c['bytes']
@@ -145,7 +165,7 @@ try:
         ax.step(xs, ys, where='post', label='LOD chain 1/5/25/100%, gltfpack -cc')
         ax.axvline(r['single_cc_bytes'] / 1e3, color='gray', linestyle=':', label='one gltfpack -cc level')
         # the chain's full level is exact (its quantization is not measured): drawn at the floor
-        ax.set_ylim(bottom=0.5 * min(q['mean_percent'] for q in r['points']))
+        ax.set_ylim(bottom=0.5 * min(q['mean_percent'] for q in shown))
         ax.set_xlabel('kB received'), ax.set_ylabel('two-sided Metro mean, % of diagonal'), ax.set_yscale('log'), ax.set_title(r['mesh'])
         ax.legend()
     fig.tight_layout()
