@@ -103,8 +103,11 @@ for src in "${assets[@]}"; do
   measure "$src" tom usable 0 "$out/tom-usable.glb"
   if node "$pack" -i "$src" -o "$out/gltfpack-floor.glb" -noq -si 0 -sa >/dev/null 2>&1; then
     measure "$src" gltfpack floor-sa 0 "$out/gltfpack-floor.glb"
-    "$tools/tomextract" "$tom" --below-floor --scene-budget "$(triangles_of "$out/gltfpack-floor.glb")" -o "$out/tom-at-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+    floor_count="$(triangles_of "$out/gltfpack-floor.glb")"
+    "$tools/tomextract" "$tom" --below-floor --scene-budget "$floor_count" -o "$out/tom-at-floor.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
     measure "$src" tom at-floor-sa 0 "$out/tom-at-floor.glb"
+    "$tools/tomextract" "$tom" --below-floor --scene-budget "$floor_count" --refit -o "$out/tom-at-floor-refit.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+    measure "$src" tom refit-floor-sa 0 "$out/tom-at-floor-refit.glb"
   fi
   # levels: gltfpack's, and TOM's at the same drawn count
   for ratio in 0.5 0.25 0.1; do
@@ -117,6 +120,9 @@ for src in "${assets[@]}"; do
       t="$out/tom-$mode-$ratio.glb"
       "$tools/tomextract" "$tom" --below-floor --scene-budget "$count" -o "$t" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
       measure "$src" tom "at-$mode" "$ratio" "$t"
+      # the same level written on its own, its vertices re-fitted (as -sv moves gltfpack's)
+      "$tools/tomextract" "$tom" --below-floor --scene-budget "$count" --refit -o "${t%.glb}-refit.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
+      measure "$src" tom "refit-$mode" "$ratio" "${t%.glb}-refit.glb"
     done
   done
   echo "$name: measured" >&2
@@ -136,38 +142,49 @@ L = ['## Real assets against gltfpack', '',
      '(`tomextract --scene-budget --below-floor`, triangles drawn), and both are measured by `tomerr` in world space against the source:',
      'two-sided mean and Hausdorff distance in % of the diagonal, mean normal deviation in degrees, mean texture-coordinate',
      'deviation. Floors: `tomextract --fraction 0 --below-floor` and `gltfpack -si 0 -sa`; TOM\'s usable floor (where its',
-     'stored mean error leaves 1% of the diagonal, the level its selections stop at): `tomextract --fraction 0`.', '',
-     '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack |',
-     '|---|---:|---|---:|---:|---:|---:|---:|']
+     'stored mean error leaves 1% of the diagonal, the level its selections stop at): `tomextract --fraction 0`. "--refit": the',
+     'same level written on its own with its vertices re-fitted (`tomextract --refit`, as `-sv` moves gltfpack\'s): what a',
+     'discrete level exported from TOM is; the runtime\'s levels, prefixes of one vertex array, are the columns before.', '',
+     '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack | --refit: mean, Hausdorff, normals |',
+     '|---|---:|---|---:|---:|---:|---:|---:|---:|']
 ratios = {}
 for asset in dict.fromkeys(r['asset'] for r in rows):
     for ratio in (0.5, 0.25, 0.1):
         for mode in ('default', 'sv', 'sa'):
-            g, t = find(asset, 'gltfpack', mode, ratio), find(asset, 'tom', 'at-' + mode, ratio)
+            g, t, f = find(asset, 'gltfpack', mode, ratio), find(asset, 'tom', 'at-' + mode, ratio), find(asset, 'tom', 'refit-' + mode, ratio)
             if not g or not t: continue
             reached = t['triangles'] <= 1.02 * g['triangles']  # else TOM stopped above gltfpack's count: not compared
             if reached:
                 for key in ('mean', 'hausdorff', 'normal_degrees'):
-                    if g[key] is not None and t[key] is not None:
-                        ratios.setdefault((mode, ratio, key), []).append(t[key] / g[key] if g[key] > 0 else 1.0)
-            L.append('| %s | %d | %s %d%% | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s |' % (
+                    for which, x in (('', t), ('refit', f)):
+                        if x and g[key] is not None and x[key] is not None:
+                            ratios.setdefault((mode, ratio, key, which), []).append(x[key] / g[key] if g[key] > 0 else 1.0)
+            L.append('| %s | %d | %s %d%% | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s | %s |' % (
                 asset, g['source_triangles'], mode, ratio * 100, t['triangles'], '' if reached else ' (floor)', g['triangles'], fmt(t['mean']), fmt(g['mean']),
-                fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3)))
+                fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3),
+                '%s, %s, %s' % (fmt(f['mean']), fmt(f['hausdorff']), fmt(f['normal_degrees'], 3)) if f else '-'))
 L += ['', 'Floors: the coarsest level each tool reaches, TOM\'s usable floor, and TOM\'s level at gltfpack -sa\'s floor count.', '',
-      '| asset | triangles | TOM floor | mean | TOM usable floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack |',
-      '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
+      '| asset | triangles | TOM floor | mean | TOM usable floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack | --refit: mean, Hausdorff |',
+      '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
+floor_ratios = {}
 for asset in dict.fromkeys(r['asset'] for r in rows):
-    t, u, g, a = (find(asset, 'tom', 'floor', 0), find(asset, 'tom', 'usable', 0), find(asset, 'gltfpack', 'floor-sa', 0),
-                  find(asset, 'tom', 'at-floor-sa', 0))
+    t, u, g, a, f = (find(asset, 'tom', 'floor', 0), find(asset, 'tom', 'usable', 0), find(asset, 'gltfpack', 'floor-sa', 0),
+                     find(asset, 'tom', 'at-floor-sa', 0), find(asset, 'tom', 'refit-floor-sa', 0))
     if t and u and g and a:
-        L.append('| %s | %d | %d | %s | %d | %s | %d | %s | %d | %s | %s / %s |' % (
+        for which, x in (('', a), ('refit', f)):
+            if x and g['mean']: floor_ratios.setdefault(which, []).append(x['mean'] / g['mean'])
+        L.append('| %s | %d | %d | %s | %d | %s | %d | %s | %d | %s | %s / %s | %s |' % (
             asset, t['source_triangles'], t['triangles'], fmt(t['mean']), u['triangles'], fmt(u['mean']), g['triangles'], fmt(g['mean']),
-            a['triangles'], fmt(a['mean']), fmt(a['hausdorff']), fmt(g['hausdorff'])))
+            a['triangles'], fmt(a['mean']), fmt(a['hausdorff']), fmt(g['hausdorff']), '%s, %s' % (fmt(f['mean']), fmt(f['hausdorff'])) if f else '-'))
+if floor_ratios:
+    L += ['', 'At gltfpack -sa\'s floor count, TOM\'s mean / gltfpack\'s: median %s, %s with --refit.' % tuple(
+        '%.2f' % statistics.median(floor_ratios[w]) if w in floor_ratios else '-' for w in ('', 'refit'))]
 L += ['', 'Medians over the assets where TOM reached gltfpack\'s count, TOM / gltfpack (below 1: TOM\'s error is smaller):', '',
-      '| mode, ratio | assets | mean | Hausdorff | normals |', '|---|---:|---:|---:|---:|']
-for mode, ratio in sorted({(m, r) for m, r, _ in ratios}, key=lambda mr: (mr[0], -mr[1])):
-    column = lambda key: '%.2f' % statistics.median(ratios[(mode, ratio, key)]) if (mode, ratio, key) in ratios else '-'
-    L.append('| %s %d%% | %d | %s | %s | %s |' % (mode, ratio * 100, len(ratios[(mode, ratio, 'mean')]), column('mean'), column('hausdorff'), column('normal_degrees')))
+      '| mode, ratio | assets | mean | Hausdorff | normals | --refit: mean | Hausdorff | normals |', '|---|---:|---:|---:|---:|---:|---:|---:|']
+for mode, ratio in sorted({(m, r) for m, r, _, _ in ratios}, key=lambda mr: (mr[0], -mr[1])):
+    column = lambda key, which='': '%.2f' % statistics.median(ratios[(mode, ratio, key, which)]) if (mode, ratio, key, which) in ratios else '-'
+    L.append('| %s %d%% | %d | %s | %s | %s | %s | %s | %s |' % (mode, ratio * 100, len(ratios[(mode, ratio, 'mean', '')]), column('mean'), column('hausdorff'),
+                                                        column('normal_degrees'), column('mean', 'refit'), column('hausdorff', 'refit'), column('normal_degrees', 'refit')))
 L.append('')
 section = '\n'.join(L)
 text = open(doc).read()
