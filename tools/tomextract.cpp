@@ -304,16 +304,18 @@ std::vector<std::vector<uint32_t>> choose_levels(const tom::File& file, const Op
 }
 
 // The meshes as written: the file's, or with --refit each wanted mesh's levels with their
-// re-fitted positions and normals (`views`: with its first level's, for OBJ and PLY).
+// re-fitted vertex streams (`views`: with its first level's, for OBJ and PLY).
 struct Meshes {
     std::vector<tom::MeshView> views;
-    std::vector<std::vector<tom::RefitLevel>> refits;  // --refit: per mesh, per level (empty for the others)
+    std::vector<std::vector<tom::RefitLevel>> refits;      // --refit: per mesh, per level (empty for the others)
+    std::vector<std::vector<tom::MeshView>> level_views;  // views of those
 };
 
 Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
     Meshes out;
     out.views.reserve(file.mesh_count());
     out.refits.resize(file.mesh_count());
+    out.level_views.resize(file.mesh_count());
     tom::RefitStats total;
     for (uint32_t i = 0, k = 0; i < file.mesh_count(); ++i) {
         out.views.push_back(file.mesh(i));
@@ -325,8 +327,8 @@ Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vecto
             const tom::RefitStats& s = out.refits[i].back().stats;
             total.moved += s.moved, total.fixed += s.fixed, total.reverted += s.reverted;
         }
-        out.views.back().positions = out.refits[i].front().positions.data();
-        if (!out.refits[i].front().normals.empty()) out.views.back().normals = out.refits[i].front().normals.data();
+        for (const tom::RefitLevel& r : out.refits[i]) out.level_views[i].push_back(tom::refit_view(file.mesh(i), r));
+        out.views.back() = out.level_views[i].front();
     }
     if (o.refit)
         std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
@@ -351,10 +353,7 @@ void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, co
         tom::GlbMesh g;
         g.mesh = &file.mesh(i);
         g.vertex_counts = levels[glb.size()];
-        for (const tom::RefitLevel& r : meshes.refits[i]) {  // --refit: each level its own positions
-            g.level_positions.push_back(r.positions.data());
-            g.level_normals.push_back(r.normals.empty() ? nullptr : r.normals.data());
-        }
+        for (const tom::MeshView& level : meshes.level_views[i]) g.level_views.push_back(&level);  // --refit: each level's own streams
         written += tom::active_triangle_count(*g.mesh, g.vertex_counts.front());
         glb.push_back(g);
     }

@@ -297,18 +297,23 @@ void mesh_properties(Class& c, ViewOf view_of) {
              }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc)
         .def("refit", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles) {
                  const tom::MeshView v = view_of(self);
-                 const uint32_t n = std::min(std::max(resolution(v, fraction, vertices, triangles), v.min_vertex_count), v.vertex_count);
+                 const uint32_t n = v.whole_groups_below(std::min(std::max(resolution(v, fraction, vertices, triangles), v.min_vertex_count), v.vertex_count));
                  const tom::RefitLevel r = tom::refit_level(v, n);
-                 auto rows = [n](const std::vector<float>& x) {
-                     py::array_t<float> a(std::vector<py::ssize_t>{py::ssize_t(n), 3});
-                     std::copy(x.begin(), x.begin() + 3 * ptrdiff_t(n), a.mutable_data());
-                     return a;
+                 py::dict out;
+                 auto put = [&](const char* key, const std::vector<float>& x, py::ssize_t width) {
+                     if (x.empty()) return;
+                     py::array_t<float> a(std::vector<py::ssize_t>{py::ssize_t(n), width});
+                     std::copy(x.begin(), x.begin() + ptrdiff_t(width) * n, a.mutable_data());
+                     out[key] = a;
                  };
-                 return py::make_tuple(rows(r.positions), r.normals.empty() ? py::object(py::none()) : py::object(rows(r.normals)));
+                 put("positions", r.positions, 3), put("normals", r.normals, 3), put("uv", r.texcoords, 2), put("uv1", r.texcoords1, 2);
+                 put("colors", r.colors, 4), put("tangents", r.tangents, 4);
+                 return out;
              }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(),
-             "(positions, normals) of one level re-fitted to be written on its own, as tomextract --refit: (n, 3) float32 arrays for the "
-             "n vertices extract() draws at the same level (normals None without normals). Its vertices move to where they best stand for "
-             "the surface they replaced; seams, hard edges, open edges and where parts meet stay joined.");
+             "One level re-fitted to be written on its own, as tomextract --refit: a dict of (n, k) float32 arrays for the n vertices "
+             "extract() draws at the same level, 'positions' and those of 'normals', 'uv', 'uv1', 'colors', 'tangents' the mesh has. "
+             "Its vertices move to where they best stand for the surface they replaced, their attributes the source's there; seams, "
+             "hard edges, open edges and where parts meet stay joined.");
 }
 
 // tom.Error and one subclass per kind the library throws, with its message.

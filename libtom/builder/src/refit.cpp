@@ -1,5 +1,6 @@
-// Re-fitted positions for one level (refit.h): the quadric of the full mesh's triangles that each
-// live point stands for, minimised near the point's own position.
+// Re-fitted vertices for one level (refit.h): the quadric of the full mesh's triangles that each
+// live point stands for, minimised near the point's own position; then the attributes of the
+// source where each moved vertex now stands.
 
 #include "tom/builder/refit.h"
 
@@ -10,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace tom {
 namespace {
@@ -25,8 +27,9 @@ using detail::sub;
 
 constexpr uint32_t kNone = ~0u;
 
-// Points: vertices at the same position (bit for bit) are one point; `point[v]` numbers them in
-// the order of their first vertex.
+// Points: vertices at the same position (equal floats) and the groups of copies the builder
+// removes together are one point each; `point[v]` numbers them in the order of their first
+// vertex.
 struct Points {
     std::vector<uint32_t> point;  // per vertex
     uint32_t count = 0;
@@ -38,7 +41,10 @@ Points weld_by_position(const MeshView& m) {
     for (uint32_t v = 0; v < V; ++v) order[v] = v;
     auto key = [&](uint32_t v) {
         std::array<uint32_t, 3> k;
-        std::memcpy(k.data(), m.positions + 3 * size_t(v), 12);
+        for (int a = 0; a < 3; ++a) {
+            const float x = m.positions[3 * size_t(v) + a] + 0.0f;  // -0 as 0
+            std::memcpy(&k[size_t(a)], &x, 4);
+        }
         return k;
     };
     std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
@@ -99,17 +105,12 @@ std::vector<uint8_t> fixed_points(const std::vector<uint32_t>& full, const Point
     return fixed;
 }
 
-// The vertex < n each vertex stands in for at resolution n: itself when live, else the end of
-// its substitution chain.
+// The vertex < n each vertex stands in for at resolution n (>= min_vertex_count): itself when
+// live, else the end of its substitution chain (substitute[v] < v past the survivors, so in
+// order of v the substitute's is known).
 std::vector<uint32_t> representatives(const MeshView& m, uint32_t n) {
-    const uint32_t V = m.vertex_count;
-    std::vector<uint32_t> rep(V, kNone);
-    for (uint32_t v = 0; v < n; ++v) rep[v] = v;
-    for (uint32_t v = n; v < V; ++v) {
-        uint32_t r = v, steps = 0;
-        while (r >= n && rep[r] == kNone && steps++ < V) r = m.substitute_at(r);
-        rep[v] = r < n ? r : rep[r];
-    }
+    std::vector<uint32_t> rep(m.vertex_count);
+    for (uint32_t v = 0; v < m.vertex_count; ++v) rep[v] = v < n ? v : rep[m.substitute_at(v)];
     return rep;
 }
 
@@ -203,33 +204,118 @@ void put_back_turned(const std::vector<uint32_t>& level, uint32_t n, const Point
     }
 }
 
-// Each live vertex's normal: the mean of the normals of the vertices it stands for, weighted by
-// their triangles' areas (its copies keep their own sides of a hard edge: chains keep copies
-// apart). Vertices >= n keep theirs.
-std::vector<float> mean_normals(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& rep) {
-    std::vector<float> out(m.normals, m.normals + 3 * size_t(m.vertex_count));
-    std::vector<double> area(m.vertex_count, 0.0), sum(3 * size_t(n), 0.0);
+// The barycentric coordinates of the point of triangle (a, b, c) closest to x (Ericson,
+// Real-Time Collision Detection 5.1.5), and its squared distance.
+double closest(V3 x, V3 a, V3 b, V3 c, double w[3]) {
+    const V3 ab = sub(b, a), ac = sub(c, a), ax = sub(x, a);
+    auto set = [&](double u, double v, double t) {
+        w[0] = u, w[1] = v, w[2] = t;
+        const V3 q{u * a.x + v * b.x + t * c.x, u * a.y + v * b.y + t * c.y, u * a.z + v * b.z + t * c.z};
+        return dot(sub(x, q), sub(x, q));
+    };
+    const double d1 = dot(ab, ax), d2 = dot(ac, ax);
+    if (d1 <= 0 && d2 <= 0) return set(1, 0, 0);
+    const V3 bx = sub(x, b);
+    const double d3 = dot(ab, bx), d4 = dot(ac, bx);
+    if (d3 >= 0 && d4 <= d3) return set(0, 1, 0);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        const double v = d1 / (d1 - d3);
+        return set(1 - v, v, 0);
+    }
+    const V3 cx = sub(x, c);
+    const double d5 = dot(ab, cx), d6 = dot(ac, cx);
+    if (d6 >= 0 && d5 <= d6) return set(0, 0, 1);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        const double t = d2 / (d2 - d6);
+        return set(1 - t, 0, t);
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+        const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return set(0, 1 - t, t);
+    }
+    const double den = va + vb + vc;
+    if (!(den > 0)) return set(1, 0, 0);
+    return set(1 - (vb + vc) / den, vb / den, vc / den);
+}
+
+// Per live vertex, the full mesh's triangles around the vertices it stands for (CSR).
+struct Around {
+    std::vector<uint32_t> start, triangles;
+};
+
+Around triangles_around(uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& rep) {
+    Around a;
+    a.start.assign(size_t(n) + 1, 0);
+    for (const uint32_t v : full) ++a.start[rep[v] + 1];
+    for (uint32_t v = 0; v < n; ++v) a.start[v + 1] += a.start[v];
+    a.triangles.resize(full.size());
+    std::vector<uint32_t> next(a.start.begin(), a.start.end() - 1);
+    for (size_t c = 0; c < full.size(); ++c) a.triangles[next[rep[full[c]]]++] = uint32_t(c / 3);
+    return a;
+}
+
+// `width` values per vertex of `src` at barycentric `w` of the corners `c`, into `dst`.
+void interpolate(const float* src, size_t width, const uint32_t* c, const double w[3], float* dst) {
+    for (size_t a = 0; a < width; ++a)
+        dst[a] = float(w[0] * src[width * c[0] + a] + w[1] * src[width * c[1] + a] + w[2] * src[width * c[2] + a]);
+}
+
+void normalize(float* x, size_t count) {
+    double l = 0;
+    for (size_t a = 0; a < count; ++a) l += double(x[a]) * x[a];
+    l = std::sqrt(l);
+    if (l > 0)
+        for (size_t a = 0; a < count; ++a) x[a] = float(x[a] / l);
+}
+
+// Each moved vertex's attributes resampled from the source where it now stands: at the point
+// closest to its new position among the triangles around the vertices it stands for (its own
+// side of a seam or a hard edge: copies stand for their own sides), interpolated there; normals
+// made unit, tangents made unit and orthogonal to the normal, their handedness kept.
+void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& rep, const Points& p,
+                         const std::vector<uint8_t>& moved, RefitLevel& r) {
+    const Around around = triangles_around(n, full, rep);
     const std::vector<float> x(m.positions, m.positions + 3 * size_t(m.vertex_count));
-    for (size_t t = 0; t + 2 < full.size(); t += 3) {
-        const double a = 0.5 * length(cross(sub(at(x, full[t + 1]), at(x, full[t])), sub(at(x, full[t + 2]), at(x, full[t]))));
-        for (int c = 0; c < 3; ++c) area[full[t + c]] += a;
-    }
-    for (uint32_t v = 0; v < m.vertex_count; ++v)
-        for (int a = 0; a < 3; ++a) sum[3 * size_t(rep[v]) + a] += area[v] * m.normals[3 * size_t(v) + a];
     for (uint32_t v = 0; v < n; ++v) {
-        const double* g = &sum[3 * size_t(v)];
-        const double l = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-        if (l > 0)
-            for (int a = 0; a < 3; ++a) out[3 * size_t(v) + a] = float(g[a] / l);
+        if (!moved[p.point[v]]) continue;
+        double best = std::numeric_limits<double>::infinity(), w[3], at_best[3] = {1, 0, 0};
+        const uint32_t* c = nullptr;
+        for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
+            const uint32_t* t = &full[3 * size_t(around.triangles[i])];
+            const double d = closest(at(r.positions, v), at(x, t[0]), at(x, t[1]), at(x, t[2]), w);
+            if (d < best) best = d, c = t, std::copy(w, w + 3, at_best);
+        }
+        if (!c) continue;
+        if (m.normals) interpolate(m.normals, 3, c, at_best, &r.normals[3 * size_t(v)]), normalize(&r.normals[3 * size_t(v)], 3);
+        if (m.texcoords) interpolate(m.texcoords, 2, c, at_best, &r.texcoords[2 * size_t(v)]);
+        if (m.texcoords1) interpolate(m.texcoords1, 2, c, at_best, &r.texcoords1[2 * size_t(v)]);
+        if (m.colors) interpolate(m.colors, 4, c, at_best, &r.colors[4 * size_t(v)]);
+        if (m.tangents && m.normals) {
+            float* t = &r.tangents[4 * size_t(v)];
+            const float handedness = t[3];
+            interpolate(m.tangents, 4, c, at_best, t);
+            const float* nv = &r.normals[3 * size_t(v)];
+            const float along = t[0] * nv[0] + t[1] * nv[1] + t[2] * nv[2];
+            for (int a = 0; a < 3; ++a) t[a] -= along * nv[a];
+            normalize(t, 3);
+            t[3] = handedness;
+        }
     }
-    return out;
+}
+
+// A stream of `width` floats per vertex copied, or empty when the mesh has none.
+std::vector<float> copy_stream(const float* values, uint32_t count, size_t width) {
+    return values ? std::vector<float>(values, values + width * count) : std::vector<float>();
 }
 
 } // namespace
 
 RefitLevel refit_level(const MeshView& m, uint32_t n) {
     RefitLevel r;
-    n = std::min(n, m.vertex_count);
+    n = m.whole_groups_below(std::min(std::max(n, m.min_vertex_count), m.vertex_count));  // as extract() takes it
     const std::vector<float> before(m.positions, m.positions + 3 * size_t(m.vertex_count));
     r.positions = before;
     const Points p = weld_by_position(m);
@@ -237,8 +323,25 @@ RefitLevel refit_level(const MeshView& m, uint32_t n) {
     const std::vector<uint32_t> rep = representatives(m, n);
     std::vector<uint8_t> moved = move_points(m, n, p, fixed_points(full, p), point_quadrics(m, full, p, rep), r.positions, r.stats);
     put_back_turned(level, n, p, before, moved, r.positions, r.stats);
-    if (m.normals) r.normals = mean_normals(m, n, full, rep);
+    r.normals = copy_stream(m.normals, m.vertex_count, 3);
+    r.texcoords = copy_stream(m.texcoords, m.vertex_count, 2);
+    r.texcoords1 = copy_stream(m.texcoords1, m.vertex_count, 2);
+    r.colors = copy_stream(m.colors, m.vertex_count, 4);
+    r.tangents = copy_stream(m.tangents, m.vertex_count, 4);
+    resample_attributes(m, n, full, rep, p, moved, r);
     return r;
+}
+
+MeshView refit_view(const MeshView& m, const RefitLevel& r) {
+    MeshView v = m;
+    auto own = [](const std::vector<float>& values, const float* kept) { return values.empty() ? kept : values.data(); };
+    v.positions = own(r.positions, m.positions);
+    v.normals = own(r.normals, m.normals);
+    v.texcoords = own(r.texcoords, m.texcoords);
+    v.texcoords1 = own(r.texcoords1, m.texcoords1);
+    v.colors = own(r.colors, m.colors);
+    v.tangents = own(r.tangents, m.tangents);
+    return v;
 }
 
 } // namespace tom

@@ -242,19 +242,16 @@ MeshStreams write_streams(Writer& w, const MeshView& m, uint32_t n, const std::v
     return s;
 }
 
-// A level's own POSITION (and NORMAL when `normals`) in `shared`'s vertex order, written as
-// write_streams writes the mesh's; `dequantize` gets their grid's.
-json level_geometry(Writer& w, const MeshView& m, const float* positions, const float* normals, const MeshStreams& shared, bool grid, json& dequantize) {
-    MeshView own = m;
-    own.positions = positions;
-    own.normals = normals;
-    own.texcoords = own.colors = own.texcoords1 = own.tangents = nullptr;
+// A level's own vertex streams (POSITION, NORMAL, TEXCOORD_0/1, COLOR_0, TANGENT: those of
+// `level`, a view of the same mesh) in `shared`'s vertex order, written as write_streams writes
+// the mesh's; `dequantize` gets their grid's.
+json level_streams(Writer& w, const MeshView& level, const MeshStreams& shared, bool grid, json& dequantize) {
     MeshStreams s;
     s.order = shared.order;
     if (w.compress)
-        write_quantized_streams(w, own, grid, s);
+        write_quantized_streams(w, level, grid, s);
     else
-        write_float_streams(w, own, uint32_t(s.order.order.size()), s);
+        write_float_streams(w, level, uint32_t(s.order.order.size()), s);
     dequantize = s.dequantize;
     return s.attributes;
 }
@@ -697,11 +694,10 @@ void export_glb(const std::string& path, const std::vector<GlbMesh>& meshes, con
         for (size_t level = 0; level < gm.vertex_counts.size(); ++level) {
             const Extracted e = extract_parts(m, std::min(gm.vertex_counts[level], m.vertex_count), indices.data(), indices.size(), draws.data());
             if (e.triangle_count == 0) continue;
-            // a level with positions of its own (re-fitted): its POSITION and NORMAL, the rest shared
+            // a level with vertex streams of its own (re-fitted): those, and the carried ones shared
             json level_attributes = attributes, level_dequantize = streams.dequantize;
-            if (level < gm.level_positions.size() && gm.level_positions[level]) {
-                const float* normals = level < gm.level_normals.size() && gm.level_normals[level] ? gm.level_normals[level] : m.normals;
-                const json own = level_geometry(w, m, gm.level_positions[level], normals, streams, !keep_float[mi], level_dequantize);
+            if (level < gm.level_views.size() && gm.level_views[level]) {
+                const json own = level_streams(w, *gm.level_views[level], streams, !keep_float[mi], level_dequantize);
                 for (const auto& [key, accessor] : own.items()) level_attributes[key] = accessor;
             }
             // one primitive per part that has triangles at this level, with the streams its source had

@@ -1,4 +1,4 @@
-// Re-fitted positions and normals for one level exported on its own.
+// Re-fitted vertices for one level exported on its own.
 //
 // A TOM's levels share one vertex array: a vertex that survives to a coarse level keeps the
 // position and normal it has at full detail, which is what lets any prefix be a level. A level
@@ -20,23 +20,35 @@ struct RefitStats {
     uint32_t reverted = 0;  ///< points put back because a triangle of theirs would turn over
 };
 
+/// A level's own vertex streams (each value-per-vertex * vertex_count, empty when the mesh has
+/// none of that stream).
 struct RefitLevel {
-    std::vector<float> positions;  ///< xyz * vertex_count
-    std::vector<float> normals;    ///< xyz * vertex_count; empty when the mesh has none
+    std::vector<float> positions;  ///< xyz
+    std::vector<float> normals;    ///< xyz
+    std::vector<float> texcoords;  ///< uv
+    std::vector<float> texcoords1; ///< uv
+    std::vector<float> colors;     ///< rgba
+    std::vector<float> tangents;   ///< xyzw
     RefitStats stats;
 };
 
-/// The level of `m` at resolution `n` (<= vertex_count; its triangles are extract(m, n)'s) with
-/// each live point moved to the minimum of the quadric of the full mesh's triangles around every
+/// The level of `m` at resolution `n` (taken as extract() takes it: into [min_vertex_count,
+/// vertex_count], never among a group's copies; its triangles are extract(m, n)'s) with each
+/// live point moved to the minimum of the quadric of the full mesh's triangles around every
 /// vertex it stands for (itself and the vertices whose substitution chains end at it), held
-/// near its own position along the directions the quadric leaves free, and each live vertex's
-/// normal the area-weighted mean of the normals of the vertices it stands for. A point is a
+/// near its own position along the directions the quadric leaves free; a moved vertex's normal,
+/// texture coordinates, colour and tangent are the source's where it now stands (at the closest
+/// point of the triangles around the vertices it stands for, on its side of a seam or hard edge:
+/// the normals of a smooth surface stay exact, and its texture does not slide). A point is a
 /// vertex with its coincident copies and the group of copies the builder removes together
 /// (seams, hard edges, poles): they move as one. Points on open edges or on edges where more
 /// than two triangles meet stay, so that borders and the chains where parts meet do not open;
 /// a point whose move would turn one of the level's triangles by more than 78 degrees stays.
-/// Vertices >= n keep their positions and normals; tangents and the other streams are kept.
-/// Deterministic.
+/// Vertices >= n and the vertices that stay keep their values; the carried streams (joints,
+/// weights, morph deltas) are not re-fitted. Deterministic.
 RefitLevel refit_level(const MeshView& m, uint32_t n);
+
+/// `m` with the vertex streams `r` has in place of its own (for the exporters).
+MeshView refit_view(const MeshView& m, const RefitLevel& r);
 
 } // namespace tom

@@ -39,10 +39,10 @@ void export_meshes(const std::string& path, const std::vector<ExportPart>& parts
 struct GlbMesh {
     const MeshView* mesh = nullptr;
     std::vector<uint32_t> vertex_counts;  ///< resolutions, finest first
-    /// Per resolution, positions (and normals) of its own (xyz * vertex_count: tom::refit_level's),
-    /// or empty / null for the mesh's: a level with its own gets POSITION and NORMAL accessors of
-    /// its own and shares the other streams.
-    std::vector<const float*> level_positions = {}, level_normals = {};
+    /// Per resolution, a view of the same mesh with vertex streams of that level's own (positions,
+    /// normals, texture coordinates, colours, tangents: tom::refit_view's), or empty / null for
+    /// the mesh's: such a level gets those accessors of its own and shares the carried streams.
+    std::vector<const MeshView*> level_views = {};
 };
 
 /// Writes a binary glTF 2.0 (.glb). Per input mesh and resolution a glTF mesh of one primitive
@@ -50,8 +50,8 @@ struct GlbMesh {
 /// streams its source had);
 /// all levels of an input mesh share its vertex streams (POSITION, NORMAL, TEXCOORD_0/1, COLOR_0,
 /// TANGENT: the levels are prefixes of one vertex array) with their own indices (16-bit when they
-/// fit), but a level given positions of its own (GlbMesh::level_positions) has its own POSITION
-/// and NORMAL. One node per instance of `scene` (instances index `meshes`), with its world transform;
+/// fit), but a level given streams of its own (GlbMesh::level_views) has its own POSITION,
+/// NORMAL, TEXCOORD_0/1, COLOR_0 and TANGENT. One node per instance of `scene` (instances index `meshes`), with its world transform;
 /// without instances, one untransformed node per mesh. With several resolutions, each node's
 /// coarser levels are nodes of their own listed by its MSFT_lod extension (coarser in order).
 /// The scene's materials are written with their factors and textures: images stored in the file
