@@ -188,9 +188,9 @@ int parse_options(Options& o, int argc, char** argv) {
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
     app.add_flag("--refit", o.refit,
                  "Move each level's vertices to where they best stand for the full mesh's surface (the quadric of the triangles they "
-                 "replaced, as gltfpack -sv): each level written with positions and normals of its own, no longer a prefix of the .tom's "
-                 "vertex array (in a .glb chain, the other streams stay shared); open edges, edges where parts meet and coincident copies "
-                 "stay joined");
+                 "replaced, as gltfpack -sv), their normals, texture coordinates, colours and tangents the source's there: each level "
+                 "written with vertex streams of its own, no longer a prefix of the .tom's vertex array (in a .glb chain, joints, weights "
+                 "and targets stay shared); open edges, edges where parts meet and coincident copies stay joined");
     app.add_flag("-c,--compress", o.compress,
                  "For .glb: quantize the vertex streams (KHR_mesh_quantization) and compress vertex and index data "
                  "(EXT_meshopt_compression), as gltfpack -c does; both extensions are then required");
@@ -303,41 +303,37 @@ std::vector<std::vector<uint32_t>> choose_levels(const tom::File& file, const Op
     return levels;
 }
 
-// The meshes as written: the file's, or with --refit each wanted mesh's levels with their
-// re-fitted vertex streams (`views`: with its first level's, for OBJ and PLY).
-struct Meshes {
-    std::vector<tom::MeshView> views;
-    std::vector<std::vector<tom::RefitLevel>> refits;      // --refit: per mesh, per level (empty for the others)
-    std::vector<std::vector<tom::MeshView>> level_views;  // views of those
+// With --refit, each wanted mesh's levels with their re-fitted vertex streams (views of the
+// file's meshes); without, nothing: the file's meshes are written as they are.
+struct Refits {
+    std::vector<std::vector<tom::RefitLevel>> levels;     // per mesh, per level (empty for the others)
+    std::vector<std::vector<tom::MeshView>> views;        // views of those
+    // mesh i as written at its first level (OBJ, PLY)
+    const tom::MeshView& first(const tom::File& file, uint32_t i) const { return views[i].empty() ? file.mesh(i) : views[i].front(); }
 };
 
-Meshes meshes_to_write(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
-    Meshes out;
-    out.views.reserve(file.mesh_count());
-    out.refits.resize(file.mesh_count());
-    out.level_views.resize(file.mesh_count());
+Refits refit_meshes(const tom::File& file, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+    Refits out;
+    out.levels.resize(file.mesh_count());
+    out.views.resize(file.mesh_count());
+    if (!o.refit) return out;
     tom::RefitStats total;
     for (uint32_t i = 0, k = 0; i < file.mesh_count(); ++i) {
-        out.views.push_back(file.mesh(i));
         if (!o.wanted(i)) continue;
-        const std::vector<uint32_t>& counts = levels[k++];
-        if (!o.refit) continue;
-        for (const uint32_t n : counts) {
-            out.refits[i].push_back(tom::refit_level(file.mesh(i), n));
-            const tom::RefitStats& s = out.refits[i].back().stats;
+        for (const uint32_t n : levels[k++]) {
+            out.levels[i].push_back(tom::refit_level(file.mesh(i), n));
+            const tom::RefitStats& s = out.levels[i].back().stats;
             total.moved += s.moved, total.fixed += s.fixed, total.reverted += s.reverted;
         }
-        for (const tom::RefitLevel& r : out.refits[i]) out.level_views[i].push_back(tom::refit_view(file.mesh(i), r));
-        out.views.back() = out.level_views[i].front();
+        for (const tom::RefitLevel& r : out.levels[i]) out.views[i].push_back(tom::refit_view(file.mesh(i), r));
     }
-    if (o.refit)
-        std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
-                    total.moved, total.fixed, total.reverted);
+    std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
+                total.moved, total.fixed, total.reverted);
     return out;
 }
 
 // A .glb of the wanted meshes at their levels (MSFT_lod for a chain), with the scene.
-void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+void write_glb(const tom::File& file, const Refits& refits, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
     std::vector<tom::GlbMesh> glb;
     uint64_t written = 0;
     tom::Scene scene = file.scene();  // with --mesh: that mesh's instances, renumbered
@@ -353,7 +349,7 @@ void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, co
         tom::GlbMesh g;
         g.mesh = &file.mesh(i);
         g.vertex_counts = levels[glb.size()];
-        for (const tom::MeshView& level : meshes.level_views[i]) g.level_views.push_back(&level);  // --refit: each level's own streams
+        for (const tom::MeshView& level : refits.views[i]) g.level_views.push_back(&level);  // --refit: each level's own streams
         written += tom::active_triangle_count(*g.mesh, g.vertex_counts.front());
         glb.push_back(g);
     }
@@ -366,12 +362,12 @@ void write_glb(const tom::File& file, const Meshes& meshes, const Options& o, co
 }
 
 // An OBJ or PLY of the wanted meshes, each at its (first) level.
-void write_meshes(const tom::File& file, const Meshes& meshes, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
+void write_meshes(const tom::File& file, const Refits& refits, const Options& o, const std::vector<std::vector<uint32_t>>& levels) {
     std::vector<tom::ExportPart> parts;
     uint64_t out_tris = 0, out_verts = 0, total_tris = 0;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (!o.wanted(i)) continue;
-        const tom::MeshView& m = meshes.views[i];
+        const tom::MeshView& m = refits.first(file, i);
         const uint32_t n = levels[parts.size()].front();
         total_tris += m.triangle_count;
         tom::ExportPart part;
@@ -407,11 +403,11 @@ int main(int argc, char** argv) {
             std::filesystem::create_directories(parent, ec);  // a failure shows when the file is written
         }
         const std::vector<std::vector<uint32_t>> levels = choose_levels(file, o);
-        const Meshes meshes = meshes_to_write(file, o, levels);
+        const Refits refits = refit_meshes(file, o, levels);
         if (o.glb())
-            write_glb(file, meshes, o, levels);
+            write_glb(file, refits, o, levels);
         else
-            write_meshes(file, meshes, o, levels);
+            write_meshes(file, refits, o, levels);
         return tools::exit_ok;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -16,9 +16,9 @@
 #include "tom/metrics/report_json.h"
 #include "tom/builder/builder.h"
 #include "tom/builder/mesh.h"
+#include "tom/builder/refit.h"
 #include "tom/builder/writer.h"
 #include "tom/errors.h"
-#include "tom/builder/refit.h"
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/io/import.h"
@@ -297,8 +297,8 @@ void mesh_properties(Class& c, ViewOf view_of) {
              }, py::kw_only(), py::arg("fraction") = py::none(), py::arg("vertices") = py::none(), py::arg("triangles") = py::none(), py::arg("out") = py::none(), kExtractDoc)
         .def("refit", [view_of](py::object self, py::object fraction, py::object vertices, py::object triangles) {
                  const tom::MeshView v = view_of(self);
-                 const uint32_t n = v.whole_groups_below(std::min(std::max(resolution(v, fraction, vertices, triangles), v.min_vertex_count), v.vertex_count));
-                 const tom::RefitLevel r = tom::refit_level(v, n);
+                 const tom::RefitLevel r = tom::refit_level(v, resolution(v, fraction, vertices, triangles));
+                 const uint32_t n = r.resolution;
                  py::dict out;
                  auto put = [&](const char* key, const std::vector<float>& x, py::ssize_t width) {
                      if (x.empty()) return;

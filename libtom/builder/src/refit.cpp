@@ -4,6 +4,7 @@
 
 #include "tom/builder/refit.h"
 
+#include "geometry.h"
 #include "substitution.h"
 #include "tom/extract.h"
 
@@ -19,7 +20,7 @@ namespace {
 using build_detail::add;
 using build_detail::add_plane;
 using build_detail::Quadric;
-using V3 = detail::Vec3T<double>;
+using detail::V3;
 using detail::cross;
 using detail::dot;
 using detail::length;
@@ -204,43 +205,6 @@ void put_back_turned(const std::vector<uint32_t>& level, uint32_t n, const Point
     }
 }
 
-// The barycentric coordinates of the point of triangle (a, b, c) closest to x (Ericson,
-// Real-Time Collision Detection 5.1.5), and its squared distance.
-double closest(V3 x, V3 a, V3 b, V3 c, double w[3]) {
-    const V3 ab = sub(b, a), ac = sub(c, a), ax = sub(x, a);
-    auto set = [&](double u, double v, double t) {
-        w[0] = u, w[1] = v, w[2] = t;
-        const V3 q{u * a.x + v * b.x + t * c.x, u * a.y + v * b.y + t * c.y, u * a.z + v * b.z + t * c.z};
-        return dot(sub(x, q), sub(x, q));
-    };
-    const double d1 = dot(ab, ax), d2 = dot(ac, ax);
-    if (d1 <= 0 && d2 <= 0) return set(1, 0, 0);
-    const V3 bx = sub(x, b);
-    const double d3 = dot(ab, bx), d4 = dot(ac, bx);
-    if (d3 >= 0 && d4 <= d3) return set(0, 1, 0);
-    const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-        const double v = d1 / (d1 - d3);
-        return set(1 - v, v, 0);
-    }
-    const V3 cx = sub(x, c);
-    const double d5 = dot(ab, cx), d6 = dot(ac, cx);
-    if (d6 >= 0 && d5 <= d6) return set(0, 0, 1);
-    const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-        const double t = d2 / (d2 - d6);
-        return set(1 - t, 0, t);
-    }
-    const double va = d3 * d6 - d5 * d4;
-    if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-        const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return set(0, 1 - t, t);
-    }
-    const double den = va + vb + vc;
-    if (!(den > 0)) return set(1, 0, 0);
-    return set(1 - (vb + vc) / den, vb / den, vc / den);
-}
-
 // Per live vertex, the full mesh's triangles around the vertices it stands for (CSR).
 struct Around {
     std::vector<uint32_t> start, triangles;
@@ -275,20 +239,24 @@ void normalize(float* x, size_t count) {
 // closest to its new position among the triangles around the vertices it stands for (its own
 // side of a seam or a hard edge: copies stand for their own sides), interpolated there; normals
 // made unit, tangents made unit and orthogonal to the normal, their handedness kept.
-void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& rep, const Points& p,
-                         const std::vector<uint8_t>& moved, RefitLevel& r) {
+void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<float>& before,
+                         const std::vector<uint32_t>& rep, const Points& p, const std::vector<uint8_t>& moved, RefitLevel& r) {
     const Around around = triangles_around(n, full, rep);
-    const std::vector<float> x(m.positions, m.positions + 3 * size_t(m.vertex_count));
     for (uint32_t v = 0; v < n; ++v) {
         if (!moved[p.point[v]]) continue;
-        double best = std::numeric_limits<double>::infinity(), w[3], at_best[3] = {1, 0, 0};
+        const V3 x = at(r.positions, v);
+        double best = std::numeric_limits<double>::infinity();
         const uint32_t* c = nullptr;
+        detail::Flat nearest{};
         for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
             const uint32_t* t = &full[3 * size_t(around.triangles[i])];
-            const double d = closest(at(r.positions, v), at(x, t[0]), at(x, t[1]), at(x, t[2]), w);
-            if (d < best) best = d, c = t, std::copy(w, w + 3, at_best);
+            const detail::Flat f = detail::make_flat(at(before, t[0]), at(before, t[1]), at(before, t[2]));
+            const double d = detail::distance2(f, x);
+            if (d < best) best = d, c = t, nearest = f;
         }
         if (!c) continue;
+        double at_best[3];
+        detail::nearest_point(nearest, x, at_best);
         if (m.normals) interpolate(m.normals, 3, c, at_best, &r.normals[3 * size_t(v)]), normalize(&r.normals[3 * size_t(v)], 3);
         if (m.texcoords) interpolate(m.texcoords, 2, c, at_best, &r.texcoords[2 * size_t(v)]);
         if (m.texcoords1) interpolate(m.texcoords1, 2, c, at_best, &r.texcoords1[2 * size_t(v)]);
@@ -315,7 +283,7 @@ std::vector<float> copy_stream(const float* values, uint32_t count, size_t width
 
 RefitLevel refit_level(const MeshView& m, uint32_t n) {
     RefitLevel r;
-    n = m.whole_groups_below(std::min(std::max(n, m.min_vertex_count), m.vertex_count));  // as extract() takes it
+    r.resolution = n = m.whole_groups_below(std::min(std::max(n, m.min_vertex_count), m.vertex_count));  // as extract() takes it
     const std::vector<float> before(m.positions, m.positions + 3 * size_t(m.vertex_count));
     r.positions = before;
     const Points p = weld_by_position(m);
@@ -328,7 +296,7 @@ RefitLevel refit_level(const MeshView& m, uint32_t n) {
     r.texcoords1 = copy_stream(m.texcoords1, m.vertex_count, 2);
     r.colors = copy_stream(m.colors, m.vertex_count, 4);
     r.tangents = copy_stream(m.tangents, m.vertex_count, 4);
-    resample_attributes(m, n, full, rep, p, moved, r);
+    resample_attributes(m, n, full, before, rep, p, moved, r);
     return r;
 }
 

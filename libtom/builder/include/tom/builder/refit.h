@@ -29,6 +29,7 @@ struct RefitLevel {
     std::vector<float> texcoords1; ///< uv
     std::vector<float> colors;     ///< rgba
     std::vector<float> tangents;   ///< xyzw
+    uint32_t resolution = 0;       ///< the level's vertex count, n as extract() takes it
     RefitStats stats;
 };
 

@@ -51,8 +51,8 @@ struct GlbMesh {
 /// all levels of an input mesh share its vertex streams (POSITION, NORMAL, TEXCOORD_0/1, COLOR_0,
 /// TANGENT: the levels are prefixes of one vertex array) with their own indices (16-bit when they
 /// fit), but a level given streams of its own (GlbMesh::level_views) has its own POSITION,
-/// NORMAL, TEXCOORD_0/1, COLOR_0 and TANGENT. One node per instance of `scene` (instances index `meshes`), with its world transform;
-/// without instances, one untransformed node per mesh. With several resolutions, each node's
+/// NORMAL, TEXCOORD_0/1, COLOR_0 and TANGENT. One node per instance of `scene` (instances index
+/// `meshes`), with its world transform; without instances, one untransformed node per mesh. With several resolutions, each node's
 /// coarser levels are nodes of their own listed by its MSFT_lod extension (coarser in order).
 /// The scene's materials are written with their factors and textures: images stored in the file
 /// (embedded in the source) are embedded in the output's binary buffer, byte for byte; images

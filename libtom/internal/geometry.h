@@ -1,7 +1,7 @@
 #pragma once
 // Point-triangle and point-box distances on plain doubles, for the Metro-style nearest-point
-// search (metrics/distance_cgal.cpp): a triangle is kept as a Flat record with what a distance
-// needs precomputed. Internal to tom::metrics.
+// search (metrics/distance_cgal.cpp) and the builder's re-fitting (builder/refit.cpp): a
+// triangle is kept as a Flat record with what a distance needs precomputed.
 
 #include <algorithm>
 #include <cmath>
