@@ -250,8 +250,9 @@ double capture_ms(Session& s, uint32_t index_count, uint32_t side, uint32_t grid
 
 // A refresh's fixed part (CostModel::refresh_t_setup_ms), measured directly: empty captures,
 // the render target's switch, its clear and the wait for the captures, above the model's draw
-// set-up. Not the difference between whole captures and the model's time of their draws: with a
-// fit 40% off on a noisy machine, that difference came out 0. < 0 without imposters.
+// set-up. Not the difference between whole captures and the model's time of their draws: that
+// difference is within the fit's error, and a fit that overestimates the draws makes it 0.
+// < 0 without imposters.
 double refresh_setup(Session& s, uint32_t side, const CostModel& model) {
     const double per_capture = capture_ms(s, 0, side, 0);
     return per_capture < 0 ? -1.0 : std::max(0.0, per_capture - model.object_ms(0, 0, 0));
@@ -319,9 +320,10 @@ bool fit_way(Session& s, Representation way, double& t_tri, double& t_vert, doub
 }
 
 // The imposters' coefficients: a refresh's fixed part (empty captures into two texture sides),
-// a meshed refresh's beyond it (the median over two levels and two sides), a depth mesh's triangle (from draws of 16 x 16 and 4 x 4
-// grids of the same captures), and the quad's draw and fill by least squares on relative errors
-// over five quad sizes. Leaves `m` without imposters when the renderer has none.
+// a meshed refresh's beyond it (the median over two levels and two sides), a depth mesh's
+// triangle (from draws of 16 x 16 and 4 x 4 grids of the same captures), and the quad's draw and
+// fill by least squares on relative errors over five quad sizes. Leaves `m` without imposters
+// when the renderer has none.
 void fit_imposters(Session& s, CostModel& m) {
     std::vector<double> setups, meshed_overheads, per_triangle;
     for (uint32_t side : {64u, 256u}) {
