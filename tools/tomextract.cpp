@@ -323,12 +323,13 @@ Refits refit_meshes(const tom::File& file, const Options& o, const std::vector<s
         for (const uint32_t n : levels[k++]) {
             out.levels[i].push_back(tom::refit_level(file.mesh(i), n));
             const tom::RefitStats& s = out.levels[i].back().stats;
-            total.moved += s.moved, total.fixed += s.fixed, total.reverted += s.reverted;
+            total.moved += s.moved, total.fixed += s.fixed, total.reverted += s.reverted, total.kept += s.kept;
         }
         for (const tom::RefitLevel& r : out.levels[i]) out.views[i].push_back(tom::refit_view(file.mesh(i), r));
     }
-    std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u put back (a triangle would turn over)\n",
-                total.moved, total.fixed, total.reverted);
+    std::printf("re-fitted: %u points moved, %u on open edges or where parts meet left in place, %u where no move lowered the error, %u put back (a "
+                "triangle would turn over)\n",
+                total.moved, total.fixed, total.kept, total.reverted);
     return out;
 }
 

@@ -429,7 +429,7 @@ void check_refit(const tom::Mesh& original, const tom::TomMesh& built, double ga
         const tom::Extracted e = tom::extract(m, n, idx.data(), idx.size());
         const tom::RefitLevel r = tom::refit_level(m, n);
         INFO(original.name << " at " << e.triangle_count << " triangles: " << r.stats.moved << " points moved, " << r.stats.fixed << " fixed, "
-                           << r.stats.reverted << " put back");
+                           << r.stats.kept << " kept, " << r.stats.reverted << " put back");
         const tom::Distance plain = tom::metro_distance(surface_of(original), {built.positions.data(), e.vertex_count, idx.data(), e.triangle_count});
         const tom::Distance refit = tom::metro_distance(surface_of(original), {r.positions.data(), e.vertex_count, idx.data(), e.triangle_count});
         const double plain_mean = std::max(plain.forward.mean, plain.backward.mean), refit_mean = std::max(refit.forward.mean, refit.backward.mean);
@@ -498,13 +498,13 @@ TEST_CASE("a level re-fitted to be written on its own is closer to the surface a
     for (const bool last_bit : {false, true})
         for (tom::Mesh mesh : {uv_sphere(48, 96, last_bit), capped_cylinder(8, 64, last_bit), torus(32, 64, last_bit)}) {
             tom::clean_mesh(mesh);
-            check_refit(mesh, tom::build(mesh), mesh.name.find("sphere") != std::string::npos ? 0.7 : 1.0);  // a cylinder's 50% is exact
+            check_refit(mesh, tom::build(mesh), mesh.name.find("sphere") != std::string::npos ? 0.65 : 0.8);  // a cylinder's 50% is exact
         }
     // an open edge keeps its place: the level's outline is the original's
     tom::Mesh open = hemisphere(24, 96);
     tom::clean_mesh(open);
     const tom::TomMesh built = tom::build(open);
-    check_refit(open, built, 0.8);
+    check_refit(open, built, 0.7);
     const tom::MeshView m = built.view();
     const uint32_t n = tom::vertex_count_for_triangles(m, m.triangle_count / 10);
     const tom::RefitLevel r = tom::refit_level(m, n);
@@ -528,6 +528,6 @@ TEST_CASE("a level re-fitted to be written on its own is closer to the surface a
 TEST_CASE("re-fitted levels of real meshes are closer to them", "[builder][refit][samples]") {
     for (const test::NamedMesh& nm : test::real_meshes()) {
         if (nm.name.find("bunny00") == std::string::npos && nm.name.find("cow") == std::string::npos) continue;
-        check_refit(nm.mesh, tom::build(nm.mesh), 0.95);
+        check_refit(nm.mesh, tom::build(nm.mesh), 0.85);
     }
 }

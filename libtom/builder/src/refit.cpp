@@ -5,6 +5,7 @@
 #include "tom/builder/refit.h"
 
 #include "geometry.h"
+#include "parallel.h"
 #include "substitution.h"
 #include "tom/extract.h"
 
@@ -20,11 +21,11 @@ namespace {
 using build_detail::add;
 using build_detail::add_plane;
 using build_detail::Quadric;
-using detail::V3;
 using detail::cross;
 using detail::dot;
 using detail::length;
 using detail::sub;
+using detail::V3;
 
 constexpr uint32_t kNone = ~0u;
 
@@ -177,8 +178,10 @@ std::vector<uint8_t> move_points(const MeshView& m, uint32_t n, const Points& p,
         if (!seen[k]) {  // the point's first live vertex
             seen[k] = 1;
             const double x0[3] = {m.positions[3 * size_t(v)], m.positions[3 * size_t(v) + 1], m.positions[3 * size_t(v) + 2]};
-            if (fixed[k]) ++s.fixed;
-            else if (solve_near(q[k], x0, &target[3 * size_t(k)])) moved[k] = 1, ++s.moved;
+            if (fixed[k])
+                ++s.fixed;
+            else if (solve_near(q[k], x0, &target[3 * size_t(k)]))
+                moved[k] = 1, ++s.moved;
         }
         if (moved[k])
             for (int a = 0; a < 3; ++a) out[3 * size_t(v) + a] = float(target[3 * size_t(k) + a]);
@@ -221,10 +224,329 @@ Around triangles_around(uint32_t n, const std::vector<uint32_t>& full, const std
     return a;
 }
 
+// Samples of the full mesh for the fit and its checks: every triangle's centroid, every edge's
+// midpoint and every vertex, each weighing a seventh of the area of the triangles it belongs to
+// (seven samples a triangle, shared; Metro's mean, which the benchmark reads, samples the edges
+// and vertices first). With each, the points the corners of the full triangles it belongs to
+// stand for at the level: it may lie nearest their triangles, and its distance is theirs to
+// answer for, each point by the weight of those of the sample's triangles it is a corner of.
+struct Samples {
+    std::vector<V3> x;
+    std::vector<double> weight;
+    std::vector<uint32_t> start{0}, near;  // CSR: per sample, its points
+    std::vector<double> share;             // per entry of `near`: the weight of the sample's triangles around that point
+};
+
+// The seven sample points of triangle abc, Samples' own (for the level's triangles).
+std::array<V3, 7> seven_points(V3 a, V3 b, V3 c) { return {(1.0 / 3.0) * (a + b + c), 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), a, b, c}; }
+
+Samples surface_samples(const std::vector<uint32_t>& full, const std::vector<float>& before, const std::vector<uint32_t>& rep, const Points& p) {
+    Samples s;
+    std::vector<double> weight(full.size() / 3, 0.0);
+    std::vector<std::pair<uint32_t, double>> candidates;  // (point, share) of the sample being made
+    auto corners_of = [&](size_t t) {
+        for (int k = 0; k < 3; ++k) candidates.emplace_back(p.point[rep[full[3 * t + size_t(k)]]], weight[t]);
+    };
+    auto add = [&](V3 x, double w) {
+        s.x.push_back(x), s.weight.push_back(w);
+        std::sort(candidates.begin(), candidates.end());
+        for (size_t i = 0; i < candidates.size();) {
+            const uint32_t k = candidates[i].first;
+            double share = 0;
+            for (; i < candidates.size() && candidates[i].first == k; ++i) share += candidates[i].second;
+            s.near.push_back(k), s.share.push_back(share);
+        }
+        s.start.push_back(uint32_t(s.near.size()));
+        candidates.clear();
+    };
+    std::vector<std::pair<uint64_t, uint32_t>> edges;    // (lower << 32 | upper vertex, triangle)
+    std::vector<std::pair<uint32_t, uint32_t>> corners;  // (vertex, triangle)
+    for (size_t t = 0; 3 * t + 2 < full.size(); ++t) {
+        const uint32_t* c = &full[3 * t];
+        const V3 a = at(before, c[0]), b = at(before, c[1]), d = at(before, c[2]);
+        weight[t] = 0.5 * length(cross(b - a, d - a)) / 7.0;
+        if (!(weight[t] > 0)) continue;
+        corners_of(t);
+        add((1.0 / 3.0) * (a + b + d), weight[t]);
+        for (int k = 0; k < 3; ++k) {
+            const uint64_t u = c[k], v = c[(k + 1) % 3];
+            edges.emplace_back(std::min(u, v) << 32 | std::max(u, v), uint32_t(t));
+            corners.emplace_back(c[k], uint32_t(t));
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    for (size_t i = 0; i < edges.size();) {
+        const uint64_t e = edges[i].first;
+        double w = 0;
+        for (; i < edges.size() && edges[i].first == e; ++i) w += weight[edges[i].second], corners_of(edges[i].second);
+        const uint32_t u = uint32_t(e >> 32), v = uint32_t(e & 0xffffffffu);
+        add(0.5 * (at(before, u) + at(before, v)), w);
+    }
+    std::sort(corners.begin(), corners.end());
+    for (size_t i = 0; i < corners.size();) {
+        const uint32_t v = corners[i].first;
+        double w = 0;
+        for (; i < corners.size() && corners[i].first == v; ++i) w += weight[corners[i].second], corners_of(corners[i].second);
+        add(at(before, v), w);
+    }
+    return s;
+}
+
+// Per point, the triangles of `triangles` (3 corners each) with a corner whose point is `of`
+// that corner's (CSR, each once per point).
+template <class PointOf>
+Around around_points(const std::vector<uint32_t>& triangles, uint32_t points, PointOf of) {
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    for (size_t c = 0; c < triangles.size(); ++c) pairs.emplace_back(of(triangles[c]), uint32_t(c / 3));
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    Around a;
+    a.start.assign(size_t(points) + 1, 0);
+    for (const auto& [k, t] : pairs) ++a.start[k + 1], a.triangles.push_back(t);
+    for (uint32_t k = 0; k < points; ++k) a.start[k + 1] += a.start[k];
+    return a;
+}
+
+// Per item of a CSR list of points, the union of those points' lists in `of` (CSR, each
+// triangle once, in the order first met). `triangles` bounds the triangle numbers.
+Around unions(const std::vector<uint32_t>& start, const std::vector<uint32_t>& points, const Around& of, size_t triangles) {
+    Around a;
+    a.start.assign(start.size(), 0);
+    std::vector<uint32_t> mark(triangles, kNone);
+    for (size_t i = 0; i + 1 < start.size(); ++i) {
+        for (uint32_t c = start[i]; c < start[i + 1]; ++c)
+            for (uint32_t j = of.start[points[c]]; j < of.start[points[c] + 1]; ++j)
+                if (mark[of.triangles[j]] != uint32_t(i)) mark[of.triangles[j]] = uint32_t(i), a.triangles.push_back(of.triangles[j]);
+        a.start[i + 1] = uint32_t(a.triangles.size());
+    }
+    return a;
+}
+
+// What the fit and its checks read, made once per level: the source's samples, the level
+// triangles around each point (where a sample of the surface the point stands for lies nearest,
+// unless the level folds there), the source triangles each point stands for and their flats.
+struct FitContext {
+    const std::vector<uint32_t>& full;
+    const std::vector<uint32_t>& level;
+    const std::vector<float>& before;
+    const std::vector<uint32_t>& rep;
+    const Points& p;
+    uint32_t n;
+    Samples samples;
+    Around near;                             // per point: the level triangles around it
+    Around sources;                          // per point: full triangles with a corner it stands for
+    std::vector<detail::Flat> source_flats;  // per full triangle
+    Around sample_near;                      // per sample: the level triangles around its points, each once
+    Around level_sources;                    // per level triangle: the full triangles its corners stand for, each once
+
+    FitContext(const std::vector<uint32_t>& full_, const std::vector<uint32_t>& level_, const std::vector<float>& before_, const std::vector<uint32_t>& rep_,
+               const Points& p_, uint32_t n_)
+        : full(full_), level(level_), before(before_), rep(rep_), p(p_), n(n_), samples(surface_samples(full_, before_, rep_, p_)),
+          near(around_points(level_, p_.count, [&](uint32_t v) { return p_.point[v]; })),
+          sources(around_points(full_, p_.count, [&](uint32_t v) { return p_.point[rep_[v]]; })), source_flats(full_.size() / 3) {
+        for (size_t t = 0; t < source_flats.size(); ++t)
+            source_flats[t] = detail::make_flat(at(before, full[3 * t]), at(before, full[3 * t + 1]), at(before, full[3 * t + 2]));
+        sample_near = unions(samples.start, samples.near, near, level.size() / 3);
+        std::vector<uint32_t> start(level.size() / 3 + 1), corners(level.size());
+        for (size_t c = 0; c < level.size(); ++c) corners[c] = p.point[level[c]], start[c / 3 + 1] = uint32_t(c + 1);
+        level_sources = unions(start, corners, sources, full.size() / 3);
+    }
+};
+
+// Where each sample lies nearest on the level with its vertices at `x`: the nearest point's
+// triangle's points, its barycentric weights and the squared distance, among the level
+// triangles around the points the sample stands for (kNone where there are none).
+struct Projection {
+    std::vector<std::array<uint32_t, 3>> points;
+    std::vector<std::array<double, 3>> weights;
+    std::vector<double> d2;
+};
+
+Projection project_samples(const FitContext& f, const std::vector<float>& x) {
+    const std::vector<uint32_t>& level = f.level;
+    std::vector<detail::Flat> flats(level.size() / 3);
+    for (size_t t = 0; t < flats.size(); ++t) flats[t] = detail::make_flat(at(x, level[3 * t]), at(x, level[3 * t + 1]), at(x, level[3 * t + 2]));
+    const size_t count = f.samples.x.size();
+    Projection out;
+    out.points.assign(count, {kNone, kNone, kNone});
+    out.weights.assign(count, {0, 0, 0});
+    out.d2.assign(count, 0.0);
+    detail::parallel_blocks(count, 4096, 0, [&](unsigned, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            const V3 s = f.samples.x[i];
+            double best = std::numeric_limits<double>::infinity();
+            uint32_t nearest = kNone;
+            for (uint32_t j = f.sample_near.start[i]; j < f.sample_near.start[i + 1]; ++j) {
+                const double d = detail::distance2_below(flats[f.sample_near.triangles[j]], s, best);
+                if (d < best) best = d, nearest = f.sample_near.triangles[j];
+            }
+            if (nearest == kNone) continue;
+            detail::nearest_point(flats[nearest], s, out.weights[i].data());
+            out.d2[i] = best;
+            for (int c = 0; c < 3; ++c) out.points[i][size_t(c)] = f.p.point[level[3 * size_t(nearest) + size_t(c)]];
+        }
+    });
+    return out;
+}
+
+// Per point, the (sample, corner) terms where it is a corner of the sample's nearest triangle
+// (CSR; a term t is 3 sample + corner).
+Around terms_of(const Projection& pr, uint32_t points) {
+    Around a;
+    a.start.assign(size_t(points) + 1, 0);
+    for (const auto& c : pr.points)
+        for (const uint32_t k : c)
+            if (k != kNone) ++a.start[k + 1];
+    for (uint32_t k = 0; k < points; ++k) a.start[k + 1] += a.start[k];
+    a.triangles.resize(a.start[points]);
+    std::vector<uint32_t> next(a.start.begin(), a.start.end() - 1);
+    for (size_t i = 0; i < pr.points.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            if (pr.points[i][size_t(c)] != kNone) a.triangles[next[pr.points[i][size_t(c)]]++] = uint32_t(3 * i + size_t(c));
+    return a;
+}
+
+// The fit of Hoppe et al.'s mesh optimization (1993) with the projections held: the moved points
+// minimising the weighted squared distances from the samples to their nearest points,
+// sum_i w_i |sum_c b_ic X_c - s_i|^2, plus a pull toward each point's start of a twentieth of a
+// mean point's weight (a point the samples barely see, at the far corner of long triangles,
+// would otherwise go far to mend a little). Block Gauss-Seidel: each point in turn at its
+// minimum with the others held, a weighted average as a point enters each term through a scalar.
+// Samples far from the level (of a part the level dropped) weigh less past three times the RMS
+// distance, and no point leaves its start by more than `reach`.
+void fit_points(const FitContext& f, const Projection& pr, const std::vector<uint8_t>& moved, const std::vector<V3>& anchor, const std::vector<double>& reach,
+                std::vector<V3>& x) {
+    const Samples& s = f.samples;
+    const Around terms = terms_of(pr, f.p.count);
+    double sum_d2 = 0, sum_w = 0;
+    for (size_t i = 0; i < pr.d2.size(); ++i)
+        if (pr.points[i][0] != kNone) sum_d2 += s.weight[i] * pr.d2[i], sum_w += s.weight[i];
+    const double tau2 = sum_w > 0 ? 9.0 * sum_d2 / sum_w : 0.0;
+    std::vector<double> w(s.weight.size());
+    for (size_t i = 0; i < w.size(); ++i) w[i] = tau2 > 0 ? s.weight[i] / (1.0 + pr.d2[i] / tau2) : s.weight[i];
+    double total = 0;
+    uint32_t seen = 0;
+    for (const uint32_t t : terms.triangles) total += w[t / 3] * pr.weights[t / 3][t % 3] * pr.weights[t / 3][t % 3];
+    for (uint32_t k = 0; k < f.p.count; ++k) seen += terms.start[k] != terms.start[k + 1];
+    const double hold = seen ? 0.05 * total / seen : 0.0;
+    for (int sweep = 0; sweep < 8; ++sweep)
+        for (uint32_t k = 0; k < f.p.count; ++k) {
+            if (!moved[k] || terms.start[k] == terms.start[k + 1]) continue;
+            V3 sum{0, 0, 0};
+            double norm = 0;
+            for (uint32_t j = terms.start[k]; j < terms.start[k + 1]; ++j) {
+                const size_t i = terms.triangles[j] / 3, c = terms.triangles[j] % 3;
+                const double b = pr.weights[i][c];
+                V3 rest = s.x[i];  // the sample less the other corners' share
+                for (size_t o = 0; o < 3; ++o)
+                    if (o != c) rest = rest - pr.weights[i][o] * x[pr.points[i][o]];
+                sum = sum + (w[i] * b) * rest;
+                norm += w[i] * b * b;
+            }
+            if (!(norm + hold > 0)) continue;
+            const V3 step = (1.0 / (norm + hold)) * (sum + hold * anchor[k]) - anchor[k];
+            const double far = length(step);
+            x[k] = anchor[k] + (far > reach[k] ? reach[k] / far : 1.0) * step;
+        }
+}
+
+// The moved points of the level at `start` fitted to the source: three rounds of projecting the
+// samples on the level as it stands and fitting the points to them (eight sweeps each). A point reaches at most
+// twice the RMS distance of the samples it is a corner for at the start (what it is there to mend).
+std::vector<float> fitted(const FitContext& f, const std::vector<float>& start, const std::vector<uint8_t>& moved) {
+    std::vector<float> out = start;
+    std::vector<V3> x(f.p.count, V3{0, 0, 0});
+    for (uint32_t v = f.n; v-- > 0;) x[f.p.point[v]] = at(out, v);  // the point's first live vertex's
+    const std::vector<V3> anchor = x;
+    std::vector<double> reach(f.p.count, 0.0), weight(f.p.count, 0.0);
+    for (int round = 0; round < 3; ++round) {
+        const Projection pr = project_samples(f, out);
+        if (round == 0) {
+            for (size_t i = 0; i < pr.d2.size(); ++i)
+                for (int c = 0; c < 3; ++c) {
+                    const uint32_t k = pr.points[i][size_t(c)];
+                    if (k == kNone) continue;
+                    const double w = f.samples.weight[i] * pr.weights[i][size_t(c)];
+                    reach[k] += w * pr.d2[i], weight[k] += w;
+                }
+            for (uint32_t k = 0; k < f.p.count; ++k) reach[k] = weight[k] > 0 ? 2.0 * std::sqrt(reach[k] / weight[k]) : 0.0;
+        }
+        fit_points(f, pr, moved, anchor, reach, x);
+        for (uint32_t v = 0; v < f.n; ++v)
+            if (moved[f.p.point[v]]) {
+                const V3 y = x[f.p.point[v]];
+                out[3 * size_t(v)] = float(y.x), out[3 * size_t(v) + 1] = float(y.y), out[3 * size_t(v) + 2] = float(y.z);
+            }
+    }
+    return out;
+}
+
+// Adds `term` to each distinct point of `k`.
+void add_once(std::vector<double>& e, const std::array<uint32_t, 3>& k, double term) {
+    e[k[0]] += term;
+    if (k[1] != k[0]) e[k[1]] += term;
+    if (k[2] != k[0] && k[2] != k[1]) e[k[2]] += term;
+}
+
+// Per point, the local two-sided error of the level with its vertices at `x`: the area-weighted
+// squared distances from the source's samples of the triangles it stands for to the level, and
+// from the seven points of each level triangle around it to the source triangles its corners
+// stand for. The second weighs three quarters: the mean the benchmark reads is the larger of
+// the two directions', the first on nearly every level, and a point pushed out to bring a
+// chord nearer its arc (a sphere's) pays in the second what it gains in the first.
+std::vector<double> local_errors(const FitContext& f, const std::vector<float>& x) {
+    std::vector<double> e(f.p.count, 0.0);
+    const Projection pr = project_samples(f, x);
+    for (size_t i = 0; i < f.samples.x.size(); ++i)
+        for (uint32_t c = f.samples.start[i]; c < f.samples.start[i + 1]; ++c) e[f.samples.near[c]] += f.samples.share[c] * pr.d2[i];
+    const std::vector<uint32_t>& level = f.level;
+    std::vector<double> away(level.size() / 3, 0.0);  // per level triangle: its seven points' weighted squared distances
+    detail::parallel_blocks(away.size(), 1024, 0, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+            const uint32_t* c = &level[3 * t];
+            const double area = 0.5 * length(cross(at(f.before, c[1]) - at(f.before, c[0]), at(f.before, c[2]) - at(f.before, c[0])));
+            double sum = 0;
+            for (const V3& q : seven_points(at(x, c[0]), at(x, c[1]), at(x, c[2]))) {
+                double best = std::numeric_limits<double>::infinity();
+                for (uint32_t j = f.level_sources.start[t]; j < f.level_sources.start[t + 1]; ++j)
+                    best = std::min(best, detail::distance2_below(f.source_flats[f.level_sources.triangles[j]], q, best));
+                if (std::isfinite(best)) sum += best;
+            }
+            away[t] = 0.75 * area / 7.0 * sum;
+        }
+    });
+    for (size_t t = 0; t < away.size(); ++t) add_once(e, {f.p.point[level[3 * t]], f.p.point[level[3 * t + 1]], f.p.point[level[3 * t + 2]]}, away[t]);
+    return e;
+}
+
+// Each point placed where, among the candidate placements of all points (`configs`), its local
+// error is the smallest: a move that helps only on average, or only elsewhere, is not taken.
+// Returns each point's choice.
+std::vector<uint8_t> choose_placements(const FitContext& f, const std::vector<const std::vector<float>*>& configs, std::vector<float>& out) {
+    std::vector<double> best(f.p.count, std::numeric_limits<double>::infinity());
+    std::vector<uint8_t> choice(f.p.count, 0);
+    for (size_t c = 0; c < configs.size(); ++c) {
+        const std::vector<double> e = local_errors(f, *configs[c]);
+        for (uint32_t k = 0; k < f.p.count; ++k)
+            if (e[k] < best[k]) best[k] = e[k], choice[k] = uint8_t(c);
+    }
+    for (uint32_t v = 0; v < f.n; ++v) std::copy_n(configs[choice[f.p.point[v]]]->begin() + 3 * ptrdiff_t(v), 3, out.begin() + 3 * ptrdiff_t(v));
+    return choice;
+}
+
+// The level's moved points fitted to the source's surface (fitted()), then each point where its
+// local error is the smallest: at full detail, at its quadric's minimum or fitted. A point
+// chosen at full detail is no longer moved.
+void fit_to_source(const FitContext& f, std::vector<uint8_t>& moved, std::vector<float>& out, RefitStats& s) {
+    const std::vector<float> quadric = out, fit = fitted(f, quadric, moved);
+    const std::vector<uint8_t> choice = choose_placements(f, {&f.before, &quadric, &fit}, out);
+    for (uint32_t k = 0; k < f.p.count; ++k)
+        if (choice[k] == 0 && moved[k]) moved[k] = 0, --s.moved, ++s.kept;
+}
+
 // `width` values per vertex of `src` at barycentric `w` of the corners `c`, into `dst`.
 void interpolate(const float* src, size_t width, const uint32_t* c, const double w[3], float* dst) {
-    for (size_t a = 0; a < width; ++a)
-        dst[a] = float(w[0] * src[width * c[0] + a] + w[1] * src[width * c[1] + a] + w[2] * src[width * c[2] + a]);
+    for (size_t a = 0; a < width; ++a) dst[a] = float(w[0] * src[width * c[0] + a] + w[1] * src[width * c[1] + a] + w[2] * src[width * c[2] + a]);
 }
 
 void normalize(float* x, size_t count) {
@@ -239,8 +561,8 @@ void normalize(float* x, size_t count) {
 // closest to its new position among the triangles around the vertices it stands for (its own
 // side of a seam or a hard edge: copies stand for their own sides), interpolated there; normals
 // made unit, tangents made unit and orthogonal to the normal, their handedness kept.
-void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<float>& before,
-                         const std::vector<uint32_t>& rep, const Points& p, const std::vector<uint8_t>& moved, RefitLevel& r) {
+void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<float>& before, const std::vector<uint32_t>& rep,
+                         const Points& p, const std::vector<uint8_t>& moved, RefitLevel& r) {
     const Around around = triangles_around(n, full, rep);
     for (uint32_t v = 0; v < n; ++v) {
         if (!moved[p.point[v]]) continue;
@@ -279,7 +601,7 @@ std::vector<float> copy_stream(const float* values, uint32_t count, size_t width
     return values ? std::vector<float>(values, values + width * count) : std::vector<float>();
 }
 
-} // namespace
+}  // namespace
 
 RefitLevel refit_level(const MeshView& m, uint32_t n) {
     RefitLevel r;
@@ -290,6 +612,7 @@ RefitLevel refit_level(const MeshView& m, uint32_t n) {
     const std::vector<uint32_t> full = level_triangles(m, m.vertex_count), level = level_triangles(m, n);
     const std::vector<uint32_t> rep = representatives(m, n);
     std::vector<uint8_t> moved = move_points(m, n, p, fixed_points(full, p), point_quadrics(m, full, p, rep), r.positions, r.stats);
+    fit_to_source(FitContext(full, level, before, rep, p, n), moved, r.positions, r.stats);
     put_back_turned(level, n, p, before, moved, r.positions, r.stats);
     r.normals = copy_stream(m.normals, m.vertex_count, 3);
     r.texcoords = copy_stream(m.texcoords, m.vertex_count, 2);
@@ -312,4 +635,4 @@ MeshView refit_view(const MeshView& m, const RefitLevel& r) {
     return v;
 }
 
-} // namespace tom
+}  // namespace tom

@@ -18,6 +18,7 @@ struct RefitStats {
     uint32_t moved = 0;     ///< points (coincident copies count once) given a new position
     uint32_t fixed = 0;     ///< live points left in place: on an open edge or where parts meet
     uint32_t reverted = 0;  ///< points put back because a triangle of theirs would turn over
+    uint32_t kept = 0;      ///< points left in place because no move lowered their local error
 };
 
 /// A level's own vertex streams (each value-per-vertex * vertex_count, empty when the mesh has
@@ -37,7 +38,11 @@ struct RefitLevel {
 /// vertex_count], never among a group's copies; its triangles are extract(m, n)'s) with each
 /// live point moved to the minimum of the quadric of the full mesh's triangles around every
 /// vertex it stands for (itself and the vertices whose substitution chains end at it), held
-/// near its own position along the directions the quadric leaves free; a moved vertex's normal,
+/// near its own position along the directions the quadric leaves free, then fitted to the
+/// full mesh's surface (Hoppe et al. 1993's fit: area-weighted samples of the full mesh, their
+/// squared distances to the level minimised); each point then takes, of its full-detail
+/// position, its quadric's minimum and its fitted position, the one where the two-sided error
+/// of the triangles around it is the smallest. A moved vertex's normal,
 /// texture coordinates, colour and tangent are the source's where it now stands (at the closest
 /// point of the triangles around the vertices it stands for, on its side of a seam or hard edge:
 /// the normals of a smooth surface stay exact, and its texture does not slide). A point is a
