@@ -79,6 +79,37 @@ Points weld_by_position(const MeshView& m) {
     return p;
 }
 
+// The points renumbered along a Morton curve through the mesh's box (by the position of each
+// point's first vertex): what the fit reads per point (its triangles, its samples, its place)
+// then lies together in memory for neighbouring points, where the file's order is that of
+// resolution, spread over the whole surface.
+void number_in_space(const MeshView& m, Points& p) {
+    std::vector<uint32_t> first(p.count, kNone);
+    for (uint32_t v = m.vertex_count; v-- > 0;) first[p.point[v]] = v;
+    auto spread = [](uint64_t x) {  // 21 bits to every third of 63
+        x &= 0x1fffff;
+        x = (x | x << 32) & 0x1f00000000ffffull;
+        x = (x | x << 16) & 0x1f0000ff0000ffull;
+        x = (x | x << 8) & 0x100f00f00f00f00full;
+        x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+        return (x | x << 2) & 0x1249249249249249ull;
+    };
+    std::vector<std::pair<uint64_t, uint32_t>> order(p.count);
+    for (uint32_t k = 0; k < p.count; ++k) {
+        uint64_t code = 0;
+        for (int a = 0; a < 3; ++a) {
+            const double lo = m.bounds_min[a], extent = double(m.bounds_max[a]) - lo;
+            const double t = extent > 0 ? (double(m.positions[3 * size_t(first[k]) + size_t(a)]) - lo) / extent : 0.0;
+            code |= spread(uint64_t(t > 0 ? std::min(t, 1.0) * 2097151.0 : 0.0)) << a;  // (NaN: 0)
+        }
+        order[k] = {code, k};
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<uint32_t> number(p.count);
+    for (uint32_t i = 0; i < p.count; ++i) number[order[i].second] = i;
+    for (uint32_t& k : p.point) k = number[k];
+}
+
 // The triangles of `m` at resolution `n`.
 std::vector<uint32_t> level_triangles(const MeshView& m, uint32_t n) {
     std::vector<uint32_t> idx(size_t(active_triangle_count(m, n)) * 3);
@@ -105,6 +136,20 @@ std::vector<uint8_t> fixed_points(const std::vector<uint32_t>& full, const Point
         i = j;
     }
     return fixed;
+}
+
+// `triangles` in the order of their lowest corner's point, `point_of` a corner's (points are
+// numbered in space).
+template <class PointOf>
+std::vector<uint32_t> in_point_order(const std::vector<uint32_t>& triangles, PointOf point_of) {
+    std::vector<std::pair<uint32_t, uint32_t>> order;
+    for (size_t t = 0; t + 2 < triangles.size(); t += 3)
+        order.emplace_back(std::min({point_of(triangles[t]), point_of(triangles[t + 1]), point_of(triangles[t + 2])}), uint32_t(t));
+    std::sort(order.begin(), order.end());
+    std::vector<uint32_t> out;
+    out.reserve(triangles.size());
+    for (const auto& [key, t] : order) out.insert(out.end(), triangles.begin() + t, triangles.begin() + t + 3);
+    return out;
 }
 
 // The vertex < n each vertex stands in for at resolution n (>= min_vertex_count): itself when
@@ -234,11 +279,26 @@ struct Samples {
     std::vector<V3> x;
     std::vector<double> weight;
     std::vector<uint32_t> start{0}, near;  // CSR: per sample, its points
-    std::vector<double> share;             // per entry of `near`: the weight of the sample's triangles around that point
+    std::vector<float> share;              // per entry of `near`: the weight of the sample's triangles around that point
 };
 
 // The seven sample points of triangle abc, Samples' own (for the level's triangles).
 std::array<V3, 7> seven_points(V3 a, V3 b, V3 c) { return {(1.0 / 3.0) * (a + b + c), 0.5 * (a + b), 0.5 * (b + c), 0.5 * (c + a), a, b, c}; }
+
+// `s` with its samples in the order of their lowest point (points are numbered in space).
+Samples in_point_order(const Samples& s) {
+    std::vector<std::pair<uint32_t, uint32_t>> order;
+    for (uint32_t i = 0; i + 1 < s.start.size(); ++i) order.emplace_back(s.start[i] < s.start[i + 1] ? s.near[s.start[i]] : kNone, i);
+    std::sort(order.begin(), order.end());
+    Samples out;
+    for (const auto& [key, i] : order) {
+        out.x.push_back(s.x[i]), out.weight.push_back(s.weight[i]);
+        out.near.insert(out.near.end(), s.near.begin() + s.start[i], s.near.begin() + s.start[i + 1]);
+        out.share.insert(out.share.end(), s.share.begin() + s.start[i], s.share.begin() + s.start[i + 1]);
+        out.start.push_back(uint32_t(out.near.size()));
+    }
+    return out;
+}
 
 Samples surface_samples(const std::vector<uint32_t>& full, const std::vector<float>& before, const std::vector<uint32_t>& rep, const Points& p) {
     Samples s;
@@ -254,7 +314,7 @@ Samples surface_samples(const std::vector<uint32_t>& full, const std::vector<flo
             const uint32_t k = candidates[i].first;
             double share = 0;
             for (; i < candidates.size() && candidates[i].first == k; ++i) share += candidates[i].second;
-            s.near.push_back(k), s.share.push_back(share);
+            s.near.push_back(k), s.share.push_back(float(share));
         }
         s.start.push_back(uint32_t(s.near.size()));
         candidates.clear();
@@ -289,7 +349,7 @@ Samples surface_samples(const std::vector<uint32_t>& full, const std::vector<flo
         for (; i < corners.size() && corners[i].first == v; ++i) w += weight[corners[i].second], corners_of(corners[i].second);
         add(at(before, v), w);
     }
-    return s;
+    return in_point_order(s);
 }
 
 // Per point, the triangles of `triangles` (3 corners each) with a corner whose point is `of`
@@ -326,8 +386,8 @@ Around unions(const std::vector<uint32_t>& start, const std::vector<uint32_t>& p
 // triangles around each point (where a sample of the surface the point stands for lies nearest,
 // unless the level folds there), the source triangles each point stands for and their flats.
 struct FitContext {
-    const std::vector<uint32_t>& full;
-    const std::vector<uint32_t>& level;
+    std::vector<uint32_t> full;  // the full mesh's triangles and the level's, in point order (declared first: built first)
+    std::vector<uint32_t> level;
     const std::vector<float>& before;
     const std::vector<uint32_t>& rep;
     const Points& p;
@@ -341,9 +401,10 @@ struct FitContext {
 
     FitContext(const std::vector<uint32_t>& full_, const std::vector<uint32_t>& level_, const std::vector<float>& before_, const std::vector<uint32_t>& rep_,
                const Points& p_, uint32_t n_)
-        : full(full_), level(level_), before(before_), rep(rep_), p(p_), n(n_), samples(surface_samples(full_, before_, rep_, p_)),
-          near(around_points(level_, p_.count, [&](uint32_t v) { return p_.point[v]; })),
-          sources(around_points(full_, p_.count, [&](uint32_t v) { return p_.point[rep_[v]]; })), source_flats(full_.size() / 3) {
+        : full(in_point_order(full_, [&](uint32_t v) { return p_.point[rep_[v]]; })), level(in_point_order(level_, [&](uint32_t v) { return p_.point[v]; })),
+          before(before_), rep(rep_), p(p_), n(n_), samples(surface_samples(full, before_, rep_, p_)),
+          near(around_points(level, p_.count, [&](uint32_t v) { return p_.point[v]; })),
+          sources(around_points(full, p_.count, [&](uint32_t v) { return p_.point[rep_[v]]; })), source_flats(full.size() / 3) {
         for (size_t t = 0; t < source_flats.size(); ++t)
             source_flats[t] = detail::make_flat(at(before, full[3 * t]), at(before, full[3 * t + 1]), at(before, full[3 * t + 2]));
         sample_near = unions(samples.start, samples.near, near, level.size() / 3);
@@ -608,7 +669,8 @@ RefitLevel refit_level(const MeshView& m, uint32_t n) {
     r.resolution = n = m.whole_groups_below(std::min(std::max(n, m.min_vertex_count), m.vertex_count));  // as extract() takes it
     const std::vector<float> before(m.positions, m.positions + 3 * size_t(m.vertex_count));
     r.positions = before;
-    const Points p = weld_by_position(m);
+    Points p = weld_by_position(m);
+    number_in_space(m, p);
     const std::vector<uint32_t> full = level_triangles(m, m.vertex_count), level = level_triangles(m, n);
     const std::vector<uint32_t> rep = representatives(m, n);
     std::vector<uint8_t> moved = move_points(m, n, p, fixed_points(full, p), point_quadrics(m, full, p, rep), r.positions, r.stats);
