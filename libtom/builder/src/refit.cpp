@@ -253,21 +253,10 @@ void put_back_turned(const std::vector<uint32_t>& level, uint32_t n, const Point
     }
 }
 
-// Per live vertex, the full mesh's triangles around the vertices it stands for (CSR).
+// Per live vertex or point: a list of triangles (CSR).
 struct Around {
     std::vector<uint32_t> start, triangles;
 };
-
-Around triangles_around(uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& rep) {
-    Around a;
-    a.start.assign(size_t(n) + 1, 0);
-    for (const uint32_t v : full) ++a.start[rep[v] + 1];
-    for (uint32_t v = 0; v < n; ++v) a.start[v + 1] += a.start[v];
-    a.triangles.resize(full.size());
-    std::vector<uint32_t> next(a.start.begin(), a.start.end() - 1);
-    for (size_t c = 0; c < full.size(); ++c) a.triangles[next[rep[full[c]]]++] = uint32_t(c / 3);
-    return a;
-}
 
 // Samples of the full mesh for the fit and its checks: every triangle's centroid, every edge's
 // midpoint and every vertex, each weighing a seventh of the area of the triangles it belongs to
@@ -382,35 +371,34 @@ Around unions(const std::vector<uint32_t>& start, const std::vector<uint32_t>& p
     return a;
 }
 
-// What the fit and its checks read, made once per level: the source's samples, the level
-// triangles around each point (where a sample of the surface the point stands for lies nearest,
-// unless the level folds there), the source triangles each point stands for and their flats.
+// What the fit and its checks read, made once per level: the source's samples with, per
+// sample, the level triangles around its points (where a sample of the surface a point stands
+// for lies nearest, unless the level folds there), and per level triangle the source triangles
+// its corners stand for, with their flats.
 struct FitContext {
-    std::vector<uint32_t> full;  // the full mesh's triangles and the level's, in point order (declared first: built first)
-    std::vector<uint32_t> level;
+    std::vector<uint32_t> level;  // the level's triangles, in point order
     const std::vector<float>& before;
-    const std::vector<uint32_t>& rep;
     const Points& p;
     uint32_t n;
     Samples samples;
-    Around near;                             // per point: the level triangles around it
-    Around sources;                          // per point: full triangles with a corner it stands for
-    std::vector<detail::Flat> source_flats;  // per full triangle
+    std::vector<detail::Flat> source_flats;  // per full triangle, in point order
     Around sample_near;                      // per sample: the level triangles around its points, each once
     Around level_sources;                    // per level triangle: the full triangles its corners stand for, each once
 
-    FitContext(const std::vector<uint32_t>& full_, const std::vector<uint32_t>& level_, const std::vector<float>& before_, const std::vector<uint32_t>& rep_,
+    FitContext(const std::vector<uint32_t>& full_, const std::vector<uint32_t>& level_, const std::vector<float>& before_, const std::vector<uint32_t>& rep,
                const Points& p_, uint32_t n_)
-        : full(in_point_order(full_, [&](uint32_t v) { return p_.point[rep_[v]]; })), level(in_point_order(level_, [&](uint32_t v) { return p_.point[v]; })),
-          before(before_), rep(rep_), p(p_), n(n_), samples(surface_samples(full, before_, rep_, p_)),
-          near(around_points(level, p_.count, [&](uint32_t v) { return p_.point[v]; })),
-          sources(around_points(full, p_.count, [&](uint32_t v) { return p_.point[rep_[v]]; })), source_flats(full.size() / 3) {
+        : level(in_point_order(level_, [&](uint32_t v) { return p_.point[v]; })), before(before_), p(p_), n(n_) {
+        const auto source_point = [&](uint32_t v) { return p.point[rep[v]]; };
+        const std::vector<uint32_t> full = in_point_order(full_, source_point);
+        samples = surface_samples(full, before, rep, p);
+        source_flats.resize(full.size() / 3);
         for (size_t t = 0; t < source_flats.size(); ++t)
             source_flats[t] = detail::make_flat(at(before, full[3 * t]), at(before, full[3 * t + 1]), at(before, full[3 * t + 2]));
+        const Around near = around_points(level, p.count, [&](uint32_t v) { return p.point[v]; });  // per point
         sample_near = unions(samples.start, samples.near, near, level.size() / 3);
         std::vector<uint32_t> start(level.size() / 3 + 1), corners(level.size());
         for (size_t c = 0; c < level.size(); ++c) corners[c] = p.point[level[c]], start[c / 3 + 1] = uint32_t(c + 1);
-        level_sources = unions(start, corners, sources, full.size() / 3);
+        level_sources = unions(start, corners, around_points(full, p.count, source_point), full.size() / 3);
     }
 };
 
@@ -624,7 +612,7 @@ void normalize(float* x, size_t count) {
 // made unit, tangents made unit and orthogonal to the normal, their handedness kept.
 void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<float>& before, const std::vector<uint32_t>& rep,
                          const Points& p, const std::vector<uint8_t>& moved, RefitLevel& r) {
-    const Around around = triangles_around(n, full, rep);
+    const Around around = around_points(full, n, [&](uint32_t v) { return rep[v]; });  // per live vertex
     for (uint32_t v = 0; v < n; ++v) {
         if (!moved[p.point[v]]) continue;
         const V3 x = at(r.positions, v);
