@@ -188,7 +188,7 @@ int parse_options(Options& o, int argc, char** argv) {
                  "For .glb: also embed the images that are files (read from --texture-dir); images stored in the .tom are always embedded");
     app.add_flag("--refit", o.refit,
                  "Move each level's vertices to where they best stand for the full mesh's surface (the quadric of the triangles they "
-                 "replaced, as gltfpack -sv), their normals, texture coordinates, colours and tangents the source's there: each level "
+                 "replaced, then fitted to the surface, each kept where the error around it is smallest; as gltfpack -sv), their normals, texture coordinates, colours and tangents the source's there: each level "
                  "written with vertex streams of its own, no longer a prefix of the .tom's vertex array (in a .glb chain, joints, weights "
                  "and targets stay shared); open edges, edges where parts meet and coincident copies stay joined");
     app.add_flag("-c,--compress", o.compress,
