@@ -5,9 +5,9 @@
 // encoder predicted from.
 
 #include <algorithm>
-#include <iterator>
 #include <cmath>
 #include <cstdint>
+#include <iterator>
 #include <type_traits>
 #include <vector>
 
@@ -129,8 +129,13 @@ struct Seen {
         if (by.size() < vertices) by.resize(vertices, 0);
     }
     /// A new gathering.
-    void start() {
-        if (++gathering == 0) std::fill(by.begin(), by.end(), 0), gathering = 1;
+    void start() { reserve(1); }
+    /// `n` new marks, the first returned and the last current (so that first() goes on with it):
+    /// a split's decoder marks p's neighbours with one and v's with the next.
+    uint32_t reserve(uint32_t n) {
+        if (gathering > UINT32_MAX - n) std::fill(by.begin(), by.end(), 0), gathering = 0;
+        gathering += n;
+        return gathering - n + 1;
     }
     /// True the first time vertex u is seen in this gathering.
     bool first(uint32_t u) {
@@ -172,19 +177,20 @@ inline void order_candidates(const std::vector<uint32_t>& around_p, const std::v
     sort_short(out.data() + common, out.data() + out.size());
 }
 
-/// The prediction of vertex v's grid values, its `lanes` lanes into `out`: for positions (`ring`
-/// not null) the rounded mean of its neighbours' when it has any (the vertices it shares a
-/// triangle with just after its split, all below v); else its substitute's for a removed vertex
-/// (normals, texture coordinates and colours: across a hard edge or a seam the neighbours' mean is
-/// a poor guess, its copy's a good one), the previous vertex's for a survivor, zero for vertex 0.
-/// `values` holds `lanes` values per vertex; every vertex below v is decoded.
+/// The prediction of vertex v's grid values, its `lanes` lanes into `out`: for positions (`ring`,
+/// `ring_size` vertices) the rounded mean of its neighbours' when it has any (the vertices it
+/// shares a triangle with just after its split, all below v, in any order); else its
+/// substitute's for a removed vertex (normals, texture coordinates and colours: across a hard
+/// edge or a seam the neighbours' mean is a poor guess, its copy's a good one), the previous
+/// vertex's for a survivor, zero for vertex 0. `values` holds `lanes` values per vertex; every
+/// vertex below v is decoded.
 template <class T>
-void prediction(const T* values, int lanes, uint32_t v, uint32_t substitute, const std::vector<uint32_t>* ring, T* out) {
-    if (ring && !ring->empty()) {
+void prediction(const T* values, int lanes, uint32_t v, uint32_t substitute, const uint32_t* ring, size_t ring_size, T* out) {
+    if (ring_size) {
         int64_t sum[4] = {0, 0, 0, 0};  // (at most 4 lanes: colours)
-        for (const uint32_t u : *ring)
-            for (int k = 0; k < lanes; ++k) sum[k] += int64_t(values[size_t(u) * lanes + k]);
-        const int64_t n = int64_t(ring->size());
+        for (size_t i = 0; i < ring_size; ++i)
+            for (int k = 0; k < lanes; ++k) sum[k] += int64_t(values[size_t(ring[i]) * lanes + k]);
+        const int64_t n = int64_t(ring_size);
         for (int k = 0; k < lanes; ++k) out[k] = T(sum[k] >= 0 ? (sum[k] + n / 2) / n : -((-sum[k] + n / 2) / n));
         return;
     }

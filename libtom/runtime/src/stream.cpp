@@ -47,12 +47,7 @@ public:
             l[1 + l[0]++] = g;
             return;
         }
-        if (l[0] == room) {  // spill: the line's corners to a list of their own
-            spill_.emplace_back(l + 1, l + 1 + room);
-            l[1] = uint32_t(spill_.size() - 1);
-        }
-        spill_[l[1]].push_back(g);
-        ++l[0];
+        push_spilled(l, g);
     }
     /// Keeps the first n corners of v's list (the caller moved the kept ones there).
     void truncate(uint32_t v, uint32_t n) {
@@ -69,11 +64,38 @@ public:
     }
 
 private:
+    /// push() past the line's room (kept out of line: the usual push is a store and an increment).
+#if defined(__GNUC__)
+    __attribute__((noinline))
+#endif
+    void push_spilled(uint32_t* l, uint32_t g) {
+        if (l[0] == room) {  // spill: the line's corners to a list of their own
+            spill_.emplace_back(l + 1, l + 1 + room);
+            l[1] = uint32_t(spill_.size() - 1);
+        }
+        spill_[l[1]].push_back(g);
+        ++l[0];
+    }
     static constexpr size_t line = 16;
     static constexpr uint32_t room = line - 1;
     bool spilled(uint32_t v) const { return lines_[size_t(v) * line] > room; }
     std::vector<uint32_t> lines_;
     std::vector<std::vector<uint32_t>> spill_;
+};
+
+/// The neighbourhood of a split (p into p and v) as its born triangles' candidates need it: p's
+/// neighbours through the corners it kept (`near_p`, each marked `mark_p` in `seen`), and v's
+/// through the corners it took, those also near p (`common`, remarked `mark_v`) and the others
+/// (`v_only`, marked `mark_v`). The candidates (stream_layout::order_candidates) are `common`
+/// ascending, then the rest ascending, which is listed only when a born triangle reaches past
+/// `common` (a manifold split's third corners are both in it).
+struct SplitScratch {
+    Seen seen;
+    uint32_t mark_p = 0, mark_v = 0;
+    std::vector<uint32_t> near_p, common, v_only, rest;
+    bool rest_listed = false;
+    size_t born_from = 0;  // where the born third corners start in the ring being listed
+    uint32_t candidate_count() const { return uint32_t(near_p.size() + v_only.size()); }
 };
 
 /// A mesh as the directory declares it and as far as its chunks are decoded.
@@ -94,9 +116,11 @@ struct MeshState {
     std::vector<std::vector<uint32_t>> corners;  // per part, 3 per live triangle, mapped to resolution
     std::vector<uint64_t> part_ends;             // per part, first_triangle + triangle_count
     CornerLists incident;                        // per vertex: the live corners holding it
-    std::vector<std::vector<uint32_t>> rings;    // per vertex of the chunk being decoded: its neighbours just after its split
-    std::vector<uint32_t> around[2];             // scratch: p's and v's neighbours during a split
-    Seen seen;                                   // scratch of gather_neighbours
+    // per vertex a + i of the chunk being decoded: its neighbours just after its split, in any
+    // order (the prediction is their mean), at [ring_ends[i - 1], ring_ends[i]) of ring_items
+    std::vector<uint32_t> ring_items;
+    std::vector<size_t> ring_ends;
+    SplitScratch split;                          // the neighbourhood of the split being decoded
     std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
     std::vector<uint32_t> births;                // scratch: a split's born triangles per part
 };
@@ -215,7 +239,9 @@ struct StreamDecoder::Impl {
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
-    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates, std::vector<uint32_t>& ring);
+    void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left);
+    uint64_t born_counts(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left);
+    void bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t part);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
@@ -507,7 +533,7 @@ void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& c
         if (base[p] > plausible || born[p] > plausible) in.fail("part " + std::to_string(p) + "'s counts cannot fit in " + std::to_string(bytes) + " bytes");
     }
     m.incident.resize(chunk.vertex_end);
-    m.seen.cover(chunk.vertex_end);
+    m.split.seen.cover(chunk.vertex_end);
     decode_base(m, in, base);
     decode_splits(m, in, chunk.vertex_begin, chunk.vertex_end, born);
     decode_vertices(m, in, chunk.vertex_begin, chunk.vertex_end);
@@ -527,14 +553,16 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
     return out;
 }
 
-/// Adds residuals to the predicted grid values, `lanes` values of type T per vertex.
+/// Adds residuals to the predicted grid values, `lanes` values of type T per vertex; `rings`
+/// (the mesh's, or null: the substitutes predict) gives the neighbours.
 template <class T>
-void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const std::vector<std::vector<uint32_t>>* rings, const uint8_t* residuals,
-             uint32_t element, uint32_t a, uint32_t b, int lanes) {
+void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const MeshState* rings, const uint8_t* residuals, uint32_t element, uint32_t a,
+             uint32_t b, int lanes) {
     values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
     for (uint32_t v = a; v < b; ++v) {
         T* out = &values[size_t(v) * lanes];
-        prediction(values.data(), lanes, v, substitute[v], rings ? &(*rings)[v - a] : nullptr, out);
+        const size_t i = v - a, from = !rings || !i ? 0 : rings->ring_ends[i - 1], to = rings ? rings->ring_ends[i] : 0;
+        prediction(values.data(), lanes, v, substitute[v], rings ? rings->ring_items.data() + from : nullptr, to - from, out);
         for (int k = 0; k < lanes; ++k) {
             T r;
             std::memcpy(&r, residuals + size_t(v - a) * element + k * sizeof(T), sizeof(T));
@@ -544,11 +572,11 @@ void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, co
 }
 
 /// The u32 before an attribute block: its prediction, the substitute's values (null) or the
-/// neighbours' mean (the chunk's rings).
-const std::vector<std::vector<uint32_t>>* predictor_of(ChunkReader& in, const MeshState& m) {
+/// neighbours' mean (the mesh, whose rings the chunk's splits listed).
+const MeshState* predictor_of(ChunkReader& in, const MeshState& m) {
     const uint32_t p = in.u32();
     if (p > 1) in.fail("prediction " + std::to_string(p) + " is not 0 (substitute) or 1 (neighbours)");
-    return p ? &m.rings : nullptr;
+    return p ? &m : nullptr;
 }
 
 /// corner() below, of a mesh with several parts: the part's range first.
@@ -608,16 +636,94 @@ void StreamDecoder::Impl::decode_base(MeshState& m, ChunkReader& in, const std::
     }
 }
 
+namespace {
+
+/// Reads which of p's live corners (in TRIS order) v takes, a bit each, up to 32 at a time, and
+/// moves them.
+void move_corners(MeshState& m, BitReader& r, uint32_t p, uint32_t v) {
+    uint32_t* around = m.incident.begin(p);
+    const uint32_t corners = m.incident.size(p);
+    // a mesh of one part appends every corner past the others (its lists stay ascending); one of
+    // several adds a part's triangles before the next part's
+    if (m.parts.size() > 1) sort_short(around, around + corners);
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < corners; i += 32) {
+        const uint32_t n = std::min(corners - i, 32u), moves = r.bits(n);
+        for (uint32_t j = 0; j < n; ++j) {
+            const uint32_t g = around[i + j];
+            if (moves >> j & 1u) {
+                uint32_t* c = corner(m, g);
+                m.rewritten.emplace_back(g, *c);
+                *c = v;
+                m.incident.push(v, g);
+            } else {
+                around[kept++] = g;
+            }
+        }
+    }
+    m.incident.truncate(p, kept);
+}
+
+/// Appends to `ring` the vertices sharing a live triangle with v, but v, each once.
+void ring_of(MeshState& m, uint32_t v, std::vector<uint32_t>& ring) {
+    Seen& seen = m.split.seen;
+    const uint32_t mark = seen.reserve(1);
+    for (const uint32_t* g = m.incident.begin(v); g != m.incident.end(v); ++g) {
+        const uint32_t* c = triangle_of(m, *g);
+        for (int k = 0; k < 3; ++k)
+            if (c[k] != v && seen.by[c[k]] != mark) seen.by[c[k]] = mark, ring.push_back(c[k]);
+    }
+}
+
+/// Lists the neighbourhood of the split of p into p and v (SplitScratch) from the corners each
+/// holds before the births, and appends v's neighbours (without p) to `ring`.
+void list_neighbourhood(MeshState& m, uint32_t p, uint32_t v, std::vector<uint32_t>& ring) {
+    SplitScratch& s = m.split;
+    std::vector<uint32_t>& by = s.seen.by;
+    s.mark_p = s.seen.reserve(2), s.mark_v = s.mark_p + 1;
+    s.near_p.clear(), s.common.clear(), s.v_only.clear(), s.rest_listed = false;
+    for (const uint32_t* g = m.incident.begin(p); g != m.incident.end(p); ++g) {
+        const uint32_t* c = triangle_of(m, *g);
+        for (int k = 0; k < 3; ++k)
+            if (c[k] != p && c[k] != v && by[c[k]] != s.mark_p) by[c[k]] = s.mark_p, s.near_p.push_back(c[k]);
+    }
+    for (const uint32_t* g = m.incident.begin(v); g != m.incident.end(v); ++g) {
+        const uint32_t* c = triangle_of(m, *g);
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t u = c[k];
+            if (u == p || u == v || by[u] == s.mark_v) continue;
+            (by[u] == s.mark_p ? s.common : s.v_only).push_back(u);
+            by[u] = s.mark_v;
+            ring.push_back(u);
+        }
+    }
+    sort_short(s.common.data(), s.common.data() + s.common.size());
+}
+
+/// Candidate `index` (below SplitScratch::candidate_count()) for a born triangle's third corner.
+uint32_t candidate(SplitScratch& s, uint32_t index) {
+    if (index < s.common.size()) return s.common[index];
+    if (!s.rest_listed) {  // p's neighbours not near v, and v's not near p, ascending
+        s.rest.clear();
+        for (const uint32_t u : s.near_p)
+            if (s.seen.by[u] == s.mark_p) s.rest.push_back(u);
+        s.rest.insert(s.rest.end(), s.v_only.begin(), s.v_only.end());
+        sort_short(s.rest.data(), s.rest.data() + s.rest.size());
+        s.rest_listed = true;
+    }
+    return s.rest[index - s.common.size()];
+}
+
+}  // namespace
+
 // The splits of vertices [a, b) (FORMAT.md): each vertex's substitute, which of its corners take
-// the vertex, and the triangles born with it.
+// the vertex, and the triangles born with it; and each vertex's ring for the attributes.
 void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born) {
     const auto [data, n] = in.block("splits");
     BitReader r{data, n, 0, &in};
-    std::vector<uint32_t> left = born, candidates;
-    // each new vertex's ring, reusing the lists of the previous chunk
-    if (m.rings.size() < b - a) m.rings.resize(b - a);
-    for (uint32_t i = 0; i < b - a; ++i) m.rings[i].clear();
-    for (uint32_t v = a; v < b; ++v) split_vertex(m, in, r, v, left, candidates, m.rings[v - a]);
+    std::vector<uint32_t> left = born;
+    m.ring_items.clear(), m.ring_ends.clear();
+    for (uint32_t v = a; v < b; ++v) split_vertex(m, in, r, v, left);
     for (size_t q = 0; q < m.parts.size(); ++q)
         if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
     if ((r.at + 7) / 8 != n) in.fail("splits block has " + std::to_string(n - (r.at + 7) / 8) + " bytes after its last split");
@@ -625,32 +731,30 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
 
 // The split of vertex v: its substitute, the corners it takes, the triangles born with it; and
 // v's ring just after (the vertices it shares a triangle with), for the attributes' prediction.
-void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left, std::vector<uint32_t>& candidates,
-                                       std::vector<uint32_t>& ring) {
-    if (v < m.min_vertex_count) {
+void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left) {
+    if (v < m.min_vertex_count) {  // a survivor: its own substitute, no ring
         m.substitute.push_back(v);
+        m.ring_ends.push_back(m.ring_items.size());
         return;
     }
     const uint32_t p = r.bits(index_bits(v));
     if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
     m.substitute.push_back(p);
-    // p's corners in TRIS order, a bit each: 1 moves it to v; the others stay, in order
-    uint32_t* around = m.incident.begin(p);
-    const uint32_t corners = m.incident.size(p);
-    sort_short(around, around + corners);  // (already sorted unless the mesh has several parts)
-    uint32_t kept = 0;
-    for (uint32_t i = 0; i < corners; ++i) {
-        const uint32_t g = around[i];
-        if (r.bits(1)) {
-            uint32_t* c = corner(m, g);
-            m.rewritten.emplace_back(g, *c);
-            *c = v;
-            m.incident.push(v, g);
-        } else {
-            around[kept++] = g;
-        }
+    move_corners(m, r, p, v);
+    if (!born_counts(m, in, r, v, left)) {  // v's triangles are the ones it took from p
+        ring_of(m, v, m.ring_items);
+    } else {  // the ring: v's neighbours before the births, p, the third corners born
+        list_neighbourhood(m, p, v, m.ring_items);
+        m.ring_items.push_back(p);
+        m.split.born_from = m.ring_items.size();
+        for (size_t q = 0; q < m.parts.size(); ++q)
+            for (uint32_t i = 0; i < m.births[q]; ++i) bear(m, in, r, p, v, q);
     }
-    m.incident.truncate(p, kept);
+    m.ring_ends.push_back(m.ring_items.size());
+}
+
+// The triangles v bears per part (MeshState::births), within what the chunk has left; their sum.
+uint64_t StreamDecoder::Impl::born_counts(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left) {
     std::vector<uint32_t>& count = m.births;
     count.assign(m.parts.size(), 0);
     uint64_t births = 0;
@@ -661,37 +765,29 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
         left[q] -= count[q];
         births += count[q];
     }
-    const auto triangle = [&](uint32_t g) { return triangle_of(m, g); };
-    if (!births) {  // v's triangles are the ones it took from p
-        gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, v, v, m.seen, ring);
-        return;
+    return births;
+}
+
+// One triangle born with v in part q: its order and third corner, added to the part and, when
+// new, the corner to v's ring (the ring's last entries since p).
+void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t q) {
+    SplitScratch& s = m.split;
+    const uint32_t order = r.bits(order_bits), index = r.gamma() - 1, candidates = s.candidate_count();
+    if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
+    uint32_t x = 0;
+    if (index < candidates) {
+        x = candidate(s, index);
+    } else if (index == candidates) {
+        x = r.bits(index_bits(v));
+        if (x >= v || x == p) in.fail("vertex " + std::to_string(v) + " born triangle corner " + std::to_string(x) + " is not another vertex below it", 36);
+    } else {
+        in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates), 36);
     }
-    gather_neighbours(m.incident.begin(p), m.incident.end(p), triangle, p, v, m.seen, m.around[0]);
-    gather_neighbours(m.incident.begin(v), m.incident.end(v), triangle, p, v, m.seen, m.around[1]);
-    order_candidates(m.around[0], m.around[1], candidates);
-    for (size_t q = 0; q < m.parts.size(); ++q)
-        for (uint32_t i = 0; i < count[q]; ++i) {
-            const uint32_t order = r.bits(order_bits), index = r.gamma() - 1;
-            if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
-            uint32_t x = 0;
-            if (index < candidates.size()) {
-                x = candidates[index];
-            } else if (index == candidates.size()) {
-                x = r.bits(index_bits(v));
-                if (x >= v || x == p) in.fail("vertex " + std::to_string(v) + " born triangle corner " + std::to_string(x) + " is not another vertex below it", 36);
-            } else {
-                in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates.size()), 36);
-            }
-            const uint32_t role[3] = {v, p, x};
-            const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
-            add_triangle(m, q, c);
-            ring.push_back(x);
-        }
-    // the ring: v's neighbours before the births (around it but p), p, the third corners born
-    ring.push_back(p);
-    ring.insert(ring.end(), m.around[1].begin(), m.around[1].end());
-    sort_short(ring.data(), ring.data() + ring.size());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    const uint32_t role[3] = {v, p, x};
+    const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
+    add_triangle(m, q, c);
+    std::vector<uint32_t>& ring = m.ring_items;
+    if (s.seen.by[x] != s.mark_v && std::find(ring.begin() + s.born_from, ring.end(), x) == ring.end()) ring.push_back(x);
 }
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
@@ -700,7 +796,7 @@ void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_
     const StreamQuantization& q = m.quantization;
     // each attribute block: its prediction (a u32), then the residuals
     auto attribute = [&](auto& values, uint32_t element, const char* name, int lanes) {
-        const std::vector<std::vector<uint32_t>>* rings = predictor_of(in, m);
+        const MeshState* rings = predictor_of(in, m);
         const std::vector<uint8_t> residuals = vertex_block(codecs, in, count, element, name);
         predict(values, m.substitute, rings, residuals.data(), element, a, b, lanes);
     };

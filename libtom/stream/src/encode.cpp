@@ -105,7 +105,7 @@ std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, 
     for (uint32_t v = a; v < b; ++v) {
         const std::vector<uint32_t>* ring = rings && v >= m.min_vertex_count ? &(*rings)[v - m.min_vertex_count] : nullptr;
         T base[4];
-        prediction(values.data(), lanes, v, m.substitute_at(v), ring, base);
+        prediction(values.data(), lanes, v, m.substitute_at(v), ring ? ring->data() : nullptr, ring ? ring->size() : 0, base);
         for (int k = 0; k < lanes; ++k) {
             const T r = zigzag(T(values[size_t(v) * lanes + k] - base[k]));
             std::memcpy(&out[size_t(v - a) * element + k * sizeof(T)], &r, sizeof(T));
