@@ -145,7 +145,7 @@ L = ['## Real assets against gltfpack', '',
      'stored mean error leaves 1% of the diagonal, the level its selections stop at): `tomextract --fraction 0`. "--refit": the',
      'same level written on its own with its vertices re-fitted (`tomextract --refit`, as `-sv` moves gltfpack\'s): what a',
      'discrete level exported from TOM is; the runtime\'s levels, prefixes of one vertex array, are the columns before.', '',
-     '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack | --refit: mean, Hausdorff, normals |',
+     '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack | --refit: mean, Hausdorff, normals, uv |',
      '|---|---:|---|---:|---:|---:|---:|---:|---:|']
 ratios = {}
 for asset in dict.fromkeys(r['asset'] for r in rows):
@@ -155,14 +155,14 @@ for asset in dict.fromkeys(r['asset'] for r in rows):
             if not g or not t: continue
             reached = t['triangles'] <= 1.02 * g['triangles']  # else TOM stopped above gltfpack's count: not compared
             if reached:
-                for key in ('mean', 'hausdorff', 'normal_degrees'):
+                for key in ('mean', 'hausdorff', 'normal_degrees', 'uv'):
                     for which, x in (('', t), ('refit', f)):
                         if x and g[key] is not None and x[key] is not None:
                             ratios.setdefault((mode, ratio, key, which), []).append(x[key] / g[key] if g[key] > 0 else 1.0)
             L.append('| %s | %d | %s %d%% | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s | %s |' % (
                 asset, g['source_triangles'], mode, ratio * 100, t['triangles'], '' if reached else ' (floor)', g['triangles'], fmt(t['mean']), fmt(g['mean']),
                 fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3),
-                '%s, %s, %s' % (fmt(f['mean']), fmt(f['hausdorff']), fmt(f['normal_degrees'], 3)) if f else '-'))
+                '%s, %s, %s, %s' % (fmt(f['mean']), fmt(f['hausdorff']), fmt(f['normal_degrees'], 3), fmt(f['uv'], 3)) if f else '-'))
 L += ['', 'Floors: the coarsest level each tool reaches, TOM\'s usable floor, and TOM\'s level at gltfpack -sa\'s floor count.', '',
       '| asset | triangles | TOM floor | mean | TOM usable floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack | --refit: mean, Hausdorff |',
       '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
@@ -179,12 +179,14 @@ for asset in dict.fromkeys(r['asset'] for r in rows):
 if floor_ratios:
     L += ['', 'At gltfpack -sa\'s floor count, TOM\'s mean / gltfpack\'s: median %s, %s with --refit.' % tuple(
         '%.2f' % statistics.median(floor_ratios[w]) if w in floor_ratios else '-' for w in ('', 'refit'))]
-L += ['', 'Medians over the assets where TOM reached gltfpack\'s count, TOM / gltfpack (below 1: TOM\'s error is smaller):', '',
-      '| mode, ratio | assets | mean | Hausdorff | normals | --refit: mean | Hausdorff | normals |', '|---|---:|---:|---:|---:|---:|---:|---:|']
+L += ['', 'Medians over the assets where TOM reached gltfpack\'s count, TOM / gltfpack (below 1: TOM\'s error is smaller; uv over',
+      'the assets where both have texture coordinates):', '',
+      '| mode, ratio | assets | mean | Hausdorff | normals | uv | --refit: mean | Hausdorff | normals | uv |', '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|']
 for mode, ratio in sorted({(m, r) for m, r, _, _ in ratios}, key=lambda mr: (mr[0], -mr[1])):
     column = lambda key, which='': '%.2f' % statistics.median(ratios[(mode, ratio, key, which)]) if (mode, ratio, key, which) in ratios else '-'
-    L.append('| %s %d%% | %d | %s | %s | %s | %s | %s | %s |' % (mode, ratio * 100, len(ratios[(mode, ratio, 'mean', '')]), column('mean'), column('hausdorff'),
-                                                        column('normal_degrees'), column('mean', 'refit'), column('hausdorff', 'refit'), column('normal_degrees', 'refit')))
+    L.append('| %s %d%% | %d | %s | %s | %s | %s | %s | %s | %s | %s |' % (
+        mode, ratio * 100, len(ratios[(mode, ratio, 'mean', '')]), column('mean'), column('hausdorff'), column('normal_degrees'), column('uv'),
+        column('mean', 'refit'), column('hausdorff', 'refit'), column('normal_degrees', 'refit'), column('uv', 'refit')))
 L.append('')
 section = '\n'.join(L)
 text = open(doc).read()

@@ -1,6 +1,7 @@
 // Re-fitted vertices for one level (refit.h): the quadric of the full mesh's triangles that each
-// live point stands for, minimised near the point's own position; then the attributes of the
-// source where each moved vertex now stands.
+// live point stands for, minimised near the point's own position, the points fitted to the
+// source's surface and each kept where it helps most; then the attributes of the source where
+// each moved vertex now stands, and every live vertex's attributes fitted to the source's.
 
 #include "tom/builder/refit.h"
 
@@ -606,6 +607,13 @@ void normalize(float* x, size_t count) {
         for (size_t a = 0; a < count; ++a) x[a] = float(x[a] / l);
 }
 
+// A tangent's xyz made unit and orthogonal to the unit normal `n`.
+void orthogonalize(float* t, const float* n) {
+    const float along = t[0] * n[0] + t[1] * n[1] + t[2] * n[2];
+    for (int a = 0; a < 3; ++a) t[a] -= along * n[a];
+    normalize(t, 3);
+}
+
 // Each moved vertex's attributes resampled from the source where it now stands: at the point
 // closest to its new position among the triangles around the vertices it stands for (its own
 // side of a seam or a hard edge: copies stand for their own sides), interpolated there; normals
@@ -636,13 +644,169 @@ void resample_attributes(const MeshView& m, uint32_t n, const std::vector<uint32
             float* t = &r.tangents[4 * size_t(v)];
             const float handedness = t[3];
             interpolate(m.tangents, 4, c, at_best, t);
-            const float* nv = &r.normals[3 * size_t(v)];
-            const float along = t[0] * nv[0] + t[1] * nv[1] + t[2] * nv[2];
-            for (int a = 0; a < 3; ++a) t[a] -= along * nv[a];
-            normalize(t, 3);
+            orthogonalize(t, &r.normals[3 * size_t(v)]);
             t[3] = handedness;
         }
     }
+}
+
+// Where the source's attributes are compared with the level's: at three inner points of every
+// source triangle (barycentric 2/3, 1/6, 1/6 and its turns, a third of its area each: exact for
+// the squared difference of two linear fields over it, and off its edges, where the copies of a
+// seam or a pole's fan meet), the nearest point among the level triangles around the vertices
+// its corners stand for (their own sides of a seam or a hard edge; of level triangles as near,
+// the one with more of those vertices), in the level as re-fitted.
+struct AttributeTerms {
+    struct Term {
+        uint32_t source[3], level[3];     // the source triangle's corners, the level triangle's
+        float at_source[3], at_level[3];  // barycentric weights in each
+        float weight = 0;
+    };
+    std::vector<Term> terms;
+    Around of_vertex;  // per live vertex, the terms (4 term + slot) where it is a level corner
+};
+
+AttributeTerms attribute_terms(const std::vector<uint32_t>& full, const std::vector<uint32_t>& level, uint32_t n, const std::vector<float>& before,
+                               const std::vector<float>& after, const std::vector<uint32_t>& rep) {
+    const Around around = around_points(level, n, [](uint32_t v) { return v; });
+    const size_t triangles = full.size() / 3;
+    AttributeTerms out;
+    out.terms.resize(3 * triangles, AttributeTerms::Term{});  // three per source triangle; weight 0 where no level triangle is near
+    detail::parallel_blocks(triangles, 1024, 0, [&](unsigned, size_t begin, size_t end) {
+        for (size_t t = begin; t < end; ++t) {
+            const uint32_t* w = &full[3 * t];
+            const double third = length(cross(at(before, w[1]) - at(before, w[0]), at(before, w[2]) - at(before, w[0]))) / 6;
+            const uint32_t own[3] = {rep[w[0]], rep[w[1]], rep[w[2]]};
+            for (int e = 0; e < 3; ++e) {
+                float weights[3];
+                for (int a = 0; a < 3; ++a) weights[a] = a == e ? 2.0f / 3.0f : 1.0f / 6.0f;
+                const V3 x = double(weights[0]) * at(before, w[0]) + double(weights[1]) * at(before, w[1]) + double(weights[2]) * at(before, w[2]);
+                double best = std::numeric_limits<double>::infinity();
+                int best_shared = -1;
+                AttributeTerms::Term& term = out.terms[3 * t + size_t(e)];
+                for (int k = 0; k < 3; ++k)
+                    for (uint32_t i = around.start[own[k]]; i < around.start[own[k] + 1]; ++i) {
+                        const uint32_t* c = &level[3 * size_t(around.triangles[i])];
+                        const detail::Flat f = detail::make_flat(at(after, c[0]), at(after, c[1]), at(after, c[2]));
+                        const double d = detail::distance2(f, x);
+                        const int shared = int(std::count_if(c, c + 3, [&](uint32_t u) { return u == own[0] || u == own[1] || u == own[2]; }));
+                        if (!(d < best || (d == best && shared > best_shared))) continue;
+                        best = d, best_shared = shared;
+                        double b[3];
+                        detail::nearest_point(f, x, b);
+                        for (int a = 0; a < 3; ++a) term.level[a] = c[a], term.at_level[a] = float(b[a]);
+                    }
+                if (!(best < std::numeric_limits<double>::infinity()) || !(third > 0)) continue;
+                for (int a = 0; a < 3; ++a) term.source[a] = w[a], term.at_source[a] = weights[a];
+                term.weight = float(third);
+            }
+        }
+    });
+    // per vertex, its terms in order (counted, then placed)
+    std::vector<uint32_t>& start = out.of_vertex.start;
+    start.assign(size_t(n) + 1, 0);
+    for (const AttributeTerms::Term& t : out.terms)
+        if (t.weight > 0)
+            for (uint32_t a = 0; a < 3; ++a) ++start[t.level[a] + 1];
+    for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
+    out.of_vertex.triangles.resize(start[n]);
+    std::vector<uint32_t> next(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < out.terms.size(); ++i)
+        if (out.terms[i].weight > 0)
+            for (uint32_t a = 0; a < 3; ++a) out.of_vertex.triangles[next[out.terms[i].level[a]]++] = uint32_t(4 * i + a);
+    return out;
+}
+
+// Each term's source values of a stream (`width` per vertex of `source`): interpolated at the
+// term's point of the source triangle.
+std::vector<double> source_targets(const AttributeTerms& a, const float* source, size_t width) {
+    std::vector<double> out(a.terms.size() * width, 0.0);
+    for (size_t i = 0; i < a.terms.size(); ++i)
+        if (a.terms[i].weight > 0)
+            for (size_t c = 0; c < width; ++c)
+                for (int k = 0; k < 3; ++k) out[width * i + c] += double(a.terms[i].at_source[k]) * source[width * a.terms[i].source[k] + c];
+    return out;
+}
+
+// One stream's values at the live vertices (`width` per vertex of `values`) fitted to the terms'
+// `targets`: each vertex's values minimise the weighted squared differences of the level's
+// interpolated values from the targets, with the others held, plus a pull toward its values
+// before of a twentieth of a mean vertex's weight (a vertex the terms barely see keeps them);
+// four Gauss-Seidel sweeps.
+void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& targets, size_t width, float* values) {
+    std::vector<double> diagonal(n, 0.0);
+    double total = 0;
+    uint32_t seen = 0;
+    for (uint32_t v = 0; v < n; ++v) {
+        for (uint32_t i = a.of_vertex.start[v]; i < a.of_vertex.start[v + 1]; ++i) {
+            const AttributeTerms::Term& t = a.terms[a.of_vertex.triangles[i] / 4];
+            const double b = t.at_level[a.of_vertex.triangles[i] % 4];
+            diagonal[v] += t.weight * b * b;
+        }
+        if (diagonal[v] > 0) total += diagonal[v], ++seen;
+    }
+    if (!seen) return;
+    const double hold = 0.05 * total / seen;
+    const std::vector<float> start(values, values + width * n);
+    std::vector<double> sum(width);
+    for (int sweep = 0; sweep < 4; ++sweep)
+        for (uint32_t v = 0; v < n; ++v) {
+            if (!(diagonal[v] > 0)) continue;
+            for (size_t c = 0; c < width; ++c) sum[c] = hold * start[width * v + c];
+            for (uint32_t i = a.of_vertex.start[v]; i < a.of_vertex.start[v + 1]; ++i) {
+                const uint32_t term = a.of_vertex.triangles[i] / 4, slot = a.of_vertex.triangles[i] % 4;
+                const AttributeTerms::Term& t = a.terms[term];
+                for (size_t c = 0; c < width; ++c) {
+                    double r = targets[width * term + c];  // less the other corners' share
+                    for (uint32_t k = 0; k < 3; ++k)
+                        if (k != slot) r -= double(t.at_level[k]) * values[width * t.level[k] + c];
+                    sum[c] += t.weight * t.at_level[slot] * r;
+                }
+            }
+            for (size_t c = 0; c < width; ++c) values[width * v + c] = float(sum[c] / (diagonal[v] + hold));
+        }
+}
+
+// The live vertices' normals fitted to the source's directions: a normal drawn is the unit
+// vector of the interpolated one, which between differing unit normals is shorter than one, so
+// each term's target is the source's unit normal at the length the level's interpolation has
+// there (a level whose normals already point as the source's is left as it is); two rounds of
+// fitting and making the normals unit.
+void fit_normals(const AttributeTerms& a, uint32_t n, const float* source, float* normals) {
+    const std::vector<double> directions = source_targets(a, source, 3);
+    std::vector<double> targets(directions.size());
+    for (int round = 0; round < 2; ++round) {
+        for (size_t i = 0; i < a.terms.size(); ++i) {
+            const AttributeTerms::Term& t = a.terms[i];
+            if (!(t.weight > 0)) continue;
+            double level[3] = {0, 0, 0};
+            for (int k = 0; k < 3; ++k)
+                for (int c = 0; c < 3; ++c) level[c] += double(t.at_level[k]) * normals[3 * size_t(t.level[k]) + c];
+            const double* d = &directions[3 * i];
+            const double length = std::sqrt(level[0] * level[0] + level[1] * level[1] + level[2] * level[2]),
+                         unit = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            for (int c = 0; c < 3; ++c) targets[3 * i + c] = unit > 0 ? d[c] * length / unit : level[c];
+        }
+        fit_stream(a, n, targets, 3, normals);
+        for (uint32_t v = 0; v < n; ++v) normalize(&normals[3 * size_t(v)], 3);
+    }
+}
+
+// The live vertices' attributes fitted to the source's (fit_stream, fit_normals), colours kept
+// in [0, 1], tangents made unit and orthogonal to the normal again.
+void fit_attributes(const MeshView& m, uint32_t n, const std::vector<uint32_t>& full, const std::vector<uint32_t>& level, const std::vector<float>& before,
+                    const std::vector<uint32_t>& rep, RefitLevel& r) {
+    if (!m.normals && !m.texcoords && !m.texcoords1 && !m.colors) return;
+    const AttributeTerms a = attribute_terms(full, level, n, before, r.positions, rep);
+    if (m.normals) fit_normals(a, n, m.normals, r.normals.data());
+    if (m.texcoords) fit_stream(a, n, source_targets(a, m.texcoords, 2), 2, r.texcoords.data());
+    if (m.texcoords1) fit_stream(a, n, source_targets(a, m.texcoords1, 2), 2, r.texcoords1.data());
+    if (m.colors) {
+        fit_stream(a, n, source_targets(a, m.colors, 4), 4, r.colors.data());
+        for (size_t i = 0; i < 4 * size_t(n); ++i) r.colors[i] = std::clamp(r.colors[i], 0.0f, 1.0f);
+    }
+    if (m.tangents && m.normals)
+        for (uint32_t v = 0; v < n; ++v) orthogonalize(&r.tangents[4 * size_t(v)], &r.normals[3 * size_t(v)]);
 }
 
 // A stream of `width` floats per vertex copied, or empty when the mesh has none.
@@ -670,6 +834,7 @@ RefitLevel refit_level(const MeshView& m, uint32_t n) {
     r.colors = copy_stream(m.colors, m.vertex_count, 4);
     r.tangents = copy_stream(m.tangents, m.vertex_count, 4);
     resample_attributes(m, n, full, before, rep, p, moved, r);
+    fit_attributes(m, n, full, level, before, rep, r);
     return r;
 }
 

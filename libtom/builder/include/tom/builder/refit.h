@@ -43,15 +43,19 @@ struct RefitLevel {
 /// squared distances to the level minimised); each point then takes, of its full-detail
 /// position, its quadric's minimum and its fitted position, the one where the two-sided error
 /// of the triangles around it is the smallest. A moved vertex's normal,
-/// texture coordinates, colour and tangent are the source's where it now stands (at the closest
-/// point of the triangles around the vertices it stands for, on its side of a seam or hard edge:
-/// the normals of a smooth surface stay exact, and its texture does not slide). A point is a
+/// texture coordinates, colour and tangent are first the source's where it now stands (at the
+/// closest point of the triangles around the vertices it stands for, on its side of a seam or
+/// hard edge: its texture does not slide); then every live vertex's normal, texture coordinates
+/// and colour are fitted to the source's the same way (at three inner points of every source
+/// triangle, the level's values interpolated at the nearest point of the level triangles on its
+/// side against the source's: their squared differences minimised, normals as directions), and
+/// tangents made orthogonal to the normals again. A point is a
 /// vertex with its coincident copies and the group of copies the builder removes together
 /// (seams, hard edges, poles): they move as one. Points on open edges or on edges where more
 /// than two triangles meet stay, so that borders and the chains where parts meet do not open;
 /// a point whose move would turn one of the level's triangles by more than 78 degrees stays.
-/// Vertices >= n and the vertices that stay keep their values; the carried streams (joints,
-/// weights, morph deltas) are not re-fitted. Deterministic.
+/// Vertices >= n keep their values, the vertices that stay their positions; the carried streams
+/// (joints, weights, morph deltas) are not re-fitted. Deterministic.
 RefitLevel refit_level(const MeshView& m, uint32_t n);
 
 /// `m` with the vertex streams `r` has in place of its own (for the exporters).
