@@ -42,6 +42,7 @@ struct Options {
     tools::BuildOptions build;
     std::string index_size = "auto";
     bool stream = false;            // write the streamed layout (docs/FORMAT.md, "Streamed files")
+    tom::StreamOptions stream_options;
     bool progress = false;
     bool mesh_progress = false;     // a line per input's stages (set by main: a terminal, one job at a time)
     bool quiet = false;
@@ -79,7 +80,11 @@ nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams
     j["build"] = tools::build_params_json(params);
     j["weld"] = !opt.build.no_weld;
     j["index_size"] = opt.index_size;
-    if (opt.stream) j["stream"] = true;
+    if (opt.stream) {
+        const tom::StreamOptions& s = opt.stream_options;
+        j["stream"] = {{"position_bits", s.position_bits}, {"normal_bits", s.normal_bits}, {"texcoord_bits", s.texcoord_bits},
+                       {"first_chunk", s.first_share}, {"chunk_growth", s.growth}};
+    }
     j["error_curve"] = !opt.no_error_curve;
     if (!opt.no_error_curve) {
         j["curve_points"] = opt.curve_points;
@@ -110,6 +115,7 @@ struct Settings {
     tom::CleanOptions clean;
     tom::WriteOptions write;
     bool stream = false;
+    tom::StreamOptions stream_options;
     tom::ReportParams report;
     nlohmann::ordered_json output_options, report_options;
 };
@@ -316,7 +322,7 @@ void write_tom(Conversion& c, Outcome& out) {
     tom::WriteOptions wopt = c.settings.write;
     wopt.provenance = c.tom_provenance = c.provenance.text();
     std::vector<uint8_t> bytes = tom::serialize(c.built, c.imported.scene, wopt);
-    if (c.settings.stream) bytes = tom::encode_stream(bytes.data(), bytes.size(), {}, c.job.output);
+    if (c.settings.stream) bytes = tom::encode_stream(bytes.data(), bytes.size(), c.settings.stream_options, c.job.output);
     tom::write_bytes_atomically(c.job.output, bytes.data(), bytes.size());
     c.bytes = bytes.size();
     out.triangles = c.triangles;
@@ -580,8 +586,32 @@ int parse_options(Options& opt, int argc, char** argv) {
     app.add_option("--index-size", opt.index_size, "Stored index width: auto (16-bit when a mesh allows; default), 16 or 32")
         ->check(CLI::IsMember({"auto", "16", "32"}))
         ->group("Output");
-    app.add_flag("--stream", opt.stream,
-                 "Write the streamed layout: quantized, compressed chunks in resolution order, every prefix a coarser mesh (docs/FORMAT.md, \"Streamed files\"); every tool reads it")
+    CLI::Option* stream = app.add_flag("--stream", opt.stream,
+                                       "Write the streamed layout: quantized, compressed chunks in resolution order, every prefix a coarser mesh (docs/FORMAT.md, "
+                                       "\"Streamed files\"); every tool reads it")
+                              ->group("Output");
+    tom::StreamOptions& so = opt.stream_options;
+    app.add_option("--position-bits", so.position_bits, "With --stream: bits of the grid positions are rounded to over the mesh's box (default 14, gltfpack's)")
+        ->check(CLI::Range(1u, 16u))
+        ->needs(stream)
+        ->group("Output");
+    app.add_option("--normal-bits", so.normal_bits, "With --stream: bits per octahedral component of normals and tangents (default 8)")
+        ->check(CLI::Range(2u, 16u))
+        ->needs(stream)
+        ->group("Output");
+    app.add_option("--texcoord-bits", so.texcoord_bits, "With --stream: bits per texture coordinate over its range (default 12)")
+        ->check(CLI::Range(1u, 16u))
+        ->needs(stream)
+        ->group("Output");
+    app.add_option("--first-chunk", so.first_share, "With --stream: the share of a mesh's vertices its first chunk holds (default 0.01; at least its coarsest level)")
+        ->check(CLI::Range(1e-6, 1.0))
+        ->needs(stream)
+        ->group("Output");
+    app.add_option("--chunk-growth", so.growth,
+                   "With --stream: each next chunk ends at this many times the last one's resolution (default 1.25; smaller: more, smaller chunks, a smoother "
+                   "error against bytes, a little more overhead)")
+        ->check(CLI::Range(1.01, 16.0))
+        ->needs(stream)
         ->group("Output");
     app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds and reports; the JSON report's error_curve is null)")->group("Output");
     app.add_option("--curve-points", opt.curve_points, "Error-curve points per mesh, log-spaced in vertex count (default 16)")
@@ -632,6 +662,7 @@ Settings make_settings(const Options& opt, unsigned per_job) {
     settings.clean = opt.build.clean();
     settings.write.index_size = opt.index_size == "32" ? tom::IndexSize::bits32 : opt.index_size == "16" ? tom::IndexSize::bits16 : tom::IndexSize::automatic;
     settings.stream = opt.stream;
+    settings.stream_options = opt.stream_options;
     settings.output_options = output_options(opt, settings.params);
     settings.report_options = report_options(opt);
     settings.report = report_params(opt, per_job);

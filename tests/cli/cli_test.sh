@@ -417,6 +417,22 @@ check "tomextract --bytes on an ordinary file exits 1 and says why" expect_exit 
 check "(a byte limit applies only to streams)" grep -q "not a streamed .tom file" "$work/stderr"
 check "a streamed scene with parts extracts as a .glb" expect_exit 0 "$tools/tomextract" "$work/streamed/spider.tom" --fraction 0.5 -o "$work/spider.glb"
 check "a rerun of tombuild --stream finds the streamed outputs up to date" bash -c "'$tools/tombuild' '$data/meshes/bunny00.off' -o '$work/streamed' --stream 2>&1 | grep -q 'up to date'"
+# the stream's quantization and chunking are options, recorded in the provenance: a finer growth
+# gives more, smaller chunks, fewer position bits a smaller file, and another value converts again
+"$tools/tominfo" --json "$work/streamed/bunny00.tom" > "$work/default.json"
+"$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/fine" -q --stream --chunk-growth 1.1 --position-bits 11
+check "tombuild --stream --chunk-growth 1.1 --position-bits 11 writes more chunks in fewer bytes" /usr/bin/python3 -c "
+import json, subprocess
+coarse = json.load(open('$work/default.json'))
+fine = json.loads(subprocess.run(['$tools/tominfo', '--json', '$work/fine/bunny00.tom'], capture_output=True, check=True).stdout)
+a, b = coarse['stream']['chunks'], fine['stream']['chunks']
+assert len(b) >= 1.8 * len(a), (len(a), len(b))
+assert all(y['triangles'] <= 1.1 * x['triangles'] + 64 for x, y in zip(b, b[1:])), 'a chunk grows past 1.1x'
+assert fine['stream']['file_bytes'] < coarse['stream']['file_bytes'], (fine['stream']['file_bytes'], coarse['stream']['file_bytes'])
+assert fine['provenance']['options']['stream'] == {'position_bits': 11, 'normal_bits': 8, 'texcoord_bits': 12, 'first_chunk': 0.01, 'chunk_growth': 1.1}, fine['provenance']['options']
+"
+check "another --chunk-growth converts the file again" bash -c "'$tools/tombuild' '$data/meshes/bunny00.off' -o '$work/fine' --stream --chunk-growth 1.2 --position-bits 11 2>&1 | grep -q '1 of 1 inputs converted'"
+check "a stream option without --stream is a usage error" expect_exit 2 "$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/fine" --chunk-growth 1.1
 head -c 5000 "$work/streamed/bunny00.tom" > "$work/cut.tom"
 check "a truncated streamed file exits 1" expect_exit 1 "$tools/tominfo" "$work/cut.tom"
 check "naming the file and the truncation" grep -q "cut.tom.*truncated" "$work/stderr"
