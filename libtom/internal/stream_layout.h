@@ -145,6 +145,19 @@ struct Seen {
     }
 };
 
+/// Appends to `out` the vertices that share a triangle with vertex u, each once in the order met,
+/// leaving out `skip_a` and `skip_b` (arguments as gather_neighbours'): the decoder's rings,
+/// whose mean needs no order.
+template <class Triangle>
+void append_neighbours(const uint32_t* first, const uint32_t* last, Triangle triangle, uint32_t skip_a, uint32_t skip_b, Seen& seen, std::vector<uint32_t>& out) {
+    seen.start();
+    for (const uint32_t* g = first; g != last; ++g) {
+        const uint32_t* c = triangle(*g);
+        for (int k = 0; k < 3; ++k)
+            if (c[k] != skip_a && c[k] != skip_b && seen.first(c[k])) out.push_back(c[k]);
+    }
+}
+
 /// The vertices that share a triangle with vertex u, ascending without repeats, leaving out
 /// `skip_a` and `skip_b`: [first, last) lists u's live corners (3 t + k in TRIS),
 /// `triangle(g)` gives the three corners of the triangle holding corner g, all vertices `seen`
@@ -153,12 +166,7 @@ struct Seen {
 template <class Triangle>
 void gather_neighbours(const uint32_t* first, const uint32_t* last, Triangle triangle, uint32_t skip_a, uint32_t skip_b, Seen& seen, std::vector<uint32_t>& out) {
     out.clear();
-    seen.start();
-    for (const uint32_t* g = first; g != last; ++g) {
-        const uint32_t* c = triangle(*g);
-        for (int k = 0; k < 3; ++k)
-            if (c[k] != skip_a && c[k] != skip_b && seen.first(c[k])) out.push_back(c[k]);
-    }
+    append_neighbours(first, last, triangle, skip_a, skip_b, seen, out);
     sort_short(out.data(), out.data() + out.size());
 }
 template <class Triangle>

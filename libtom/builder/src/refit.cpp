@@ -357,6 +357,24 @@ Around around_points(const std::vector<uint32_t>& triangles, uint32_t points, Po
     return a;
 }
 
+// Per key below `keys`, the corners (3 item + corner, for items below `items`) whose
+// `key_of(item, corner)` it is, in item order (CSR; kNone: the corner has none).
+template <class KeyOf>
+Around corners_by_key(size_t items, uint32_t keys, KeyOf key_of) {
+    Around a;
+    a.start.assign(size_t(keys) + 1, 0);
+    for (size_t i = 0; i < items; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (const uint32_t k = key_of(i, c); k != kNone) ++a.start[k + 1];
+    for (uint32_t k = 0; k < keys; ++k) a.start[k + 1] += a.start[k];
+    a.triangles.resize(a.start[keys]);
+    std::vector<uint32_t> next(a.start.begin(), a.start.end() - 1);
+    for (size_t i = 0; i < items; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (const uint32_t k = key_of(i, c); k != kNone) a.triangles[next[k]++] = uint32_t(3 * i + size_t(c));
+    return a;
+}
+
 // Per item of a CSR list of points, the union of those points' lists in `of` (CSR, each
 // triangle once, in the order first met). `triangles` bounds the triangle numbers.
 Around unions(const std::vector<uint32_t>& start, const std::vector<uint32_t>& points, const Around& of, size_t triangles) {
@@ -403,6 +421,13 @@ struct FitContext {
     }
 };
 
+// The flat of each of `triangles` (3 corners each) with its vertices at `x`.
+std::vector<detail::Flat> flats_of(const std::vector<uint32_t>& triangles, const std::vector<float>& x) {
+    std::vector<detail::Flat> flats(triangles.size() / 3);
+    for (size_t t = 0; t < flats.size(); ++t) flats[t] = detail::make_flat(at(x, triangles[3 * t]), at(x, triangles[3 * t + 1]), at(x, triangles[3 * t + 2]));
+    return flats;
+}
+
 // Where each sample lies nearest on the level with its vertices at `x`: the nearest point's
 // triangle's points, its barycentric weights and the squared distance, among the level
 // triangles around the points the sample stands for (kNone where there are none).
@@ -414,8 +439,7 @@ struct Projection {
 
 Projection project_samples(const FitContext& f, const std::vector<float>& x) {
     const std::vector<uint32_t>& level = f.level;
-    std::vector<detail::Flat> flats(level.size() / 3);
-    for (size_t t = 0; t < flats.size(); ++t) flats[t] = detail::make_flat(at(x, level[3 * t]), at(x, level[3 * t + 1]), at(x, level[3 * t + 2]));
+    const std::vector<detail::Flat> flats = flats_of(level, x);
     const size_t count = f.samples.x.size();
     Projection out;
     out.points.assign(count, {kNone, kNone, kNone});
@@ -442,18 +466,7 @@ Projection project_samples(const FitContext& f, const std::vector<float>& x) {
 // Per point, the (sample, corner) terms where it is a corner of the sample's nearest triangle
 // (CSR; a term t is 3 sample + corner).
 Around terms_of(const Projection& pr, uint32_t points) {
-    Around a;
-    a.start.assign(size_t(points) + 1, 0);
-    for (const auto& c : pr.points)
-        for (const uint32_t k : c)
-            if (k != kNone) ++a.start[k + 1];
-    for (uint32_t k = 0; k < points; ++k) a.start[k + 1] += a.start[k];
-    a.triangles.resize(a.start[points]);
-    std::vector<uint32_t> next(a.start.begin(), a.start.end() - 1);
-    for (size_t i = 0; i < pr.points.size(); ++i)
-        for (int c = 0; c < 3; ++c)
-            if (pr.points[i][size_t(c)] != kNone) a.triangles[next[pr.points[i][size_t(c)]]++] = uint32_t(3 * i + size_t(c));
-    return a;
+    return corners_by_key(pr.points.size(), points, [&](size_t i, int c) { return pr.points[i][size_t(c)]; });
 }
 
 // The fit of Hoppe et al.'s mesh optimization (1993) with the projections held: the moved points
@@ -663,12 +676,13 @@ struct AttributeTerms {
         float weight = 0;
     };
     std::vector<Term> terms;
-    Around of_vertex;  // per live vertex, the terms (4 term + slot) where it is a level corner
+    Around of_vertex;  // per live vertex, the terms (3 term + slot) where it is a level corner
 };
 
 AttributeTerms attribute_terms(const std::vector<uint32_t>& full, const std::vector<uint32_t>& level, uint32_t n, const std::vector<float>& before,
                                const std::vector<float>& after, const std::vector<uint32_t>& rep) {
     const Around around = around_points(level, n, [](uint32_t v) { return v; });
+    const std::vector<detail::Flat> flats = flats_of(level, after);
     const size_t triangles = full.size() / 3;
     AttributeTerms out;
     out.terms.resize(3 * triangles, AttributeTerms::Term{});  // three per source triangle; weight 0 where no level triangle is near
@@ -687,7 +701,7 @@ AttributeTerms attribute_terms(const std::vector<uint32_t>& full, const std::vec
                 for (int k = 0; k < 3; ++k)
                     for (uint32_t i = around.start[own[k]]; i < around.start[own[k] + 1]; ++i) {
                         const uint32_t* c = &level[3 * size_t(around.triangles[i])];
-                        const detail::Flat f = detail::make_flat(at(after, c[0]), at(after, c[1]), at(after, c[2]));
+                        const detail::Flat& f = flats[around.triangles[i]];
                         const double d = detail::distance2(f, x);
                         const int shared = int(std::count_if(c, c + 3, [&](uint32_t u) { return u == own[0] || u == own[1] || u == own[2]; }));
                         if (!(d < best || (d == best && shared > best_shared))) continue;
@@ -702,18 +716,7 @@ AttributeTerms attribute_terms(const std::vector<uint32_t>& full, const std::vec
             }
         }
     });
-    // per vertex, its terms in order (counted, then placed)
-    std::vector<uint32_t>& start = out.of_vertex.start;
-    start.assign(size_t(n) + 1, 0);
-    for (const AttributeTerms::Term& t : out.terms)
-        if (t.weight > 0)
-            for (uint32_t a = 0; a < 3; ++a) ++start[t.level[a] + 1];
-    for (uint32_t v = 0; v < n; ++v) start[v + 1] += start[v];
-    out.of_vertex.triangles.resize(start[n]);
-    std::vector<uint32_t> next(start.begin(), start.end() - 1);
-    for (size_t i = 0; i < out.terms.size(); ++i)
-        if (out.terms[i].weight > 0)
-            for (uint32_t a = 0; a < 3; ++a) out.of_vertex.triangles[next[out.terms[i].level[a]]++] = uint32_t(4 * i + a);
+    out.of_vertex = corners_by_key(out.terms.size(), n, [&](size_t i, int c) { return out.terms[i].weight > 0 ? out.terms[i].level[c] : kNone; });
     return out;
 }
 
@@ -739,8 +742,8 @@ void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& 
     uint32_t seen = 0;
     for (uint32_t v = 0; v < n; ++v) {
         for (uint32_t i = a.of_vertex.start[v]; i < a.of_vertex.start[v + 1]; ++i) {
-            const AttributeTerms::Term& t = a.terms[a.of_vertex.triangles[i] / 4];
-            const double b = t.at_level[a.of_vertex.triangles[i] % 4];
+            const AttributeTerms::Term& t = a.terms[a.of_vertex.triangles[i] / 3];
+            const double b = t.at_level[a.of_vertex.triangles[i] % 3];
             diagonal[v] += t.weight * b * b;
         }
         if (diagonal[v] > 0) total += diagonal[v], ++seen;
@@ -754,7 +757,7 @@ void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& 
             if (!(diagonal[v] > 0)) continue;
             for (size_t c = 0; c < width; ++c) sum[c] = hold * start[width * v + c];
             for (uint32_t i = a.of_vertex.start[v]; i < a.of_vertex.start[v + 1]; ++i) {
-                const uint32_t term = a.of_vertex.triangles[i] / 4, slot = a.of_vertex.triangles[i] % 4;
+                const uint32_t term = a.of_vertex.triangles[i] / 3, slot = a.of_vertex.triangles[i] % 3;
                 const AttributeTerms::Term& t = a.terms[term];
                 for (size_t c = 0; c < width; ++c) {
                     double r = targets[width * term + c];  // less the other corners' share

@@ -666,13 +666,7 @@ void move_corners(MeshState& m, BitReader& r, uint32_t p, uint32_t v) {
 
 /// Appends to `ring` the vertices sharing a live triangle with v, but v, each once.
 void ring_of(MeshState& m, uint32_t v, std::vector<uint32_t>& ring) {
-    Seen& seen = m.split.seen;
-    const uint32_t mark = seen.reserve(1);
-    for (const uint32_t* g = m.incident.begin(v); g != m.incident.end(v); ++g) {
-        const uint32_t* c = triangle_of(m, *g);
-        for (int k = 0; k < 3; ++k)
-            if (c[k] != v && seen.by[c[k]] != mark) seen.by[c[k]] = mark, ring.push_back(c[k]);
-    }
+    append_neighbours(m.incident.begin(v), m.incident.end(v), [&](uint32_t g) { return triangle_of(m, g); }, v, v, m.split.seen, ring);
 }
 
 /// Lists the neighbourhood of the split of p into p and v (SplitScratch) from the corners each
