@@ -388,6 +388,20 @@ void write_meshes(const tom::File& file, const Refits& refits, const Options& o,
                 total_tris ? 100.0 * double(out_tris) / double(total_tris) : 0.0, static_cast<unsigned long long>(total_tris), o.output.c_str());
 }
 
+/// --bytes: what the first B bytes of a streamed file decode to; a warning when they end before
+/// its deferred block, whose sections (embedded images, provenance, source glTF) the output lacks.
+tom::File open_prefix(const std::string& path, uint64_t bytes) {
+    if (!tom::is_stream_file(path)) return tom::open_any(path, bytes);  // (its error)
+    const tom::StreamDecoder d = tom::read_stream(path, bytes);
+    if (!d.deferred_received() && d.has_directory())
+        std::fprintf(
+            stderr,
+            "warning: %s: the first %llu bytes end before the deferred sections (bytes %llu to %llu): no embedded images, provenance or source glTF scene\n",
+            path.c_str(), static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(d.deferred().begin_byte),
+            static_cast<unsigned long long>(d.deferred().end_byte));
+    return d.file();
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -395,7 +409,7 @@ int main(int argc, char** argv) {
     if (const int code = parse_options(o, argc, argv); code >= 0) return code;
     if (const int code = check_options(o); code >= 0) return code;
     try {
-        const tom::File file = o.bytes ? tom::open_any(o.path, *o.bytes) : tom::open_any(o.path);
+        const tom::File file = o.bytes ? open_prefix(o.path, *o.bytes) : tom::open_any(o.path);
         if (o.mesh_index && *o.mesh_index >= file.mesh_count())
             return usage_error(o.path + " has " + std::to_string(file.mesh_count()) + " meshes; --mesh " + std::to_string(*o.mesh_index) + " does not exist");
         if (o.texture_dir.empty()) o.texture_dir = source_folder(o.path, file.scene());

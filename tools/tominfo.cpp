@@ -259,13 +259,6 @@ void print_sections(const tom::File& file) {
                     static_cast<unsigned long long>(s.bytes), s.checksum);
 }
 
-bool is_stream_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    char head[8] = {0};
-    in.read(head, sizeof head);
-    return tom::is_stream(head, size_t(in.gcount()));
-}
-
 // A streamed file's chunks (docs/FORMAT.md, "Streamed files"), in file order, and its meshes'
 // quantization.
 nlohmann::ordered_json stream_json(const tom::StreamDecoder& d) {
@@ -274,6 +267,8 @@ nlohmann::ordered_json stream_json(const tom::StreamDecoder& d) {
     j["chunks"] = nlohmann::ordered_json::array();
     for (const tom::StreamChunk& c : d.chunks())
         j["chunks"].push_back({{"end_byte", c.end_byte}, {"mesh", c.mesh}, {"vertices", c.vertex_end}, {"triangles", c.triangles}});
+    const tom::StreamDeferred& deferred = d.deferred();
+    j["deferred"] = {{"after_chunk", deferred.after_chunk}, {"begin_byte", deferred.begin_byte}, {"end_byte", deferred.end_byte}};
     j["quantization"] = nlohmann::ordered_json::array();
     for (uint32_t m = 0; m < d.mesh_count(); ++m) {
         const tom::StreamQuantization& q = d.quantization(m);
@@ -287,6 +282,11 @@ void print_stream(const nlohmann::ordered_json& s) {
     const double bytes = s["file_bytes"].get<double>();
     std::printf("  streamed: %zu chunks, %.0f bytes; the first ends at byte %llu (%.1f%%)\n", chunks.size(), bytes,
                 static_cast<unsigned long long>(chunks[0]["end_byte"].get<uint64_t>()), 100.0 * chunks[0]["end_byte"].get<double>() / bytes);
+    const auto& deferred = s["deferred"];
+    if (deferred["end_byte"] != deferred["begin_byte"])
+        std::printf("  deferred (provenance, images, source glTF): bytes %llu to %llu, after chunk %zu\n",
+                    static_cast<unsigned long long>(deferred["begin_byte"].get<uint64_t>()),
+                    static_cast<unsigned long long>(deferred["end_byte"].get<uint64_t>()), deferred["after_chunk"].get<size_t>());
     for (size_t m = 0; m < s["quantization"].size(); ++m) {
         const auto& q = s["quantization"][m];
         std::printf("  mesh %zu quantized: positions %u bits (step %.4g), normals %u bits, texture coordinates %u bits\n", m, q["position_bits"].get<uint32_t>(),
@@ -303,7 +303,7 @@ int main(int argc, char** argv) {
         tom::OpenOptions oo;
         oo.verify_checksums = !o.no_verify;
         std::optional<tom::StreamDecoder> stream;
-        if (is_stream_file(o.path)) stream.emplace(tom::read_stream(o.path));
+        if (tom::is_stream_file(o.path)) stream.emplace(tom::read_stream(o.path));
         const tom::File file = stream ? stream->file() : tom::File::open(o.path, oo);
         nlohmann::ordered_json j = file_json(file, o.path, o.sections || o.json);
         if (stream) j["stream"] = stream_json(*stream);

@@ -16,13 +16,15 @@
 namespace tom::stream_layout {
 
 constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'S', 0x0D, 0x0A, 0x1A, 0x0A};
-constexpr uint32_t version_major = 1, version_minor = 0;
+constexpr uint32_t version_major = 1, version_minor = 1;
 constexpr uint32_t header_bytes = 64;
 // header field offsets
 constexpr uint32_t h_version_major = 8, h_version_minor = 12, h_file_bytes = 16, h_mesh_count = 24, h_chunk_count = 28,
                    h_directory_bytes = 32, h_directory_checksum = 40, h_header_checksum = 44;
 
-constexpr uint32_t directory_header_bytes = 16;   // u32 kept_count, u32[3] reserved
+constexpr uint32_t directory_header_bytes = 16;  // u32 kept_count, deferred_count, deferred_after, deferred_checksum
+// directory header field offsets (the deferred fields since 1.1: zero in 1.0)
+constexpr uint32_t d_kept_count = 0, d_deferred_count = 4, d_deferred_after = 8, d_deferred_checksum = 12;
 constexpr uint32_t kept_entry_bytes = 16;         // u32 type, u32 mesh, u64 bytes
 constexpr uint32_t quantization_bytes = 64;       // per mesh, below
 constexpr uint32_t chunk_record_bytes = 24;       // u32 mesh, vertex_end, triangle_end, reserved, bytes, checksum
@@ -31,6 +33,11 @@ constexpr uint32_t q_position_bits = 0, q_normal_bits = 4, q_texcoord_bits = 8, 
                    q_texcoord0_min = 32, q_texcoord0_step = 40, q_texcoord1_min = 48, q_texcoord1_step = 56;
 // chunk record field offsets
 constexpr uint32_t r_mesh = 0, r_vertex_end = 4, r_triangle_end = 8, r_bytes = 16, r_checksum = 20;
+
+/// File-level sections no frame needs to draw (provenance, embedded images, the source's glTF
+/// scene): since 1.1 they travel in the deferred block after every mesh's first chunk, so that the
+/// first frame does not wait for a textured asset's images.
+inline bool deferrable(uint32_t type) { return type == layout::sec_provenance || type == layout::sec_images || type == layout::sec_source_gltf; }
 
 /// Element sizes of the quantized blocks (the meshopt vertex codec takes multiples of 4).
 constexpr uint32_t position_element = 8;     // u16 x, y, z, 0: residuals against the prediction

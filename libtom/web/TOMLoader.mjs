@@ -307,7 +307,8 @@ export class TOMObject extends Group {
     }
     let end = 0;
     for (const c of chunks) if (c.vertexBegin < this.targets[c.mesh]) end = Math.max(end, c.endByte);
-    this.wantEnd = end;
+    // the deferred block too: every resolution is drawn with the file's images
+    this.wantEnd = Math.max(end, this.source.directory.deferred.endByte);
     this.redraw();
     this.pump().catch(() => {}); // an error is the object's: its 'error' event and `loaded`
   }
@@ -376,7 +377,8 @@ export class TOMObject extends Group {
   // piece is cut where the decoder can go on, so that frame is drawn from the fewest bytes even
   // when the network hands over several chunks at once.
   take(bytes) {
-    while (!this.slots.length && this.source.isStream && !this.error) {
+    // (the first 8 bytes alone: the magic says whether the file is a stream)
+    while (!this.slots.length && (this.source.isStream || this.source.bytesReceived < 8) && !this.error) {
       const cut = this.source.nextBoundary - this.source.bytesReceived;
       if (cut <= 0 || cut >= bytes.length) break;
       this.takePiece(bytes.subarray(0, cut));
@@ -387,6 +389,7 @@ export class TOMObject extends Group {
 
   takePiece(bytes) {
     const before = this.source.decodedChunks;
+    const imagesBefore = this.source.isStream && this.source.deferredReceived;
     try {
       this.source.append(bytes);
     } catch (error) {
@@ -395,7 +398,8 @@ export class TOMObject extends Group {
     }
     if (this.options.onProgress) this.options.onProgress({ loaded: this.source.bytesReceived, total: this.fileBytes, lengthComputable: this.fileBytes > 0 });
     if (this.source.directory && !this.meshChunks) this.onDirectory();
-    if (this.source.isStream && this.source.decodedChunks > before && this.source.decodedChunks >= this.totals.length) this.refine();
+    const news = this.source.decodedChunks > before || (!imagesBefore && this.source.deferredReceived);
+    if (this.source.isStream && news && this.source.decodedChunks >= this.totals.length) this.refine();
   }
 
   // A stream's directory: its meshes' chunks, sizes and bounds, the error after each chunk, and
@@ -439,6 +443,7 @@ export class TOMObject extends Group {
     const snapshot = this.source.snapshot();
     const first = !this.slots.length;
     if (first) this.build(snapshot);
+    if (!this.imagesIn && this.source.deferredReceived) this.attachImages(snapshot);
     for (let m = 0; m < this.slots.length; ++m) this.copyVertices(snapshot, m);
     this.snapshot = snapshot;
     this.redraw();
@@ -466,6 +471,8 @@ export class TOMObject extends Group {
       return slot;
     });
     const materials = snapshot.materials.map((mat) => this.makeMaterial(snapshot, mat));
+    this.materialUses = materials.map((m) => [m]); // per material of the file, the three.js materials drawing it
+    this.imagesIn = !this.source.isStream || this.source.deferredReceived;
     const fallback = this.makeMaterial(snapshot, null);
     for (const instance of snapshot.instances) {
       const parts = snapshot.meshes[instance.mesh].parts;
@@ -475,6 +482,7 @@ export class TOMObject extends Group {
         if (!slot.streams.includes('color') || !mat.isMeshStandardMaterial) return mat;
         const withColors = mat.clone();
         withColors.vertexColors = true;
+        if (this.materialUses[p.material]) this.materialUses[p.material].push(withColors);
         return withColors;
       });
       const mesh = new Mesh(slot.geometry, list);
@@ -516,10 +524,7 @@ export class TOMObject extends Group {
         fragmentShader: referenceFragment,
         side: DoubleSide,
       });
-      if (map) {
-        m.defines.USE_IMAGE = '';
-        map.colorSpace = NoColorSpace;
-      }
+      if (map) this.useMap(m, map);
       return m;
     }
     const m = new MeshStandardMaterial({
@@ -535,6 +540,29 @@ export class TOMObject extends Group {
     });
     if (mat) m.name = mat.name;
     return m;
+  }
+
+  // A stream's images, once its deferred block is in (after every mesh's first chunk): each
+  // material's base-colour texture, which the frames before drew without.
+  attachImages(snapshot) {
+    this.imagesIn = true;
+    snapshot.materials.forEach((mat, i) => {
+      const ref = mat.textures.find((t) => t.role === 'baseColor' && t.texcoord === 0);
+      if (!ref || ref.image < 0 || !this.materialUses[i]) return;
+      const map = this.makeTexture(snapshot, ref);
+      for (const m of this.materialUses[i]) this.useMap(m, map);
+    });
+  }
+
+  useMap(m, map) {
+    if (m.isShaderMaterial) {
+      m.uniforms.image.value = map;
+      m.defines.USE_IMAGE = '';
+      map.colorSpace = NoColorSpace;
+    } else {
+      m.map = map;
+    }
+    m.needsUpdate = true;
   }
 
   // A base-colour texture: an image stored in the file, or one the source referenced beside it
@@ -685,6 +713,9 @@ export class TOMStreamScheduler {
       const gain = Math.min(before * scale, 1e9) - o.chunkError[i] * scale;
       return { object: o, end: c.endByte, bytes: c.endByte - start, gain: Math.max(gain, 1e-9) };
     }
+    // nothing the targets need: the deferred block (the images), when the budget buys nothing better
+    const deferred = o.source.directory.deferred;
+    if (deferred.endByte > start) return { object: o, end: deferred.endByte, bytes: deferred.endByte - start, gain: 1e-9 };
     return null;
   }
 }

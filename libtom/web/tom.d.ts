@@ -17,6 +17,8 @@ export interface StreamDirectory {
   /** per mesh, the full-detail bounds [min x, y, z, max x, y, z] */
   bounds: number[][];
   chunks: StreamChunk[];
+  /** the sections no frame needs to draw (images, provenance, source glTF), stored after chunk afterChunk - 1; empty when beginByte === endByte */
+  deferred: { afterChunk: number; beginByte: number; endByte: number };
 }
 
 export interface TextureRef { /** 'baseColor', 'metallicRoughness', 'normal', 'occlusion' or 'emissive' */ role: string; texcoord: number; uri: string; image: number }
@@ -73,7 +75,10 @@ export class TOMSource {
   readonly bytesReceived: number;
   readonly decodedChunks: number;
   readonly nextBoundary: number;
+  /** every chunk decoded and the deferred block in */
   readonly complete: boolean;
+  /** the deferred block is in: snapshots hold the file's images from then on */
+  readonly deferredReceived: boolean;
   /** Takes the next bytes; returns the decoded chunk count. Throws TOMError on malformed input. */
   append(bytes: Uint8Array): number;
   snapshot(): TOMSnapshot;

@@ -99,6 +99,7 @@ export class TOMSource {
         fileBytes: d.file_bytes,
         bounds: d.bounds,
         chunks: d.chunks.map(([mesh, vertexBegin, vertexEnd, triangles, beginByte, endByte]) => ({ mesh, vertexBegin, vertexEnd, triangles, beginByte, endByte })),
+        deferred: { afterChunk: d.deferred[0], beginByte: d.deferred[1], endByte: d.deferred[2] },
       };
     }
     return this.decodedChunks;
@@ -117,9 +118,13 @@ export class TOMSource {
   get decodedChunks() {
     return this.wasm._tomw_decoded_chunks(this.handle);
   }
-  /** True when every chunk of a stream is decoded. */
+  /** True when every chunk of a stream is decoded and its deferred block is in. */
   get complete() {
-    return !!this.directory && this.decodedChunks === this.directory.chunks.length;
+    return !!this.directory && this.wasm._tomw_complete(this.handle) !== 0;
+  }
+  /** True when a stream's deferred block (images, provenance, source glTF) is in: snapshots hold its images from then on. */
+  get deferredReceived() {
+    return this.wasm._tomw_deferred_received(this.handle) !== 0;
   }
 
   /**

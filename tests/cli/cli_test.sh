@@ -433,6 +433,19 @@ assert fine['provenance']['options']['stream'] == {'position_bits': 11, 'normal_
 "
 check "another --chunk-growth converts the file again" bash -c "'$tools/tombuild' '$data/meshes/bunny00.off' -o '$work/fine' --stream --chunk-growth 1.2 --position-bits 11 2>&1 | grep -q '1 of 1 inputs converted'"
 check "a stream option without --stream is a usage error" expect_exit 2 "$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/fine" --chunk-growth 1.1
+# a textured GLB's embedded image travels in the deferred block, after the mesh's first chunk:
+# the first frame does not wait for it, and a prefix before it says what it lacks
+"$tools/tombuild" "$data/assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb" -o "$work/streamed" -q --stream
+check "tominfo --json places a textured GLB's deferred block after its first chunk" expect_exit 0 "$tools/tominfo" --json "$work/streamed/BoxTextured.tom"
+check "(the block follows the first chunk and holds most of the file: the image)" /usr/bin/python3 -c "
+import json
+s = json.load(open('$work/stdout'))['stream']
+d, c = s['deferred'], s['chunks']
+assert d['after_chunk'] == 1 and d['begin_byte'] == c[0]['end_byte'] and d['end_byte'] - d['begin_byte'] > 0.5 * s['file_bytes'], (d, c)
+open('$work/box-first', 'w').write(str(c[0]['end_byte']))
+"
+check "tomextract --bytes before the block writes the coarse box" expect_exit 0 "$tools/tomextract" "$work/streamed/BoxTextured.tom" --bytes "$(cat "$work/box-first")" -o "$work/box-first.glb"
+check "and warns that it has no embedded images yet" grep -q "BoxTextured.tom: the first $(cat "$work/box-first") bytes end before the deferred sections" "$work/stderr"
 head -c 5000 "$work/streamed/bunny00.tom" > "$work/cut.tom"
 check "a truncated streamed file exits 1" expect_exit 1 "$tools/tominfo" "$work/cut.tom"
 check "naming the file and the truncation" grep -q "cut.tom.*truncated" "$work/stderr"

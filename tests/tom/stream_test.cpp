@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -110,7 +111,22 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
     std::printf("%s: %zu bytes as .tom, %zu streamed (%.1f%%) in %zu chunks; the first chunk ends at byte %llu (%.1f%%)\n", what.c_str(), image.size(),
                 stream.size(), 100.0 * double(stream.size()) / double(image.size()), chunks.size(), (unsigned long long)chunks[0].end_byte,
                 100.0 * double(chunks[0].end_byte) / double(stream.size()));
+    const tom::StreamDeferred deferred = decoder.deferred();
+    const size_t images = original.scene().images.size();
+    // the deferred block (images, provenance, source glTF) right after every mesh's first chunk
+    if (deferred.end_byte > deferred.begin_byte) CHECK(deferred.after_chunk == std::min<size_t>(original.mesh_count(), chunks.size()));
+    auto feed_deferred = [&](size_t k) {
+        if (k != deferred.after_chunk || decoder.deferred_received()) return;
+        CHECK(decoder.file().scene().images.empty());  // a frame before the block: no images yet
+        CHECK(decoder.next_boundary() == deferred.end_byte);
+        decoder.append(stream.data() + fed, deferred.end_byte - fed);
+        fed = deferred.end_byte;
+        REQUIRE(decoder.deferred_received());
+        CHECK(decoder.file().scene().images.size() == images);
+        CHECK(decoder.file().provenance() == original.provenance());
+    };
     for (size_t k = 0; k < chunks.size(); ++k) {
+        feed_deferred(k);
         // a chunk in two pieces: nothing is decoded until its last byte
         const uint64_t middle = (chunks[k].begin_byte + chunks[k].end_byte) / 2;
         CHECK(decoder.next_boundary() == chunks[k].end_byte);  // then each chunk
@@ -124,8 +140,10 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
         CHECK(prefix.mesh(chunks[k].mesh).triangle_count == chunks[k].triangles);
         CHECK(prefix.scene().materials.size() == original.scene().materials.size());
         CHECK(prefix.scene().instances.size() == original.scene().instances.size());
+        CHECK(prefix.scene().images.size() == (decoder.deferred_received() ? images : 0));
         for (uint32_t i = 0; i < original.mesh_count(); ++i) check_prefix_mesh(original.mesh(i), prefix.mesh(i), decoder.quantization(i));
     }
+    feed_deferred(chunks.size());
     CHECK(decoder.complete());
     CHECK(decoder.next_boundary() == stream.size());
     CHECK(fed == stream.size());
@@ -138,13 +156,27 @@ uint64_t chunk_record(const std::vector<uint8_t>& s, uint32_t k) {
     return 64 + 16 + 16 * uint64_t(load_u32(&s[64])) + 64 * uint64_t(load_u32(&s[24])) + 24 * uint64_t(k);
 }
 
+/// The deferred block's size: the data of the directory's last deferred_count kept entries.
+uint64_t deferred_bytes(const std::vector<uint8_t>& s) {
+    using namespace tom::layout;
+    const uint32_t kept = load_u32(&s[64]);
+    uint64_t bytes = 0;
+    for (uint32_t k = kept - load_u32(&s[68]); k < kept; ++k) bytes += load_u64(&s[64 + 16 + 16 * uint64_t(k) + 8]);
+    return bytes;
+}
+
 /// Recomputes every checksum of a stream after a test changed its bytes, so that the checks
 /// behind the checksums are what refuses them.
 void reseal(std::vector<uint8_t>& s) {
     using namespace tom::layout;
-    const uint64_t directory = load_u64(&s[32]);
+    const uint64_t directory = load_u64(&s[32]), deferred = deferred_bytes(s);
     uint64_t at = 64 + directory;
-    for (uint32_t k = 0; k < load_u32(&s[28]); ++k) {
+    for (uint32_t k = 0; k <= load_u32(&s[28]); ++k) {
+        if (k == load_u32(&s[72]) && deferred) {
+            store_u32(&s[76], tom::crc32(&s[at], deferred));
+            at += deferred;
+        }
+        if (k == load_u32(&s[28])) break;
         const uint64_t r = chunk_record(s, k);
         const uint32_t bytes = load_u32(&s[r + 16]);
         if (at + bytes <= s.size()) store_u32(&s[r + 20], tom::crc32(&s[at], bytes));
@@ -206,7 +238,11 @@ TEST_CASE("a stream fed in random pieces decodes as when fed whole", "[stream]")
 }
 
 TEST_CASE("bad streams are errors naming the place, and keep what was decoded", "[stream][errors]") {
-    const std::vector<uint8_t> image = tom_image(test::sample("meshes/fandisk.off"));
+    tom::Mesh fandisk = tom::import_file(test::sample("meshes/fandisk.off")).meshes.at(0);
+    tom::clean_mesh(fandisk);
+    tom::WriteOptions with_provenance;  // (a deferred block to corrupt)
+    with_provenance.provenance = "{\"tool\": \"stream_test\"}";
+    const std::vector<uint8_t> image = tom::serialize({tom::build(fandisk)}, with_provenance);
     const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size());
     tom::StreamDecoder reference(tom::meshopt_codecs());
     reference.append(stream.data(), stream.size());
@@ -214,7 +250,10 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
     const uint64_t directory_end = chunks[0].begin_byte;
 
     SECTION("a flipped byte anywhere is refused by a checksum") {
-        for (const uint64_t at : {uint64_t(20), uint64_t(70), directory_end - 3, chunks[0].begin_byte + 5, chunks[3].begin_byte + 9, stream.size() - 1}) {
+        const tom::StreamDeferred deferred = reference.deferred();
+        REQUIRE(deferred.end_byte > deferred.begin_byte);  // (its provenance)
+        for (const uint64_t at :
+             {uint64_t(20), uint64_t(70), directory_end - 3, chunks[0].begin_byte + 5, deferred.begin_byte + 7, chunks[3].begin_byte + 9, stream.size() - 1}) {
             std::vector<uint8_t> bad = stream;
             bad[at] ^= 0x40;
             tom::StreamDecoder d(tom::meshopt_codecs(), "bad.tom");
@@ -268,6 +307,17 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         tom::layout::store_u32(&table[chunk_record(table, 1) + 4], 1u << 30);
         reseal(table);
         CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "t.tom").append(table.data(), table.size()), Catch::Contains("t.tom") && Catch::Contains("chunk 1 vertex_end"));
+        // a deferred block placed past the chunks, and a deferred section a frame needs
+        std::vector<uint8_t> placed = stream;
+        tom::layout::store_u32(&placed[72], tom::layout::load_u32(&placed[28]) + 1);
+        reseal(placed);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "p.tom").append(placed.data(), placed.size()),
+                          Catch::Contains("p.tom") && Catch::Contains("deferred_after"));
+        std::vector<uint8_t> needed = stream;
+        std::memcpy(&needed[64 + 16 + 16 * uint64_t(tom::layout::load_u32(&needed[64]) - 1)], "MATL", 4);
+        reseal(needed);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "n.tom").append(needed.data(), needed.size()),
+                          Catch::Contains("only PROV, IMAG and GLTF may be deferred"));
     }
     SECTION("a truncated file is an error unless a byte limit asks for a prefix") {
         const fs::path dir = fs::temp_directory_path() / ("tom_stream_" + std::to_string(::getpid()));

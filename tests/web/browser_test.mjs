@@ -5,7 +5,8 @@
 //   - the first frame is drawn after at most 5% of the bunny's bytes;
 //   - every frame is a valid mesh: no index past the vertices drawn, none drawn undecoded;
 //   - the final frame matches tomview's image of the full-detail ordinary .tom (SSIM >= 0.98,
-//     same camera, tomview's lighting), for the bunny, a multi-material scene and a textured box;
+//     same camera, tomview's lighting), for the bunny, a multi-material scene and a textured box
+//     (whose first frame comes before its image, which the loader attaches when it arrives);
 //   - automatic mode fetches a few chunks for a far camera, everything near, within the link budget;
 //   - a fixed resolution fetches only a prefix and draws the level extraction gives;
 //   - a truncated, a corrupted and a missing file each give an error on the page naming the
@@ -159,8 +160,12 @@ async function main() {
     check(s3 >= 0.98, `bunny00, ordinary file: final frame against tomview's, SSIM ${s3.toFixed(4)} (at least 0.98)`);
 
     // a textured asset: its embedded image decoded in the page and sampled as tomview samples it
+    // (the image in the deferred block: the first frame before it, drawn untextured, then textured)
     const box = await page(server, 'file=/data/stream/BoxTextured.tom');
     judgePage(box, 'BoxTextured');
+    const boxCase = box.cases[0] || {};
+    check(boxCase.deferred && boxCase.deferred.endByte > boxCase.deferred.beginByte && boxCase.firstFrameBytes <= boxCase.deferred.beginByte,
+      `BoxTextured: first frame after ${boxCase.firstFrameBytes} bytes, before its image (bytes ${boxCase.deferred && boxCase.deferred.beginByte} to ${boxCase.deferred && boxCase.deferred.endByte})`);
     const s2 = ssim(2, box.image);
     check(s2 >= 0.98, `BoxTextured: final frame against tomview's full detail, SSIM ${s2.toFixed(4)} (at least 0.98)`);
 

@@ -59,6 +59,8 @@ export async function attach(viewer, params) {
       const started = performance.now();
       const object = await viewer.load(url);
       record.firstFrameBytes = object.firstFrameBytes;
+      const directory = object.source && object.source.directory;
+      if (directory) record.deferred = directory.deferred;
       record.firstFrameMs = performance.now() - started;
       checkFrame(object, record);
       object.addEventListener('refine', () => checkFrame(object, record));

@@ -224,6 +224,15 @@ struct StreamDecoder::Impl {
     std::vector<StreamChunk> chunks;
     std::vector<uint32_t> chunk_checksums;
     size_t decoded = 0;
+    /// The deferred block: its sections' entries, where it stands, its CRC.
+    struct DeferredEntry {
+        uint32_t type = 0, mesh = 0;
+        uint64_t bytes = 0;
+    };
+    std::vector<DeferredEntry> deferred_entries;
+    StreamDeferred deferred;
+    uint32_t deferred_checksum = 0;
+    bool deferred_read = false;
 
     [[noreturn]] void fail(uint64_t offset, const std::string& field, int rule, const std::string& detail) const {
         throw FormatError(path, offset, field, rule, detail);
@@ -235,6 +244,7 @@ struct StreamDecoder::Impl {
     void read_kept_section(uint32_t type, uint32_t mesh, const uint8_t* data, uint64_t bytes, uint64_t offset);
     void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
     void read_chunk_table(const uint8_t* table, uint64_t offset);
+    void read_deferred(const uint8_t* data);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
@@ -274,11 +284,14 @@ uint64_t StreamDecoder::file_bytes() const noexcept { return impl_->declared_byt
 uint32_t StreamDecoder::mesh_count() const noexcept { return uint32_t(impl_->meshes.size()); }
 const std::vector<StreamChunk>& StreamDecoder::chunks() const noexcept { return impl_->chunks; }
 size_t StreamDecoder::decoded_chunks() const noexcept { return impl_->decoded; }
-bool StreamDecoder::complete() const noexcept { return impl_->directory && impl_->decoded == impl_->chunks.size(); }
+bool StreamDecoder::complete() const noexcept { return impl_->directory && impl_->decoded == impl_->chunks.size() && impl_->deferred_read; }
+const StreamDeferred& StreamDecoder::deferred() const noexcept { return impl_->deferred; }
+bool StreamDecoder::deferred_received() const noexcept { return impl_->deferred_read; }
 uint64_t StreamDecoder::next_boundary() const noexcept {
     const Impl& d = *impl_;
     if (!d.declared_bytes) return header_bytes;
     if (!d.directory) return header_bytes + d.directory_bytes;
+    if (!d.deferred_read && d.decoded == d.deferred.after_chunk) return d.deferred.end_byte;
     return d.decoded < d.chunks.size() ? d.chunks[d.decoded].end_byte : d.declared_bytes;
 }
 uint32_t StreamDecoder::vertex_count(uint32_t mesh) const noexcept { return mesh < impl_->meshes.size() ? impl_->meshes[mesh].resolution : 0; }
@@ -312,7 +325,14 @@ void StreamDecoder::Impl::take(const uint8_t* bytes, size_t size) {
         read_directory();
     }
     size_t used = 0;
-    while (decoded < chunks.size()) {
+    for (;;) {
+        if (!deferred_read && decoded == deferred.after_chunk) {  // the deferred block's turn
+            if (deferred.end_byte > received) break;
+            read_deferred(pending.data() + (deferred.begin_byte - consumed));
+            used = deferred.end_byte - consumed;
+            continue;
+        }
+        if (decoded == chunks.size()) break;
         const StreamChunk& c = chunks[decoded];
         if (c.end_byte > received) break;
         const uint8_t* data = pending.data() + (c.begin_byte - consumed);
@@ -354,20 +374,42 @@ void StreamDecoder::Impl::read_directory() {
     const uint64_t base = header_bytes;
     if (verify && crc32(d, directory_bytes) != load_u32(pending.data() + h_directory_checksum)) fail(h_directory_checksum, "directory_checksum", 32, "directory checksum mismatch");
     if (directory_bytes < directory_header_bytes) fail(base, "directory", 32, "shorter than its 16-byte header");
-    const uint64_t kept = load_u32(d);
+    const uint64_t kept = load_u32(d + d_kept_count), deferred_count = load_u32(d + d_deferred_count);
+    deferred.after_chunk = load_u32(d + d_deferred_after);
+    deferred_checksum = load_u32(d + d_deferred_checksum);
+    if (deferred_count > kept)
+        fail(base + d_deferred_count, "directory deferred_count", 32,
+             std::to_string(deferred_count) + " deferred of " + std::to_string(kept) + " kept sections");
+    if (deferred.after_chunk > chunks_declared)
+        fail(base + d_deferred_after, "directory deferred_after", 32,
+             "the deferred block follows chunk " + std::to_string(deferred.after_chunk) + " of " + std::to_string(chunks_declared));
+    if (!deferred_count && (deferred.after_chunk || deferred_checksum))
+        fail(base + d_deferred_after, "directory deferred_after", 32, "nonzero without deferred sections");
     meshes.resize(meshes_declared);
     uint64_t entries = directory_header_bytes;
     uint64_t data = entries + kept * kept_entry_bytes + uint64_t(meshes_declared) * quantization_bytes + uint64_t(chunks_declared) * chunk_record_bytes;
     if (data > directory_bytes) fail(base, "directory kept_count", 32, std::to_string(kept) + " kept sections do not fit in the directory");
     const uint64_t quant = entries + kept * kept_entry_bytes, table = quant + uint64_t(meshes_declared) * quantization_bytes;
+    uint64_t deferred_bytes = 0;
     for (uint64_t k = 0; k < kept; ++k) {
         const uint8_t* e = d + entries + k * kept_entry_bytes;
         const uint32_t type = load_u32(e), mesh = load_u32(e + 4);
-        const uint64_t bytes = load_u64(e + 8);
-        if (bytes > directory_bytes - data) fail(base + entries + k * kept_entry_bytes + 8, "kept section " + std::to_string(k) + " bytes", 32, "runs past the directory's end");
+        const uint64_t bytes = load_u64(e + 8), entry = base + entries + k * kept_entry_bytes;
+        if (k >= kept - deferred_count) {  // its data in the deferred block
+            if (mesh != layout::file_level || !deferrable(type))
+                fail(entry, "kept section " + std::to_string(k), 32, "only PROV, IMAG and GLTF may be deferred");
+            if (bytes > declared_bytes - deferred_bytes)
+                fail(entry + 8, "kept section " + std::to_string(k) + " bytes", 32, "the deferred block runs past the file's end");
+            deferred_entries.push_back({type, mesh, bytes});
+            deferred_bytes += bytes;
+            continue;
+        }
+        if (bytes > directory_bytes - data) fail(entry + 8, "kept section " + std::to_string(k) + " bytes", 32, "runs past the directory's end");
         read_kept_section(type, mesh, d + data, bytes, base + data);
         data += bytes;
     }
+    deferred.end_byte = deferred_bytes;  // its size until the chunk table places it
+    deferred_read = !deferred_count;
     if (data != directory_bytes) fail(base + data, "directory", 32, std::to_string(directory_bytes - data) + " bytes after the kept sections");
     for (uint32_t m = 0; m < meshes_declared; ++m) {
         const std::string field = "mesh " + std::to_string(m);
@@ -468,7 +510,14 @@ void StreamDecoder::Impl::read_quantization(MeshState& m, const uint8_t* q, uint
 void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset) {
     std::vector<uint32_t> end(meshes.size(), 0);
     uint64_t at = header_bytes + directory_bytes;
+    const uint64_t deferred_bytes = deferred.end_byte;
+    auto place_deferred = [&] {
+        if (deferred_bytes > declared_bytes - at) fail(offset, "deferred block", 33, "runs past the file's end");
+        deferred.begin_byte = at, deferred.end_byte = at + deferred_bytes;
+        at = deferred.end_byte;
+    };
     for (uint32_t k = 0; k < chunks_declared; ++k) {
+        if (k == deferred.after_chunk) place_deferred();
         const uint8_t* r = table + uint64_t(k) * chunk_record_bytes;
         const uint64_t ro = offset + uint64_t(k) * chunk_record_bytes;
         const std::string field = "chunk " + std::to_string(k);
@@ -495,10 +544,23 @@ void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset
         chunks.push_back(c);
         chunk_checksums.push_back(load_u32(r + r_checksum));
     }
+    if (deferred.after_chunk == chunks_declared) place_deferred();
     if (at != declared_bytes) fail(h_file_bytes, "file_bytes", 33, "the chunks end at byte " + std::to_string(at) + ", not at the file's " + std::to_string(declared_bytes));
     for (uint32_t m = 0; m < meshes.size(); ++m)
         if (end[m] != meshes[m].vertex_count)
             fail(offset, "mesh " + std::to_string(m) + " chunks", 33, "reach vertex " + std::to_string(end[m]) + " of " + std::to_string(meshes[m].vertex_count));
+}
+
+// rule 34: the deferred block's checksum; then its sections join the file's
+void StreamDecoder::Impl::read_deferred(const uint8_t* data) {
+    if (verify && crc32(data, deferred.end_byte - deferred.begin_byte) != deferred_checksum)
+        fail(deferred.begin_byte, "deferred block", 34, "checksum mismatch: the block is corrupt");
+    uint64_t at = 0;
+    for (const DeferredEntry& e : deferred_entries) {
+        read_kept_section(e.type, e.mesh, data + at, e.bytes, deferred.begin_byte + at);
+        at += e.bytes;
+    }
+    deferred_read = true;
 }
 
 // rules 35 and 36: a chunk's counts, its blocks and the values they decode to; a bad chunk leaves

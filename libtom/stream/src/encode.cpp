@@ -422,11 +422,16 @@ void check_options(const StreamOptions& o) {
 std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamOptions& options, const std::string& name) {
     check_options(options);
     const File file = File::borrow(bytes, size, name);
-    // the directory: kept sections, quantization per mesh, then (below) the chunk table
-    const std::vector<layout::PendingSection> kept = kept_sections(file, static_cast<const uint8_t*>(bytes));
-    std::vector<uint8_t> directory;
-    put_u32(directory, uint32_t(kept.size()));
-    directory.resize(directory_header_bytes, 0);
+    // the directory: kept sections (those a frame needs, then the deferred ones), quantization per
+    // mesh, then (below) the chunk table
+    std::vector<layout::PendingSection> kept = kept_sections(file, static_cast<const uint8_t*>(bytes));
+    const size_t front = size_t(
+        std::stable_partition(kept.begin(), kept.end(), [](const layout::PendingSection& s) { return s.mesh != layout::file_level || !deferrable(s.type); }) -
+        kept.begin());
+    std::vector<uint8_t> deferred;
+    for (size_t k = front; k < kept.size(); ++k) deferred.insert(deferred.end(), kept[k].bytes.begin(), kept[k].bytes.end());
+    std::vector<uint8_t> directory(directory_header_bytes, 0);
+    store_u32(&directory[d_kept_count], uint32_t(kept.size()));
     for (const layout::PendingSection& s : kept) {
         put_u32(directory, s.type);
         put_u32(directory, s.mesh);
@@ -444,6 +449,13 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         for (Chunk& c : mesh_chunks(m, i, q, options)) chunks.push_back(std::move(c));
     }
     std::stable_sort(chunks.begin(), chunks.end(), [](const Chunk& x, const Chunk& y) { return x.start < y.start; });
+    // the deferred block right after the meshes' first chunks
+    const size_t after = kept.size() > front ? std::min<size_t>(file.mesh_count(), chunks.size()) : 0;
+    if (kept.size() > front) {
+        store_u32(&directory[d_deferred_count], uint32_t(kept.size() - front));
+        store_u32(&directory[d_deferred_after], uint32_t(after));
+        store_u32(&directory[d_deferred_checksum], crc32(deferred.data(), deferred.size()));
+    }
     for (const Chunk& c : chunks) {
         const size_t r = directory.size();
         directory.resize(r + chunk_record_bytes, 0);
@@ -453,8 +465,8 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         store_u32(&directory[r + r_bytes], uint32_t(c.bytes.size()));
         store_u32(&directory[r + r_checksum], crc32(c.bytes.data(), c.bytes.size()));
     }
-    for (const layout::PendingSection& s : kept) directory.insert(directory.end(), s.bytes.begin(), s.bytes.end());
-    // header, directory, chunks
+    for (size_t k = 0; k < front; ++k) directory.insert(directory.end(), kept[k].bytes.begin(), kept[k].bytes.end());
+    // header, directory, chunks with the deferred block among them
     std::vector<uint8_t> out(header_bytes, 0);
     std::memcpy(out.data(), magic, 8);
     store_u32(&out[h_version_major], version_major);
@@ -464,7 +476,10 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
     store_u64(&out[h_directory_bytes], directory.size());
     store_u32(&out[h_directory_checksum], crc32(directory.data(), directory.size()));
     out.insert(out.end(), directory.begin(), directory.end());
-    for (const Chunk& c : chunks) out.insert(out.end(), c.bytes.begin(), c.bytes.end());
+    for (size_t k = 0; k <= chunks.size(); ++k) {
+        if (k == after) out.insert(out.end(), deferred.begin(), deferred.end());
+        if (k < chunks.size()) out.insert(out.end(), chunks[k].bytes.begin(), chunks[k].bytes.end());
+    }
     store_u64(&out[h_file_bytes], out.size());
     store_u32(&out[h_header_checksum], crc32(out.data(), h_header_checksum));
     return out;

@@ -54,15 +54,15 @@ StreamDecoder read_stream(const std::string& path, uint64_t byte_limit) {
     return decoder;
 }
 
-File open_any(const std::string& path, uint64_t byte_limit, const OpenOptions& options) {
+bool is_stream_file(const std::string& path) {
+    const std::unique_ptr<std::FILE, CloseFile> f(std::fopen(path.c_str(), "rb"));
     uint8_t head[8] = {0};
-    size_t got = 0;
-    {
-        const std::unique_ptr<std::FILE, CloseFile> f(std::fopen(path.c_str(), "rb"));
-        if (!f) throw IoError("cannot open " + path);
-        got = std::fread(head, 1, sizeof head, f.get());
-    }
-    if (!is_stream(head, got)) {
+    return f && is_stream(head, std::fread(head, 1, sizeof head, f.get()));
+}
+
+File open_any(const std::string& path, uint64_t byte_limit, const OpenOptions& options) {
+    if (!std::unique_ptr<std::FILE, CloseFile>(std::fopen(path.c_str(), "rb"))) throw IoError("cannot open " + path);
+    if (!is_stream_file(path)) {
         if (byte_limit != std::numeric_limits<uint64_t>::max())
             throw ArgumentError(path + " is not a streamed .tom file: a byte limit applies only to streams (tombuild --stream)");
         return File::open(path, options);

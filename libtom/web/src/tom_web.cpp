@@ -142,10 +142,15 @@ EMSCRIPTEN_KEEPALIVE int tomw_has_directory(const tomw_source* s) { return s->de
 /// A stream's next boundary (tom::StreamDecoder::next_boundary); 0 for an ordinary file.
 EMSCRIPTEN_KEEPALIVE double tomw_next_boundary(const tomw_source* s) { return s->decoder ? double(s->decoder->next_boundary()) : (s->whole.size() < 8 ? 8 : 0); }
 EMSCRIPTEN_KEEPALIVE int tomw_decoded_chunks(const tomw_source* s) { return s->decoder ? int(s->decoder->decoded_chunks()) : 0; }
+/// 1 when a stream is decoded whole: every chunk and the deferred block.
+EMSCRIPTEN_KEEPALIVE int tomw_complete(const tomw_source* s) { return s->decoder && s->decoder->complete() ? 1 : 0; }
+/// 1 when a stream's deferred block (its images, provenance, source glTF) is in.
+EMSCRIPTEN_KEEPALIVE int tomw_deferred_received(const tomw_source* s) { return s->decoder && s->decoder->deferred_received() ? 1 : 0; }
 
 /// A stream's directory: the declared size, each mesh's full-detail bounds as
 /// [min x, y, z, max x, y, z], and its chunks in file order as
-/// [mesh, vertex_begin, vertex_end, triangles, begin_byte, end_byte]. "null" before it is in.
+/// [mesh, vertex_begin, vertex_end, triangles, begin_byte, end_byte], and its deferred block as
+/// [after_chunk, begin_byte, end_byte]. "null" before it is in.
 EMSCRIPTEN_KEEPALIVE const char* tomw_directory_json(tomw_source* s) {
     s->json = "null";
     if (!s->decoder || !s->decoder->has_directory()) return s->json.c_str();
@@ -156,12 +161,13 @@ EMSCRIPTEN_KEEPALIVE const char* tomw_directory_json(tomw_source* s) {
         d.declared_bounds(m, lo, hi);
         bounds += (m ? ",[" : "[") + number(lo[0]) + "," + number(lo[1]) + "," + number(lo[2]) + "," + number(hi[0]) + "," + number(hi[1]) + "," + number(hi[2]) + "]";
     }
-    s->json = "{\"file_bytes\":" + number(double(d.file_bytes())) + ",\"bounds\":" + bounds + "],\"chunks\":" +
-              array(d.chunks(), [](const tom::StreamChunk& c) {
-                  return "[" + std::to_string(c.mesh) + "," + std::to_string(c.vertex_begin) + "," + std::to_string(c.vertex_end) + "," +
-                         std::to_string(c.triangles) + "," + number(double(c.begin_byte)) + "," + number(double(c.end_byte)) + "]";
-              }) +
-              "}";
+    const tom::StreamDeferred& block = d.deferred();
+    const std::string deferred = "[" + std::to_string(block.after_chunk) + "," + number(double(block.begin_byte)) + "," + number(double(block.end_byte)) + "]";
+    const std::string chunks = array(d.chunks(), [](const tom::StreamChunk& c) {
+        return "[" + std::to_string(c.mesh) + "," + std::to_string(c.vertex_begin) + "," + std::to_string(c.vertex_end) + "," + std::to_string(c.triangles) +
+               "," + number(double(c.begin_byte)) + "," + number(double(c.end_byte)) + "]";
+    });
+    s->json = "{\"file_bytes\":" + number(double(d.file_bytes())) + ",\"bounds\":" + bounds + "],\"chunks\":" + chunks + ",\"deferred\":" + deferred + "}";
     return s->json.c_str();
 }
 

@@ -36,6 +36,15 @@ struct StreamChunk {
     uint64_t begin_byte = 0, end_byte = 0;      ///< its bytes in the file: a prefix of end_byte bytes decodes it
 };
 
+/// The deferred block (since stream 1.1): the file's sections no frame needs to draw (its
+/// provenance, embedded images and source glTF scene), stored whole among the chunks, right after
+/// every mesh's first one. `after_chunk` chunks precede it; begin_byte == end_byte when the file
+/// has none.
+struct StreamDeferred {
+    size_t after_chunk = 0;
+    uint64_t begin_byte = 0, end_byte = 0;
+};
+
 /// How a mesh of a streamed file was quantized (the grid the decoded values lie on).
 struct StreamQuantization {
     uint32_t position_bits = 0, normal_bits = 0, texcoord_bits = 0;
@@ -72,9 +81,12 @@ public:
     uint32_t mesh_count() const noexcept;
     const std::vector<StreamChunk>& chunks() const noexcept;  ///< the directory's (empty before it)
     size_t decoded_chunks() const noexcept;             ///< chunks()[0, decoded_chunks()) are decoded
-    bool complete() const noexcept;                     ///< every chunk decoded
+    bool complete() const noexcept;                     ///< every chunk decoded, the deferred block read
+    const StreamDeferred& deferred() const noexcept;    ///< where the deferred block is (from the directory on)
+    bool deferred_received() const noexcept;            ///< the deferred block is read (its sections are in tom_bytes())
     /// The byte count at which the next decoding step can run: the header's end before it is in,
-    /// the directory's end before that, then the next chunk's end; file_bytes() when complete.
+    /// the directory's end before that, then the next chunk's or the deferred block's end;
+    /// file_bytes() when complete.
     /// A client fetching by ranges asks for the bytes up to it.
     uint64_t next_boundary() const noexcept;
     uint32_t vertex_count(uint32_t mesh) const noexcept;      ///< decoded resolution of a mesh (0 before its first chunk)
@@ -84,8 +96,9 @@ public:
     void declared_bounds(uint32_t mesh, float min[3], float max[3]) const noexcept;
 
     /// The .tom image of what is decoded (FORMAT.md): every mesh at its decoded resolution with
-    /// its levels below, and the file's scene, materials, images and metadata; a mesh before its
-    /// first chunk is empty. \throw FormatError before the directory is in.
+    /// its levels below, and the file's scene, materials and metadata, with its images,
+    /// provenance and source glTF once the deferred block is in; a mesh before its first chunk
+    /// is empty. \throw FormatError before the directory is in.
     std::vector<uint8_t> tom_bytes() const;
     /// tom_bytes() validated and held as a File.
     File file() const;

@@ -39,6 +39,9 @@ StreamCodecs meshopt_codecs();
 /// (all of a file must be all of its stream: a truncated file is an error unless a limit is set).
 StreamDecoder read_stream(const std::string& path, uint64_t byte_limit = std::numeric_limits<uint64_t>::max());
 
+/// True when the file at `path` starts with a streamed file's magic (false when unreadable).
+bool is_stream_file(const std::string& path);
+
 /// Opens `path` whether it holds an ordinary or a streamed .tom; a streamed one is decoded (its
 /// first `byte_limit` bytes: the mesh a viewer shows after that many bytes). \throw as File::open
 /// and read_stream; ArgumentError for a byte limit on an ordinary file.
