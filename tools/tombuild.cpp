@@ -69,7 +69,9 @@ struct Options {
 // upgrade converts again instead of keeping outputs the new code would not write.
 // 2: integrated quadric costs, texture coordinates weighed only when sampled.
 // 3: chains where parts meet move along them; joins of two sheets ranked behind manifold moves.
-constexpr int kOutputRevision = 3;
+// 4: streams place provenance, images and the source glTF after the first chunks (stream 1.1);
+//    a join taken only at the cost the oracle ranked it.
+constexpr int kOutputRevision = 4;
 const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) +
                                  ", output revision " + std::to_string(kOutputRevision) + ")";
 

@@ -20,6 +20,7 @@
 #include "tom/builder/writer.h"
 #include "tom/errors.h"
 #include "tom/extract.h"
+#include "tom/stream/stream_file.h"
 #include "tom/format.h"
 #include "tom/io/import.h"
 #include "tom/metrics/report.h"
@@ -394,14 +395,17 @@ void add_files(py::module_& m) {
         }, "What to draw: the instances, or every mesh once untransformed; transform is a 4x4 object-to-world matrix.")
         .def("__len__", [](const FileHolder& f) { return f.file.mesh_count(); });
 
-    m.def("open", [](const std::string& path) {
+    m.def("open", [](const std::string& path, std::optional<uint64_t> byte_limit) {
         std::optional<tom::File> f;
         {
             py::gil_scoped_release release;
-            f.emplace(tom::File::open(path));
+            f.emplace(byte_limit ? tom::open_any(path, *byte_limit) : tom::open_any(path));
         }
         return std::make_shared<FileHolder>(FileHolder{std::move(*f), py::none()});
-    }, py::arg("path"), "Maps and validates a .tom file (every rule of docs/FORMAT.md). Raises tom.FormatError or tom.IoError.");
+    }, py::arg("path"), py::arg("byte_limit") = py::none(),
+          "Maps and validates a .tom file (every rule of docs/FORMAT.md); a streamed one (tombuild --stream) is decoded, only its first "
+          "byte_limit bytes when given (the meshes a viewer shows after that many bytes). Raises tom.FormatError, tom.IoError, or "
+          "tom.ArgumentError for a byte limit on an ordinary file.");
     m.def("open_bytes", [](py::buffer bytes, const std::string& name) {
         const py::buffer_info info = bytes.request();
         if (info.itemsize != 1 || info.ndim != 1) throw tom::ArgumentError("open_bytes: a one-dimensional buffer of bytes is needed");

@@ -12,16 +12,7 @@
 #include "tom/tcr.h"
 #include "tom/tom.h"
 
-static int failures = 0, checks = 0;
-
-#define CHECK(condition)                                                             \
-    do {                                                                             \
-        ++checks;                                                                    \
-        if (!(condition)) {                                                          \
-            ++failures;                                                              \
-            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #condition); \
-        }                                                                            \
-    } while (0)
+#include "check.h"
 
 /* An allocator that counts what it hands out. */
 typedef struct counting {

@@ -75,6 +75,21 @@ def test_levels_are_tomextracts_index_for_index(bunny, tmp_path, fraction):
     assert indices.max() < n and len(indices) == mesh.active_triangles(n)
 
 
+def test_a_streamed_file_and_its_prefixes_open_as_tomextract_decodes_them(bunny, tmp_path):
+    streamed = tombuild(tmp_path, f"{DATA}/meshes/bunny00.off", "--stream")
+    info = json.loads(subprocess.run([f"{TOOLS}/tominfo", "--json", str(streamed)], check=True, capture_output=True).stdout)
+    chunk = info["stream"]["chunks"][5]
+    prefix = tom.open(str(streamed), byte_limit=chunk["end_byte"] + 10).meshes[0]
+    assert (prefix.vertex_count, prefix.triangle_count) == (chunk["vertices"], chunk["triangles"])
+    indices, n = prefix.extract(vertices=chunk["vertices"])
+    expected, _ = tom.open(str(bunny)).meshes[0].extract(vertices=chunk["vertices"])
+    assert n == chunk["vertices"] and np.array_equal(indices, expected)
+    whole = tom.open(str(streamed)).meshes[0]
+    assert whole.triangle_count == info["meshes"][0]["triangles"]
+    with pytest.raises(tom.ArgumentError, match="byte limit applies only to streams"):
+        tom.open(str(bunny), byte_limit=1000)
+
+
 def test_refit_is_tomextract_refits_level_and_moves_within_it(bunny, tmp_path):
     mesh = tom.open(str(bunny)).meshes[0]
     indices, n = mesh.extract(fraction=0.1)

@@ -7,6 +7,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -18,12 +19,20 @@
 #include "tom/extract.h"
 #include "tom/format.h"
 #include "tom/scene.h"
+#include "tom/stream.h"
 
 #ifndef TOM_VERSION_STRING
 #define TOM_VERSION_STRING "0.0.0"
 #endif
 
 // A file and the C forms of its scene, made once at open so that lookups allocate nothing.
+/// A stream decoder with the caller's codecs, which the runtime's decoder reaches through
+/// `codecs` (their address is the runtime codecs' context: the object never moves).
+struct tom_stream {
+    tom_stream_codecs codecs{};
+    std::unique_ptr<tom::StreamDecoder> decoder;
+};
+
 struct tom_file {
     explicit tom_file(tom::File f) : file(std::move(f)) {}
     tom::File file;
@@ -443,5 +452,77 @@ tom_status tom_build_file(const tom_build_mesh* meshes, uint32_t mesh_count, con
         return TOM_OK;
     });
 }
+
+} // extern "C"
+
+namespace {
+
+// The runtime's codecs calling the caller's C ones (0 is success in C, as in meshoptimizer).
+bool stream_vertices(void* context, void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) {
+    const tom_stream_codecs& c = *static_cast<const tom_stream_codecs*>(context);
+    return c.decode_vertices(c.context, out, count, size, in, in_bytes) == 0;
+}
+bool stream_indices(void* context, uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) {
+    const tom_stream_codecs& c = *static_cast<const tom_stream_codecs*>(context);
+    return c.decode_indices(c.context, out, index_count, in, in_bytes) == 0;
+}
+
+} // namespace
+
+extern "C" {
+
+tom_status tom_stream_create(const tom_stream_codecs* codecs, const char* name, tom_stream** out) {
+    if (!codecs || !codecs->decode_vertices || !codecs->decode_indices) return null_argument("tom_stream_create", "codecs (or one of its decoders)");
+    if (!out) return null_argument("tom_stream_create", "out");
+    return guarded([&] {
+        auto s = std::make_unique<tom_stream>();
+        s->codecs = *codecs;
+        tom::StreamCodecs runtime;
+        runtime.decode_vertices = stream_vertices, runtime.decode_indices = stream_indices, runtime.context = &s->codecs;
+        s->decoder = std::make_unique<tom::StreamDecoder>(runtime, name ? name : "<stream>");
+        *out = s.release();
+        return TOM_OK;
+    });
+}
+
+tom_status tom_stream_append(tom_stream* stream, const void* bytes, size_t size) {
+    if (!stream) return null_argument("tom_stream_append", "stream");
+    if (!bytes && size > 0) return null_argument("tom_stream_append", "bytes");
+    return guarded([&] {
+        stream->decoder->append(bytes, size);
+        return TOM_OK;
+    });
+}
+
+uint64_t tom_stream_next_boundary(const tom_stream* stream) { return stream ? stream->decoder->next_boundary() : 0; }
+uint64_t tom_stream_bytes_received(const tom_stream* stream) { return stream ? stream->decoder->bytes_received() : 0; }
+uint64_t tom_stream_file_bytes(const tom_stream* stream) { return stream ? stream->decoder->file_bytes() : 0; }
+int tom_stream_has_directory(const tom_stream* stream) { return stream && stream->decoder->has_directory() ? 1 : 0; }
+size_t tom_stream_chunk_count(const tom_stream* stream) { return stream ? stream->decoder->chunks().size() : 0; }
+size_t tom_stream_decoded_chunks(const tom_stream* stream) { return stream ? stream->decoder->decoded_chunks() : 0; }
+int tom_stream_complete(const tom_stream* stream) { return stream && stream->decoder->complete() ? 1 : 0; }
+
+tom_status tom_stream_chunk_at(const tom_stream* stream, size_t index, tom_stream_chunk* out) {
+    if (!stream) return null_argument("tom_stream_chunk_at", "stream");
+    if (!out) return null_argument("tom_stream_chunk_at", "out");
+    const std::vector<tom::StreamChunk>& chunks = stream->decoder->chunks();
+    if (index >= chunks.size())
+        return fail(TOM_ERROR_ARGUMENT, "tom_stream_chunk_at: chunk " + std::to_string(index) + " of " + std::to_string(chunks.size()) +
+                                            (stream->decoder->has_directory() ? "" : " (the directory is not in)"));
+    const tom::StreamChunk& c = chunks[index];
+    *out = tom_stream_chunk{c.mesh, c.vertex_begin, c.vertex_end, c.triangles, c.begin_byte, c.end_byte};
+    return TOM_OK;
+}
+
+tom_status tom_stream_snapshot(const tom_stream* stream, tom_file** out) {
+    if (!stream) return null_argument("tom_stream_snapshot", "stream");
+    if (!out) return null_argument("tom_stream_snapshot", "out");
+    return guarded([&] {
+        *out = make_file(stream->decoder->file());
+        return TOM_OK;
+    });
+}
+
+void tom_stream_destroy(tom_stream* stream) { delete stream; }
 
 } // extern "C"

@@ -611,7 +611,7 @@ namespace {
 std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, size_t count, size_t size, const char* what) {
     const auto [p, n] = in.block(what);
     std::vector<uint8_t> out(count * size);
-    if (!codecs.decode_vertices(out.data(), count, size, p, n)) in.fail(std::string(what) + " block does not decode (meshopt vertex codec)");
+    if (!codecs.decode_vertices(codecs.context, out.data(), count, size, p, n)) in.fail(std::string(what) + " block does not decode (meshopt vertex codec)");
     return out;
 }
 
@@ -687,7 +687,7 @@ void StreamDecoder::Impl::decode_base(MeshState& m, ChunkReader& in, const std::
         if (!base[p]) continue;
         const auto [data, n] = in.block("TRIS");
         std::vector<uint32_t> c(3 * size_t(base[p]));
-        if (!codecs.decode_indices(c.data(), c.size(), data, n)) in.fail("TRIS block does not decode (meshopt index codec)");
+        if (!codecs.decode_indices(codecs.context, c.data(), c.size(), data, n)) in.fail("TRIS block does not decode (meshopt index codec)");
         rotate_back(in, c.data(), base[p]);
         for (size_t t = 0; t < base[p]; ++t) {
             for (int k = 0; k < 3; ++k)
@@ -882,7 +882,8 @@ void StreamDecoder::Impl::rotate_back(ChunkReader& in, uint32_t* corners, uint32
     if (n == 0) return;
     const size_t elements = (size_t(triangles) + 3) / 4;
     std::vector<uint8_t> turns(elements * rotation_element);
-    if (!codecs.decode_vertices(turns.data(), elements, rotation_element, data, n)) in.fail("rotations block does not decode (meshopt vertex codec)");
+    if (!codecs.decode_vertices(codecs.context, turns.data(), elements, rotation_element, data, n))
+        in.fail("rotations block does not decode (meshopt vertex codec)");
     for (size_t t = 0; t < triangles; ++t) {
         const uint8_t r = turns[t];
         if (r > 2) in.fail("triangle " + std::to_string(t) + " of the block turns by " + std::to_string(r) + ", not 0 to 2", 36);

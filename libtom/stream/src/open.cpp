@@ -12,10 +12,10 @@ namespace tom {
 
 namespace {
 
-bool decode_vertices(void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) {
+bool decode_vertices(void*, void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) {
     return meshopt_decodeVertexBuffer(out, count, size, in, in_bytes) == 0;
 }
-bool decode_indices(uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) {
+bool decode_indices(void*, uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) {
     return meshopt_decodeIndexBuffer(out, index_count, sizeof(uint32_t), in, in_bytes) == 0;
 }
 

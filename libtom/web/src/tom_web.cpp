@@ -45,10 +45,10 @@ EM_JS(int, tomw_js_decode_indices, (uint32_t* out, size_t index_count, const uin
 
 namespace {
 
-bool decode_vertices(void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) {
+bool decode_vertices(void*, void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) {
     return tomw_js_decode_vertices(out, count, size, in, in_bytes) != 0;
 }
-bool decode_indices(uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) {
+bool decode_indices(void*, uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) {
     return tomw_js_decode_indices(out, index_count, in, in_bytes) != 0;
 }
 

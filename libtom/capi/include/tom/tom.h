@@ -239,6 +239,51 @@ tom_status tom_file_image(const tom_file* file, uint32_t index, tom_image* out);
  * tom_file_image, or -1 when the image is a file named by the texture's uri. */
 tom_status tom_file_texture_image(const tom_file* file, uint32_t material, uint32_t texture, int32_t* image);
 
+/* ---- streamed files (tombuild --stream; docs/FORMAT.md, "Streamed files") ------------- */
+
+/* A streamed .tom decodes as its bytes arrive: feed them in order, and any prefix that ends on a
+ * chunk boundary is a valid file whose meshes stand at the resolutions received. Its chunks are
+ * compressed with meshoptimizer's codecs; the library does not link meshoptimizer, so the caller
+ * hands its two decoders in (one line each around meshopt_decodeVertexBuffer and
+ * meshopt_decodeIndexBuffer, which return 0 on success as these must). `context` is passed to
+ * both unchanged. */
+typedef struct tom_stream_codecs {
+    int (*decode_vertices)(void* context, void* out, size_t count, size_t size, const unsigned char* in, size_t in_bytes);
+    int (*decode_indices)(void* context, uint32_t* out, size_t index_count, const unsigned char* in, size_t in_bytes);
+    void* context;
+} tom_stream_codecs;
+
+typedef struct tom_stream tom_stream;
+
+/* One chunk of a stream's directory, in file order: it adds vertices [vertex_begin, vertex_end)
+ * to `mesh`, which then has `triangles` live triangles; a prefix of end_byte bytes decodes it. */
+typedef struct tom_stream_chunk {
+    uint32_t mesh, vertex_begin, vertex_end, triangles;
+    uint64_t begin_byte, end_byte;
+} tom_stream_chunk;
+
+/* A decoder for one streamed file; `name` (may be NULL: "<stream>") stands for it in messages. */
+tom_status tom_stream_create(const tom_stream_codecs* codecs, const char* name, tom_stream** out);
+/* Takes the next `size` bytes and decodes every chunk they complete. On TOM_ERROR_FORMAT the
+ * stream keeps what it decoded before and refuses further bytes (TOM_ERROR_ARGUMENT). */
+tom_status tom_stream_append(tom_stream* stream, const void* bytes, size_t size);
+/* The byte count up to which to fetch next: the header's end, the directory's, then the next
+ * chunk's (or the deferred block's); the file's size when complete. */
+uint64_t tom_stream_next_boundary(const tom_stream* stream);
+uint64_t tom_stream_bytes_received(const tom_stream* stream);
+uint64_t tom_stream_file_bytes(const tom_stream* stream); /* declared by the header; 0 before it */
+int tom_stream_has_directory(const tom_stream* stream);
+size_t tom_stream_chunk_count(const tom_stream* stream); /* 0 before the directory */
+tom_status tom_stream_chunk_at(const tom_stream* stream, size_t index, tom_stream_chunk* out);
+size_t tom_stream_decoded_chunks(const tom_stream* stream);
+int tom_stream_complete(const tom_stream* stream); /* every chunk decoded, the deferred block in */
+/* What is decoded, as a validated file of its own (every mesh at its decoded resolution, the
+ * levels below it, the scene; the images once the deferred block is in), independent of the
+ * stream: close it with tom_file_close. TOM_ERROR_FORMAT before the directory is in. */
+tom_status tom_stream_snapshot(const tom_stream* stream, tom_file** out);
+/* Releases the decoder (not the snapshots it made). NULL is ignored. */
+void tom_stream_destroy(tom_stream* stream);
+
 /* ---- building ------------------------------------------------------------------------- */
 
 /* Memory the library hands to the caller (tom_build_memory's bytes). NULL functions mean

@@ -20,12 +20,14 @@
 namespace tom {
 
 /// The two decoders of meshoptimizer's formats. Each returns false for malformed input, never
-/// reads outside [in, in + in_bytes) nor writes past its output.
+/// reads outside [in, in + in_bytes) nor writes past its output; each gets `context` unchanged
+/// (what a C or script binding needs to reach its own decoders).
 struct StreamCodecs {
     /// meshopt_decodeVertexBuffer: `count` elements of `size` bytes (a multiple of 4) into `out`.
-    bool (*decode_vertices)(void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) = nullptr;
+    bool (*decode_vertices)(void* context, void* out, size_t count, size_t size, const uint8_t* in, size_t in_bytes) = nullptr;
     /// meshopt_decodeIndexBuffer: `index_count` (a multiple of 3) 32-bit indices into `out`.
-    bool (*decode_indices)(uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) = nullptr;
+    bool (*decode_indices)(void* context, uint32_t* out, size_t index_count, const uint8_t* in, size_t in_bytes) = nullptr;
+    void* context = nullptr;
 };
 
 /// One chunk of the directory, in file order.
