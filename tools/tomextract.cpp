@@ -389,16 +389,20 @@ void write_meshes(const tom::File& file, const Refits& refits, const Options& o,
 }
 
 /// --bytes: what the first B bytes of a streamed file decode to; a warning when they end before
-/// its deferred block, whose sections (embedded images, provenance, source glTF) the output lacks.
+/// its deferred block and it holds what the output would carry (embedded images, the source glTF
+/// scene: the provenance alone is not written out).
 tom::File open_prefix(const std::string& path, uint64_t bytes) {
     if (!tom::is_stream_file(path)) return tom::open_any(path, bytes);  // (its error)
     const tom::StreamDecoder d = tom::read_stream(path, bytes);
-    if (!d.deferred_received() && d.has_directory())
-        std::fprintf(
-            stderr,
-            "warning: %s: the first %llu bytes end before the deferred sections (bytes %llu to %llu): no embedded images, provenance or source glTF scene\n",
-            path.c_str(), static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(d.deferred().begin_byte),
-            static_cast<unsigned long long>(d.deferred().end_byte));
+    const tom::StreamDeferred& deferred = d.deferred();
+    std::string missing;
+    for (const std::string& s : deferred.sections)
+        if (s == "IMAG" || s == "GLTF")
+            missing += std::string(missing.empty() ? "" : " and ") + (s == "IMAG" ? "its embedded images" : "its source glTF scene");
+    if (!d.deferred_received() && d.has_directory() && !missing.empty())
+        std::fprintf(stderr, "warning: %s: the first %llu bytes end before the deferred sections (bytes %llu to %llu): the output lacks %s\n", path.c_str(),
+                     static_cast<unsigned long long>(bytes), static_cast<unsigned long long>(deferred.begin_byte),
+                     static_cast<unsigned long long>(deferred.end_byte), missing.c_str());
     return d.file();
 }
 

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "tom/format.h"
@@ -42,6 +43,15 @@ constexpr uint32_t known_attributes = stream_attributes | attr_parts;
 
 constexpr uint32_t fourcc(const char (&s)[5]) {
     return uint32_t(uint8_t(s[0])) | uint32_t(uint8_t(s[1])) << 8 | uint32_t(uint8_t(s[2])) << 16 | uint32_t(uint8_t(s[3])) << 24;
+}
+/// A section type as its four characters ('?' for one that is not printable ASCII).
+inline std::string fourcc_name(uint32_t type) {
+    std::string s;
+    for (int k = 0; k < 4; ++k) {
+        const char c = char((type >> (8 * k)) & 0xFF);
+        s += (c >= 32 && c < 127) ? c : '?';
+    }
+    return s;
 }
 constexpr uint32_t sec_mesh = fourcc("MESH"), sec_positions = fourcc("POSI"), sec_normals = fourcc("NORM"),
                    sec_texcoords = fourcc("TEX0"), sec_colors = fourcc("COL0"), sec_substitute = fourcc("SUBS"),

@@ -27,15 +27,6 @@ FormatError::FormatError(std::string path, uint64_t offset, std::string field, i
 
 namespace {
 
-std::string type_name(uint32_t type) {
-    std::string s;
-    for (int k = 0; k < 4; ++k) {
-        const char c = char((type >> (8 * k)) & 0xFF);
-        s += (c >= 32 && c < 127) ? c : '?';
-    }
-    return s;
-}
-
 struct MeshSections {
     const SectionInfo* mesh = nullptr;
     const SectionInfo* positions = nullptr;
@@ -181,12 +172,12 @@ void File::Impl::read_sections(SectionMap& map, const OpenOptions& options) {
         const uint64_t e = table_offset + uint64_t(i) * section_entry_bytes;
         SectionInfo& s = sections[i];
         const uint32_t type = load_u32(data + e + s_type);
-        for (int k = 0; k < 4; ++k) s.type[k] = type_name(type)[k];
+        for (int k = 0; k < 4; ++k) s.type[k] = layout::fourcc_name(type)[k];
         s.mesh = load_u32(data + e + s_mesh);
         s.offset = load_u64(data + e + s_offset);
         s.bytes = load_u64(data + e + s_bytes);
         s.checksum = load_u32(data + e + s_checksum);
-        const std::string field = "section " + std::to_string(i) + " (" + type_name(type) + ")";
+        const std::string field = "section " + std::to_string(i) + " (" + layout::fourcc_name(type) + ")";
         // rule 7: placement
         if (s.offset % section_alignment != 0) fail(e + s_offset, field, 7, "offset " + std::to_string(s.offset) + " is not a multiple of 16");
         if (s.offset < table_offset + table_bytes || s.offset > size || s.bytes > size - s.offset)

@@ -401,6 +401,7 @@ void StreamDecoder::Impl::read_directory() {
             if (bytes > declared_bytes - deferred_bytes)
                 fail(entry + 8, "kept section " + std::to_string(k) + " bytes", 32, "the deferred block runs past the file's end");
             deferred_entries.push_back({type, mesh, bytes});
+            deferred.sections.push_back(layout::fourcc_name(type));
             deferred_bytes += bytes;
             continue;
         }

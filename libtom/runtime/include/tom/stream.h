@@ -45,6 +45,7 @@ struct StreamChunk {
 struct StreamDeferred {
     size_t after_chunk = 0;
     uint64_t begin_byte = 0, end_byte = 0;
+    std::vector<std::string> sections;  ///< their types in file order: "PROV", "IMAG", "GLTF"
 };
 
 /// How a mesh of a streamed file was quantized (the grid the decoded values lie on).
