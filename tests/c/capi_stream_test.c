@@ -134,6 +134,11 @@ int main(int argc, char** argv) {
         tom_file_close(kept);
         tom_stream_destroy(bad);
     }
+    { /* the ordinary reader refuses a stream and names what decodes it */
+        tom_file* wrong = NULL;
+        CHECK(tom_file_open(argv[1], &wrong) == TOM_ERROR_FORMAT && wrong == NULL);
+        CHECK(strstr(tom_last_error(), "a streamed .tom") != NULL && strstr(tom_last_error(), "tom_stream_create") != NULL);
+    }
     { /* the argument checks */
         tom_stream_codecs none;
         tom_stream* s = NULL;

@@ -328,6 +328,9 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         const tom::File prefix = tom::open_any(path.string(), chunks[4].end_byte + 10);
         CHECK(prefix.mesh(0).vertex_count == chunks[4].vertex_end);
         CHECK_THROWS_WITH(tom::open_any(test::sample("meshes/fandisk.off"), 100), Catch::Contains("not a streamed .tom"));
+        // a reader of ordinary files handed a stream says what it is and what decodes it
+        CHECK_THROWS_WITH(tom::File::from_bytes(stream.data(), stream.size(), "s.tom"),
+                          Catch::Contains("s.tom") && Catch::Contains("a streamed .tom") && Catch::Contains("tom_stream_create"));
         fs::remove_all(dir);
     }
 }

@@ -13,6 +13,7 @@
 #include "scene_codec.h"
 #include "tom/errors.h"
 #include "tom/format.h"
+#include "tom/stream.h"
 
 namespace tom {
 
@@ -132,7 +133,11 @@ SectionMap File::Impl::validate_header() {
     // rule 1: the header fits
     if (size < header_bytes) fail(0, "header", 1, "file is " + std::to_string(size) + " bytes, shorter than the 64-byte header");
     // rule 2: magic
-    if (std::memcmp(data, magic, 8) != 0) fail(0, "magic", 2, "not a .tom file (bad magic)");
+    if (std::memcmp(data, magic, 8) != 0)
+        fail(0, "magic", 2,
+             is_stream(data, size)
+                 ? "a streamed .tom (tombuild --stream): decode it with tom::open_any or tom::StreamDecoder (C: tom_stream_create; Python: tom.open)"
+                 : "not a .tom file (bad magic)");
     // rule 3: version
     version_major = load_u32(data + h_version_major);
     version_minor = load_u32(data + h_version_minor);
