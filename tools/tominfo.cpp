@@ -1,7 +1,6 @@
 // tominfo: prints what a .tom file holds: header, sections, meshes, counts and sizes.
 
 #include <cstdio>
-#include <fstream>
 #include <optional>
 
 #include <nlohmann/json.hpp>

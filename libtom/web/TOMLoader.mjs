@@ -164,6 +164,9 @@ class MeshSlot {
   }
 }
 
+// A material's base-colour texture on TEXCOORD_0, the one the loader draws (undefined when none).
+const baseColorTexture = (mat) => mat.textures.find((t) => t.role === 'baseColor' && t.texcoord === 0);
+
 export class TOMObject extends Group {
   constructor(url, options = {}) {
     super();
@@ -515,7 +518,7 @@ export class TOMObject extends Group {
 
   makeMaterial(snapshot, mat) {
     const base = mat ? mat.base_color : [0.7, 0.7, 0.7, 1];
-    const texture = mat && mat.textures.find((t) => t.role === 'baseColor' && t.texcoord === 0);
+    const texture = mat && baseColorTexture(mat);
     const map = texture ? this.makeTexture(snapshot, texture) : null;
     if (this.options.shading === 'reference') {
       const m = new ShaderMaterial({
@@ -547,7 +550,7 @@ export class TOMObject extends Group {
   attachImages(snapshot) {
     this.imagesIn = true;
     snapshot.materials.forEach((mat, i) => {
-      const ref = mat.textures.find((t) => t.role === 'baseColor' && t.texcoord === 0);
+      const ref = baseColorTexture(mat);
       if (!ref || ref.image < 0 || !this.materialUses[i]) return;
       const map = this.makeTexture(snapshot, ref);
       for (const m of this.materialUses[i]) this.useMap(m, map);

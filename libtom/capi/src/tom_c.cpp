@@ -26,18 +26,18 @@
 #endif
 
 // A file and the C forms of its scene, made once at open so that lookups allocate nothing.
-/// A stream decoder with the caller's codecs, which the runtime's decoder reaches through
-/// `codecs` (their address is the runtime codecs' context: the object never moves).
-struct tom_stream {
-    tom_stream_codecs codecs{};
-    std::unique_ptr<tom::StreamDecoder> decoder;
-};
-
 struct tom_file {
     explicit tom_file(tom::File f) : file(std::move(f)) {}
     tom::File file;
     std::vector<std::vector<tom_texture>> textures;  // per material
     std::vector<tom::Instance> draw;                 // tom::draw_list
+};
+
+// A stream decoder with the caller's codecs, which the runtime's decoder reaches through
+// `codecs` (their address is the runtime codecs' context: the object never moves).
+struct tom_stream {
+    tom_stream_codecs codecs{};
+    std::unique_ptr<tom::StreamDecoder> decoder;
 };
 
 namespace tom::capi {

@@ -243,7 +243,7 @@ struct StreamDecoder::Impl {
     void read_directory();
     void read_kept_section(uint32_t type, uint32_t mesh, const uint8_t* data, uint64_t bytes, uint64_t offset);
     void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
-    void read_chunk_table(const uint8_t* table, uint64_t offset);
+    void read_chunk_table(const uint8_t* table, uint64_t offset, uint64_t deferred_bytes);
     void read_deferred(const uint8_t* data);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
@@ -409,7 +409,6 @@ void StreamDecoder::Impl::read_directory() {
         read_kept_section(type, mesh, d + data, bytes, base + data);
         data += bytes;
     }
-    deferred.end_byte = deferred_bytes;  // its size until the chunk table places it
     deferred_read = !deferred_count;
     if (data != directory_bytes) fail(base + data, "directory", 32, std::to_string(directory_bytes - data) + " bytes after the kept sections");
     for (uint32_t m = 0; m < meshes_declared; ++m) {
@@ -419,7 +418,7 @@ void StreamDecoder::Impl::read_directory() {
             fail(base, field + " PAIR", 32, std::to_string(meshes[m].pair_bits.size()) + " bytes where the mesh's vertices require " + std::to_string((uint64_t(meshes[m].vertex_count) + 7) / 8));
         read_quantization(meshes[m], d + quant + uint64_t(m) * quantization_bytes, base + quant + uint64_t(m) * quantization_bytes, field + " quantization");
     }
-    read_chunk_table(d + table, base + table);
+    read_chunk_table(d + table, base + table, deferred_bytes);
     pending.erase(pending.begin(), pending.begin() + header_bytes + directory_bytes);
     consumed = header_bytes + directory_bytes;
     directory = true;
@@ -508,10 +507,9 @@ void StreamDecoder::Impl::read_quantization(MeshState& m, const uint8_t* q, uint
 
 // rule 33: every chunk adds vertices to one mesh, from where its previous chunk ended, without
 // splitting a group of copies; the first reaches the survivors, the last the whole mesh
-void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset) {
+void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset, uint64_t deferred_bytes) {
     std::vector<uint32_t> end(meshes.size(), 0);
     uint64_t at = header_bytes + directory_bytes;
-    const uint64_t deferred_bytes = deferred.end_byte;
     auto place_deferred = [&] {
         if (deferred_bytes > declared_bytes - at) fail(offset, "deferred block", 33, "runs past the file's end");
         deferred.begin_byte = at, deferred.end_byte = at + deferred_bytes;

@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "tom/errors.h"
 #include "tom/stream/stream_file.h"
@@ -22,6 +23,14 @@ bool decode_indices(void*, uint32_t* out, size_t index_count, const uint8_t* in,
 struct CloseFile {
     void operator()(std::FILE* f) const { std::fclose(f); }
 };
+
+/// Whether the file at `path` starts with a stream's magic; empty when it cannot be opened.
+std::optional<bool> stream_magic(const std::string& path) {
+    const std::unique_ptr<std::FILE, CloseFile> f(std::fopen(path.c_str(), "rb"));
+    if (!f) return std::nullopt;
+    uint8_t head[8] = {0};
+    return is_stream(head, std::fread(head, 1, sizeof head, f.get()));
+}
 
 } // namespace
 
@@ -54,15 +63,12 @@ StreamDecoder read_stream(const std::string& path, uint64_t byte_limit) {
     return decoder;
 }
 
-bool is_stream_file(const std::string& path) {
-    const std::unique_ptr<std::FILE, CloseFile> f(std::fopen(path.c_str(), "rb"));
-    uint8_t head[8] = {0};
-    return f && is_stream(head, std::fread(head, 1, sizeof head, f.get()));
-}
+bool is_stream_file(const std::string& path) { return stream_magic(path).value_or(false); }
 
 File open_any(const std::string& path, uint64_t byte_limit, const OpenOptions& options) {
-    if (!std::unique_ptr<std::FILE, CloseFile>(std::fopen(path.c_str(), "rb"))) throw IoError("cannot open " + path);
-    if (!is_stream_file(path)) {
+    const std::optional<bool> stream = stream_magic(path);
+    if (!stream) throw IoError("cannot open " + path);
+    if (!*stream) {
         if (byte_limit != std::numeric_limits<uint64_t>::max())
             throw ArgumentError(path + " is not a streamed .tom file: a byte limit applies only to streams (tombuild --stream)");
         return File::open(path, options);
