@@ -1096,3 +1096,25 @@ TEST_CASE("the usable floor: where a real asset's measured mean error leaves the
         CHECK(tom::vertex_count_for_fraction(bad_file.mesh(0), 0.0) == bad_file.mesh(0).min_vertex_count);
     }
 }
+
+TEST_CASE("the error curve reaches the coarsest level: a floor's quad is not free to halve", "[metrics][curve][floor]") {
+    // a quad of two triangles (a floor, a wall, a decal) has one coarser level, a triangle covering
+    // half of it; a curve starting above it made every selection read that level as free
+    const tom::Mesh quad = tom::make_grid(1, 1, 0.0f);
+    REQUIRE(quad.vertex_count() == 4);
+    const tom::TomMesh t = tom::build(quad);
+    REQUIRE(t.min_vertex_count == 3);
+    tom::ReportParams params;
+    params.floor_error = 0.01;
+    const tom::ErrorCurve curve = tom::measure_error_curve(quad, t, params);
+    REQUIRE(curve.points.size() == 2);
+    CHECK(curve.points[0].vertices == 3);
+    CHECK(curve.points[0].triangles == 1);
+    CHECK(curve.points[0].mean > 0.02);  // a quarter of the square's area, a third of its width away
+    CHECK(curve.k_mean > 0);
+    CHECK(tom::usable_floor_of(t.view(), curve, params.floor_error).vertices == 4);
+    // a real mesh's curve starts at its chain's coarsest level too
+    const test::NamedMesh wuson = test::real_meshes()[4];
+    const tom::TomMesh w = tom::build(wuson.mesh);
+    CHECK(tom::measure_error_curve(wuson.mesh, w, params).points.front().vertices == w.min_vertex_count);
+}

@@ -160,6 +160,9 @@ ErrorCurve curve_with(const TomMesh& built, const ReportParams& params, const Me
     const uint32_t hi = v.vertex_count;
     const uint32_t count = std::max<uint32_t>(2, std::min<uint32_t>(64, params.curve_points));
     std::vector<uint32_t> ns;
+    // and the coarsest level below them: a small mesh's (a floor's quad, a decal) would otherwise
+    // have none measured, which every selection reads as free
+    if (v.min_vertex_count > 0 && v.min_vertex_count < lo) ns.push_back(v.min_vertex_count);
     for (uint32_t i = 0; i < count; ++i) {
         const double t = count == 1 ? 1.0 : double(i) / double(count - 1);
         const uint32_t n = uint32_t(std::lround(std::exp(std::log(double(lo)) + t * (std::log(double(hi)) - std::log(double(lo))))));
