@@ -214,13 +214,28 @@ TEST_CASE("what a glTF holds and the .tom does not keep is named, never dropped 
         {"assimp/glTF2/cameras/Cameras.gltf", {}},
         {"assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", {}},
         {"assimp/glTF2/ClearCoat-glTF/ClearCoatTest.gltf", {}},
-        {"assimp/glTF2/BoxTextured-glTF-pbrSpecularGlossiness/BoxTextured.gltf", {"extension KHR_materials_pbrSpecularGlossiness"}},
+        {"assimp/glTF2/BoxTextured-glTF-pbrSpecularGlossiness/BoxTextured.gltf",
+         {"extension KHR_materials_pbrSpecularGlossiness (its specular and glossiness; the diffuse is kept as the base colour)"}},
     };
     for (const auto& [source, expected] : cases) {
         INFO(source);
         const tom::ImportResult r = tom::import_file(test::sample(source));
         CHECK(r.dropped == expected);
         CHECK(!r.scene.gltf.empty());
+    }
+    {
+        // assimp's exporter declares extensions no object uses: nothing is lost, nothing named;
+        // the one a primitive uses is
+        Glb declared(file_bytes(test::sample("assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb")));
+        declared.doc["extensionsUsed"] = {"KHR_materials_volume", "FB_ngon_encoding"};
+        const fs::path path = work_dir("declared") / "declared.glb";
+        std::vector<uint8_t> bytes = declared.bytes();
+        std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+        CHECK(tom::import_file(path.string()).dropped.empty());
+        declared.doc["meshes"][0]["primitives"][0]["extensions"] = {{"FB_ngon_encoding", nlohmann::json::object()}};
+        bytes = declared.bytes();
+        std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+        CHECK(tom::import_file(path.string()).dropped == std::vector<std::string>{"extension FB_ngon_encoding"});
     }
     // a mesh's default morph weights and its extras are kept and come back on every level
     const std::string cube = test::sample("assimp/glTF2/glTF-Sample-Models/AnimatedMorphCube-glTF/AnimatedMorphCube.gltf");

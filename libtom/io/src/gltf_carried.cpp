@@ -74,6 +74,25 @@ size_t nodes_without_mesh(const nlohmann::json& doc) {
     return n;
 }
 
+// the names of the extensions some object of the document uses (keys of any "extensions" object):
+// a name only declared in extensionsUsed loses nothing (exporters declare some they never use)
+void extensions_in_use(const nlohmann::json& j, std::set<std::string>& out) {
+    if (j.is_object()) {
+        const auto it = j.find("extensions");
+        if (it != j.end() && it->is_object())
+            for (const auto& [name, value] : it->items()) out.insert(name);
+        for (const auto& [key, value] : j.items()) extensions_in_use(value, out);
+    } else if (j.is_array()) {
+        for (const auto& value : j) extensions_in_use(value, out);
+    }
+}
+
+// what a dropped extension costs, where part of it is kept
+std::string dropped_extension(const std::string& name) {
+    if (name == "KHR_materials_pbrSpecularGlossiness") return "extension " + name + " (its specular and glossiness; the diffuse is kept as the base colour)";
+    return "extension " + name;
+}
+
 // texture-info properties the materials do not keep
 void scan_materials(const nlohmann::json& doc, std::vector<std::string>& out) {
     const auto materials = doc.find("materials");
@@ -142,11 +161,13 @@ std::vector<std::string> gltf_dropped(const nlohmann::json& doc, bool scene_kept
                     for (const auto& [name, value] : m["extensions"].items()) (carries_material_extension(name) ? kept : lost).insert(name);
         for (const std::string& name : lost) kept.erase(name);
     }
+    std::set<std::string> in_use;
+    extensions_in_use(doc, in_use);
     const auto used = doc.find("extensionsUsed");
     if (used != doc.end() && used->is_array())
         for (const auto& e : *used)
-            if (e.is_string() && !carried_extensions.count(e.get<std::string>()) && !kept.count(e.get<std::string>()))
-                out.push_back("extension " + e.get<std::string>());
+            if (e.is_string() && in_use.count(e.get<std::string>()) && !carried_extensions.count(e.get<std::string>()) && !kept.count(e.get<std::string>()))
+                out.push_back(dropped_extension(e.get<std::string>()));
     scan_materials(doc, out);
     if (const size_t n = size_of(doc, "samplers"); n && !scene_kept) out.push_back(counted("texture samplers", n));
     // with the scene kept, so are its objects' extras and the materials' and meshes' own
