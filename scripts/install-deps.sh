@@ -20,6 +20,7 @@ packages=(
   python3-dev python3-numpy python3-pybind11 python3-pytest   # the Python package (python/) and its tests
   g++-mingw-w64-x86-64-posix wine64    # the Windows build of the runtime and its tests under wine (scripts/portable.sh)
   libcgal-demo assimp-testmodels       # sample meshes (copied into data/ by scripts/fetch-samples.sh)
+  assimp-utils                         # converts the samples' Collada and FBX models to glTF (scripts/fetch-samples.sh)
   libxxhash-dev                        # tombuild's digests of inputs (incremental conversion)
   slurm-wlm munge                      # the Slurm job-array test starts a one-node cluster (tests/cli/slurm_test.sh)
   parallel                             # GNU parallel: the README's shard recipe, run by tests/cli/batch_test.sh
