@@ -20,12 +20,31 @@
 
 namespace {
 
-// The meshes of `file` (or mesh `only`) as a scene budget shares among them: each weighted by
-// its instances' world-space sizes (the cube root of each transform's determinant, times the
-// mesh's diagonal) and costing its instance count in triangles drawn.
+// The mesh's full-detail surface area, in its own units.
+double surface_area(const tom::MeshView& m) {
+    double area = 0;
+    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+        const float* a = &m.positions[3 * size_t(m.corner(3 * t))];
+        const float* b = &m.positions[3 * size_t(m.corner(3 * t + 1))];
+        const float* c = &m.positions[3 * size_t(m.corner(3 * t + 2))];
+        const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
+        const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
+        const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+    return area;
+}
+
+// The meshes of `file` (or mesh `only`) as a scene budget shares among them, each costing its
+// instance count in triangles drawn. The weights make the summed error the scene's Metro mean
+// (what tomerr measures, what the screen shows): a point's distance averaged over the whole
+// surface, so each instance counts with its area. An instance scaled by s (the cube root of its
+// transform's determinant) has s^2 times the mesh's area A and s times its distances, which the
+// curve gives relative to the diagonal D: its weight is A D s^3 over the scene's area.
 std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<uint32_t> only, tom::Floor floor, const std::string& path) {
     const std::vector<tom::Instance> draws = tom::draw_list(file.scene(), file.mesh_count());
     std::vector<tcr::BudgetMesh> out;
+    double scene_area = 0;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         if (only && *only != i) continue;
         tcr::BudgetMesh b;
@@ -34,20 +53,23 @@ std::vector<tcr::BudgetMesh> budget_meshes(const tom::File& file, std::optional<
         std::optional<tom::ErrorCurve> curve = tom::read_error_curve(*b.mesh);
         if (!curve) throw tom::ArgumentError(path + ": mesh '" + std::string(b.mesh->name) + "' has no stored error curve (it was built with --no-error-curve)");
         b.curve = std::move(*curve);
-        double instances = 0, size = 0;
+        double instances = 0, areas = 0, cubes = 0;  // the sums of s^2 and s^3 over the instances
         for (const tom::Instance& inst : draws) {
             if (inst.mesh != i) continue;
             const float* t = inst.transform;
             const double det = double(t[0]) * (double(t[5]) * t[10] - double(t[6]) * t[9]) - double(t[4]) * (double(t[1]) * t[10] - double(t[2]) * t[9]) +
                                double(t[8]) * (double(t[1]) * t[6] - double(t[2]) * t[5]);
-            instances += 1;
-            size += std::cbrt(std::fabs(det));
+            const double s = std::cbrt(std::fabs(det));
+            instances += 1, areas += s * s, cubes += s * s * s;
         }
-        if (instances == 0 || !(size > 0)) instances = 1, size = 1;  // drawn by no instance: once, as stored
+        if (instances == 0 || !(cubes > 0)) instances = 1, areas = 1, cubes = 1;  // drawn by no instance: once, as stored
+        const double area = std::max(1e-30, surface_area(*b.mesh));
         b.instances = instances;
-        b.weight = size * std::max(1e-30, double(b.curve.diagonal));
+        b.weight = area * std::max(1e-30, double(b.curve.diagonal)) * cubes;
+        scene_area += area * areas;
         out.push_back(std::move(b));
     }
+    for (tcr::BudgetMesh& b : out) b.weight /= scene_area;
     return out;
 }
 
@@ -168,7 +190,8 @@ int parse_options(Options& o, int argc, char** argv) {
         ->check(CLI::IsMember({"max", "mean"}));
     auto* sb = app.add_option("--scene-budget", o.scene_budgets,
                               "The whole scene in N triangles drawn (each mesh's count times its instances), shared among its meshes so that "
-                              "their summed error (weighted by instances and size) is least; several, finest first, write a .glb chain "
+                              "the scene's mean error (Metro's, each instance weighted by its area) is least; several, finest first, "
+                              "write a .glb chain "
                               "(e.g. 200000,50000,10000)")
                    ->delimiter(',')
                    ->check(CLI::PositiveNumber);
@@ -251,7 +274,8 @@ std::vector<std::vector<uint32_t>> share_scene_budgets(const tom::File& file, co
     for (const double budget : o.scene_budgets) {
         const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, o.mesh_index, o.floor(), o.path), budget);
         if (share.feasible)
-            std::printf("%s: scene budget %.0f triangles: %.0f drawn, summed error %.6g (weighted), certified within %.2f%% of the optimum\n",
+            std::printf("%s: scene budget %.0f triangles: %.0f drawn, estimated mean error %.6g (world units, from the stored curves), "
+                        "certified within %.2f%% of the optimum\n",
                         o.path.c_str(), budget, share.drawn, share.error, 100.0 * share.gap);
         else
             std::fprintf(stderr, "warning: %s: the meshes' floors draw %.0f triangles, more than the budget of %.0f; each is at its floor\n",

@@ -231,6 +231,19 @@ for path, l in converted.items():
 duck = [l for p, l in converted.items() if p.endswith('duck-dae.glb')][0]
 assert duck['triangles'] == 4212, duck
 "
+# a scene budget shared by area: the FBX spider is 19 meshes (legs, teeth, eyes); its share at
+# 1,010 triangles has well under the mean error of every mesh at the same fraction
+check "--scene-budget on a scene of 19 meshes: the budget goes where the surface is" /usr/bin/python3 -c "
+import json, subprocess
+tom, src = '$work/conv/FBX/spider-fbx.tom', '$conv/FBX/spider-fbx.glb'
+def run(*args): return subprocess.run(args, capture_output=True, text=True, check=True).stdout
+def error(path): return json.loads(run('$tools/tomerr', src, path, '--json'))
+run('$tools/tomextract', tom, '--scene-budget', '1010', '-o', '$work/spider-budget.glb')
+run('$tools/tomextract', tom, '--triangles', '1010', '-o', '$work/spider-fraction.glb')
+shared, proportional = error('$work/spider-budget.glb'), error('$work/spider-fraction.glb')
+assert shared['simplified_triangles'] <= 1010, shared['simplified_triangles']
+assert shared['forward']['mean_abs'] < 0.5 * proportional['forward']['mean_abs'], (shared['forward'], proportional['forward'])
+"
 check "tomextract --lods 100 embeds the stored image" expect_exit 0 "$tools/tomextract" "$work/kept/BoxTextured.tom" --lods 100 -o "$work/kept/box.glb"
 check "the image bytes are the source's" /usr/bin/python3 -c "
 import json, struct
