@@ -207,7 +207,7 @@ if start < 0:
     text = text[:at] + section + '\n' + text[at:] if at >= 0 else text.rstrip('\n') + '\n\n' + section
 else:
     end = text.find('\n## ', start + 1)
-    text = text[:start] + section + (text[end + 1:] if end >= 0 else '')
+    text = text[:start] + section + ('\n' + text[end + 1:] if end >= 0 else '')
 open(doc, 'w').write(text)
 print(section)
 EOF
