@@ -282,6 +282,41 @@ static const tom::VertexStreamView& stored_stream(const tom::MeshView& m, const 
     return m.extra_streams[0];
 }
 
+TEST_CASE("3-component texture coordinates, as assimp writes them, are read as (u, v)", "[fidelity][dropped]") {
+    // assimp's glTF exporter writes the UVW channels of Collada and FBX files as VEC3 accessors
+    // (glTF allows VEC2): u and v are the texture coordinates, and a third component is named
+    // only when it holds something
+    const std::string path = test::sample("assimp/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
+    const tom::ImportResult original = tom::import_file(path);
+    REQUIRE(original.meshes.size() == 1);
+    const std::vector<float>& uv = original.meshes[0].texcoords;
+    const size_t n = uv.size() / 2;
+    REQUIRE(n == original.meshes[0].vertex_count());
+    for (const float w : {0.0f, 0.5f}) {
+        INFO("w = " << w);
+        Glb box(file_bytes(path));
+        std::vector<float> uvw;
+        for (size_t v = 0; v < n; ++v) uvw.insert(uvw.end(), {uv[2 * v], uv[2 * v + 1], w});
+        box.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = box.add(uvw, "VEC3", 5126, n);
+        const fs::path out = work_dir("uvw") / "uvw.glb";
+        const std::vector<uint8_t> bytes = box.bytes();
+        std::ofstream(out, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+        const tom::ImportResult r = tom::import_file(out.string());
+        REQUIRE(r.meshes.size() == 1);
+        CHECK(r.meshes[0].texcoords == uv);
+        const std::vector<std::string> named =
+            w == 0.0f ? std::vector<std::string>{} : std::vector<std::string>{"the third component of TEXCOORD_0 (3-component texture coordinates)"};
+        CHECK(r.dropped == named);
+    }
+    // four components are still an error naming the accessor
+    Glb box(file_bytes(path));
+    box.doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = box.add(std::vector<float>(4 * n, 0.25f), "VEC4", 5126, n);
+    const fs::path out = work_dir("uvwq") / "uvwq.glb";
+    const std::vector<uint8_t> bytes = box.bytes();
+    std::ofstream(out, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+    CHECK_THROWS_WITH(tom::import_file(out.string()), Catch::Contains("TEXCOORD_0 accessor") && Catch::Contains("has 4 components"));
+}
+
 TEST_CASE("material extensions and materials' extras pass through, the textures they refer to renumbered", "[fidelity][dropped]") {
     const std::string box = test::sample("assimp/glTF2/BoxTextured-glTF/BoxTextured.gltf");
     std::ifstream in(box);

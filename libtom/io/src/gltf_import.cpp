@@ -350,6 +350,24 @@ std::vector<uint32_t> primitive_triangles(const PrimitiveReader& reader, const t
     return triangles;
 }
 
+// A TEXCOORD_n attribute's (u, v). glTF allows VEC2 only, but assimp's exporter writes the UVW
+// channels of Collada, FBX and 3ds files as VEC3: their u and v are read, and a third component
+// that is not zero everywhere is named in `dropped` (once per attribute name), since the .tom
+// keeps two.
+std::vector<float> read_texcoords(const PrimitiveReader& reader, int index, const char* role, size_t n, std::vector<std::string>& dropped) {
+    std::vector<float> uv = reader.read_floats(index, role, 2, 3, PrimitiveReader::Kind::texcoord, n);
+    if (uv.size() != 3 * n) return uv;
+    bool lost = false;
+    for (size_t v = 0; v < n; ++v) {  // in place: element v moves down from 3 v to 2 v
+        lost = lost || uv[3 * v + 2] != 0.0f;
+        uv[2 * v] = uv[3 * v], uv[2 * v + 1] = uv[3 * v + 1];
+    }
+    uv.resize(2 * n);
+    const std::string what = std::string("the third component of ") + role + " (3-component texture coordinates)";
+    if (lost && std::find(dropped.begin(), dropped.end(), what) == dropped.end()) dropped.push_back(what);
+    return uv;
+}
+
 // The attributes the importer does not interpret (TEXCOORD_2.., COLOR_1.., JOINTS_n, WEIGHTS_n,
 // "_CUSTOM") and every morph target's deltas ("TARGET<k>/<ATTRIBUTE>"), carried unread.
 void read_carried_streams(const PrimitiveReader& reader, const tinygltf::Primitive& prim, size_t n, Mesh& mesh) {
@@ -466,8 +484,8 @@ ImportResult import_gltf(const std::string& path, bool binary) {
             mesh.positions = reader.read_floats(pos_index, "POSITION", 3, 3, PrimitiveReader::Kind::position, 0);
             const size_t n = mesh.positions.size() / 3;
             if (attr("NORMAL") >= 0) mesh.normals = reader.read_floats(attr("NORMAL"), "NORMAL", 3, 3, PrimitiveReader::Kind::vector, n);
-            if (attr("TEXCOORD_0") >= 0) mesh.texcoords = reader.read_floats(attr("TEXCOORD_0"), "TEXCOORD_0", 2, 2, PrimitiveReader::Kind::texcoord, n);
-            if (attr("TEXCOORD_1") >= 0) mesh.texcoords1 = reader.read_floats(attr("TEXCOORD_1"), "TEXCOORD_1", 2, 2, PrimitiveReader::Kind::texcoord, n);
+            if (attr("TEXCOORD_0") >= 0) mesh.texcoords = read_texcoords(reader, attr("TEXCOORD_0"), "TEXCOORD_0", n, result.dropped);
+            if (attr("TEXCOORD_1") >= 0) mesh.texcoords1 = read_texcoords(reader, attr("TEXCOORD_1"), "TEXCOORD_1", n, result.dropped);
             if (attr("TANGENT") >= 0) mesh.tangents = reader.read_floats(attr("TANGENT"), "TANGENT", 4, 4, PrimitiveReader::Kind::vector, n);
             if (attr("COLOR_0") >= 0) {
                 std::vector<float> c = reader.read_floats(attr("COLOR_0"), "COLOR_0", 3, 4, PrimitiveReader::Kind::color, n);
