@@ -71,7 +71,8 @@ struct Options {
 // 3: chains where parts meet move along them; joins of two sheets ranked behind manifold moves.
 // 4: streams place provenance, images and the source glTF after the first chunks (stream 1.1);
 //    a join taken only at the cost the oracle ranked it.
-// 5: the stored error curve reaches the coarsest level (was: none below 4 vertices).
+// 5: the stored error curve reaches the coarsest level (was: none below 4 vertices); texture
+//    seams keep their shape (edge planes).
 constexpr int kOutputRevision = 5;
 const std::string tool_version = "tombuild 0.1.0 (format " + std::to_string(tom::format_version_major) + "." + std::to_string(tom::format_version_minor) +
                                  ", output revision " + std::to_string(kOutputRevision) + ")";

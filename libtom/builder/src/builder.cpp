@@ -342,7 +342,27 @@ void find_pieces(Builder& b, float mesh_diagonal) {
     }
 }
 
-void init_quadrics(Builder& b, detail::Team& team) {
+// Edge (a, e) of triangle t is a texture seam: the mesh welded by position has another triangle
+// on it (it is no border), and there the copies of a or e have other texture coordinates.
+bool texture_seam(const Builder& b, const float* uv, uint32_t t, uint32_t a, uint32_t e) {
+    const uint32_t we = b.classes.wedge[e];
+    auto differs = [&](uint32_t x, uint32_t y) { return uv[2 * size_t(x)] != uv[2 * size_t(y)] || uv[2 * size_t(x) + 1] != uv[2 * size_t(y) + 1]; };
+    uint32_t a2 = a;
+    do {
+        for (uint32_t c = b.topo.first[a2]; c != kNone; c = b.topo.next[c]) {
+            const uint32_t t2 = c / 3;
+            if (t2 == t) continue;
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t x = b.topo.idx[3 * size_t(t2) + size_t(k)];
+                if (x != a2 && b.classes.wedge[x] == we && (differs(a, a2) || differs(e, x))) return true;
+            }
+        }
+        a2 = b.classes.next_copy[a2];
+    } while (a2 != a);
+    return false;
+}
+
+void init_quadrics(Builder& b, const float* texcoords, detail::Team& team) {
     detail::zero_on_team(team, b.quadric, b.n);
     detail::scatter_by_vertex_range(team, b.n, b.topo.idx.data(), b.m, [&](uint32_t t, uint32_t lo, uint32_t hi) {
         auto mine = [&](uint32_t v) { return v >= lo && v < hi; };
@@ -358,13 +378,18 @@ void init_quadrics(Builder& b, detail::Team& team) {
         add_plane(q, nrm.x, nrm.y, nrm.z, d, weight);
         for (const uint32_t v : {i0, i1, i2})
             if (mine(v)) add(b.quadric[v], q);
-        // open and chain edges: a plane through the edge, perpendicular to the triangle, keeps
-        // borders and the chains where parts meet in place
+        // open and chain edges, and texture seams: a plane through the edge, perpendicular to the
+        // triangle, keeps borders, the chains where parts meet and (lighter) seams in place
         const uint32_t c[3] = {i0, i1, i2};
         for (int k = 0; k < 3; ++k) {
             const uint32_t a = c[k], e = c[(k + 1) % 3];
             const uint32_t pa_ = b.classes.wedge[a], pe_ = b.classes.wedge[e];  // open in the welded mesh
-            if ((!mine(a) && !mine(e)) || !b.classes.linked(pa_, pe_)) continue;
+            if (!mine(a) && !mine(e)) continue;
+            double edge_weight = kBoundaryWeight;
+            if (!b.classes.linked(pa_, pe_)) {
+                if (!texcoords || !texture_seam(b, texcoords, t, a, e)) continue;
+                edge_weight = kTextureSeamWeight;
+            }
             const Vec3 pa = b.pos[a], pe = b.pos[e];
             const Vec3 edge = sub(pe, pa);
             Vec3 en = cross(edge, nrm);
@@ -372,7 +397,7 @@ void init_quadrics(Builder& b, detail::Team& team) {
             if (el == 0.0f) continue;
             en = {en.x / el, en.y / el, en.z / el};
             Quadric qe{};
-            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), kBoundaryWeight * double(length(edge)));
+            add_plane(qe, en.x, en.y, en.z, -double(dot(en, pa)), edge_weight * double(length(edge)));
             if (mine(a)) add(b.quadric[a], qe);
             if (mine(e)) add(b.quadric[e], qe);
         }
@@ -823,7 +848,8 @@ static TomMesh build_from(const Mesh& input, Mesh* owned, const BuildParams& par
     // contraction keep them locked (pair contraction takes only exact copies: it joins near ones)
     classify(b, stats, params.pair_threshold > 0.0f ? 0.0f : copy_tolerance(local, params), params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f), params.lock_borders,
              team);
-    if (b.predicate == Predicate::quadric) init_quadrics(b, team);
+    const bool weigh_texcoords = params.weigh_texcoords && !local.mesh.texcoords.empty();
+    if (b.predicate == Predicate::quadric) init_quadrics(b, weigh_texcoords ? local.mesh.texcoords.data() : nullptr, team);
     // (not with locked borders: a tile's pieces all meet its neighbours)
     if (b.predicate == Predicate::quadric && params.strategy == Strategy::passes && !(params.pair_threshold > 0.0f) && !params.lock_borders)
         find_pieces(b, diagonal_of(local));

@@ -79,6 +79,11 @@ constexpr CollapseRule kCollapseRules[kKindCount] = {
 
 constexpr uint32_t kNone = UINT32_MAX;
 constexpr float kBoundaryWeight = 4.0f;  // border edge planes (x edge length) vs. face planes (x sqrt(area))
+// Texture seam edge planes (x edge length), where a sampled TEXCOORD_0 differs across an edge of
+// the welded mesh: a seam's copies move together along it, and its planes keep it from cutting
+// corners, so the texture on both sides does not slide. Light: hard edges get none (a
+// flat-shaded mesh is all hard edges, which must stay free to move).
+constexpr float kTextureSeamWeight = 0.25f;
 // A substitution that joins two sheets (it fails the link condition: a thin wall's two faces, a
 // box's sides, a handle) is legal unless BuildParams::keep_topology, and ranks as if it cost this
 // many times more: it is taken where the manifold moves left cost far more (a building's walls
