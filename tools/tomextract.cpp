@@ -271,8 +271,10 @@ uint32_t level_for_error(const Options& o, const tom::MeshView& m, size_t k) {
 // --scene-budget: each budget's share, a resolution per wanted mesh (file order).
 std::vector<std::vector<uint32_t>> share_scene_budgets(const tom::File& file, const Options& o) {
     std::vector<std::vector<uint32_t>> levels;
+    if (o.scene_budgets.empty()) return levels;
+    const std::vector<tcr::BudgetMesh> meshes = budget_meshes(file, o.mesh_index, o.floor(), o.path);  // once for every budget
     for (const double budget : o.scene_budgets) {
-        const tcr::BudgetShare share = tcr::share_budget(budget_meshes(file, o.mesh_index, o.floor(), o.path), budget);
+        const tcr::BudgetShare share = tcr::share_budget(meshes, budget);
         if (share.feasible)
             std::printf("%s: scene budget %.0f triangles: %.0f drawn, estimated mean error %.6g (world units, from the stored curves), "
                         "certified within %.2f%% of the optimum\n",

@@ -345,6 +345,8 @@ void find_pieces(Builder& b, float mesh_diagonal) {
 // Edge (a, e) of triangle t is a texture seam: the mesh welded by position has another triangle
 // on it (it is no border), and there the copies of a or e have other texture coordinates.
 bool texture_seam(const Builder& b, const float* uv, uint32_t t, uint32_t a, uint32_t e) {
+    // without copies of a or e, the triangle across is on a and e themselves: no seam (most edges)
+    if (b.classes.next_copy[a] == a && b.classes.next_copy[e] == e) return false;
     const uint32_t we = b.classes.wedge[e];
     auto differs = [&](uint32_t x, uint32_t y) { return uv[2 * size_t(x)] != uv[2 * size_t(y)] || uv[2 * size_t(x) + 1] != uv[2 * size_t(y) + 1]; };
     uint32_t a2 = a;
