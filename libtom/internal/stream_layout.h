@@ -16,7 +16,7 @@
 namespace tom::stream_layout {
 
 constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'S', 0x0D, 0x0A, 0x1A, 0x0A};
-constexpr uint32_t version_major = 1, version_minor = 1;
+constexpr uint32_t version_major = 1, version_minor = 2;
 constexpr uint32_t header_bytes = 64;
 // header field offsets
 constexpr uint32_t h_version_major = 8, h_version_minor = 12, h_file_bytes = 16, h_mesh_count = 24, h_chunk_count = 28,
@@ -102,6 +102,41 @@ T unzigzag(T z) {
     using U = std::make_unsigned_t<T>;
     const U u = U(z);
     return T(U(u >> 1) ^ U(0 - U(u & 1u)));
+}
+
+/// An attribute block's prediction (the u32 before it): bit 0 says what predicts (0 the
+/// substitute's values, 1 the neighbours' mean), bit 1 (since 1.2) how the residuals travel:
+/// zigzag-coded (clear), or in byte form with their lanes summed (set, below).
+constexpr uint32_t predict_neighbours = 1, predict_byte_form = 2, prediction_count = 4;
+
+/// The byte form of a residual (since 1.2): its value as signed bytes, low first, each in
+/// [-128, 127] (the last takes what is left, modulo the lane's width), so that a small residual of
+/// either sign has small bytes and zero high bytes. A block sums each byte lane over its elements
+/// (sum_lanes), so that the vertex codec, which codes each byte as the difference from the one
+/// before, codes the residual's own bytes; a zigzag-coded block makes it code the difference of
+/// two residuals, about twice as large.
+template <class T>
+void residual_to_bytes(T r, uint8_t* out) {
+    int64_t x = int64_t(std::make_signed_t<T>(r));
+    for (size_t j = 0; j < sizeof(T); ++j) {
+        const int8_t low = int8_t(uint8_t(x & 0xFF));
+        out[j] = uint8_t(low);
+        x = (x - low) / 256;
+    }
+}
+template <class T>
+T residual_from_bytes(const uint8_t* in) {
+    using U = std::make_unsigned_t<T>;
+    U r = 0;
+    for (size_t j = sizeof(T); j-- > 0;) r = U(U(r << 8) + U(int64_t(int8_t(in[j]))));
+    return T(r);
+}
+/// Each byte lane summed over `count` elements of `element` bytes (modulo 256), in place; and back.
+inline void sum_lanes(uint8_t* elements, size_t count, size_t element) {
+    for (size_t i = element; i < count * element; ++i) elements[i] = uint8_t(elements[i] + elements[i - element]);
+}
+inline void difference_lanes(uint8_t* elements, size_t count, size_t element) {
+    for (size_t i = count * element; i-- > element;) elements[i] = uint8_t(elements[i] - elements[i - element]);
 }
 
 /// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.

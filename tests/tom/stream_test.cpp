@@ -23,6 +23,7 @@
 #include "tom/io/import.h"
 #include "tom/stream/stream_file.h"
 #include "format_layout.h"
+#include "stream_layout.h"
 
 namespace {
 
@@ -188,6 +189,33 @@ void reseal(std::vector<uint8_t>& s) {
 
 } // namespace
 
+TEST_CASE("residuals in byte form come back exactly, small ones in small bytes", "[stream]") {
+    using namespace tom::stream_layout;
+    // every 16-bit residual, unsigned (positions, texture coordinates) and signed (normals)
+    std::vector<uint8_t> lanes;
+    for (uint32_t x = 0; x < 65536; ++x) {
+        uint8_t b[2];
+        residual_to_bytes(uint16_t(x), b);
+        CHECK(residual_from_bytes<uint16_t>(b) == uint16_t(x));
+        residual_to_bytes(int16_t(x), b);
+        CHECK(residual_from_bytes<int16_t>(b) == int16_t(x));
+        const int r = int16_t(x);
+        if (r >= -128 && r <= 127) CHECK((int8_t(b[0]) == r && b[1] == 0));  // the codec sees r itself, no high byte
+        lanes.insert(lanes.end(), b, b + 2);
+    }
+    for (uint32_t x = 0; x < 256; ++x) {
+        uint8_t b;
+        residual_to_bytes(uint8_t(x), &b);
+        CHECK(residual_from_bytes<uint8_t>(&b) == uint8_t(x));
+    }
+    // a block's lanes summed and taken back
+    const std::vector<uint8_t> kept = lanes;
+    sum_lanes(lanes.data(), lanes.size() / 4, 4);
+    CHECK(lanes != kept);
+    difference_lanes(lanes.data(), lanes.size() / 4, 4);
+    CHECK(lanes == kept);
+}
+
 TEST_CASE("every chunk of a streamed scanned mesh decodes to its level", "[stream]") {
     check_every_prefix("bunny00", tom_image(test::sample("meshes/bunny00.off")));
 }
@@ -318,6 +346,22 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         reseal(needed);
         CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "n.tom").append(needed.data(), needed.size()),
                           Catch::Contains("only PROV, IMAG and GLTF may be deferred"));
+    }
+    SECTION("an attribute block's prediction outside the version's is refused") {
+        // chunk 2: its part's (base, born), the splits block, then POSI's prediction
+        const uint64_t at = chunks[2].begin_byte + 8, prediction = at + 4 + tom::layout::load_u32(&stream[at]);
+        std::vector<uint8_t> bad = stream;
+        tom::layout::store_u32(&bad[prediction], 4);
+        reseal(bad);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "q.tom").append(bad.data(), bad.size()),
+                          Catch::Contains("q.tom") && Catch::Contains("POSI prediction 4 is not 0 to 3"));
+        // the byte form (predictions 2 and 3) is new in 1.2
+        std::vector<uint8_t> old = stream;
+        tom::layout::store_u32(&old[prediction], 2);
+        tom::layout::store_u32(&old[12], 1);
+        reseal(old);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "o.tom").append(old.data(), old.size()),
+                          Catch::Contains("o.tom") && Catch::Contains("prediction 2 is not 0 to 1 (stream version 1.1)"));
     }
     SECTION("a truncated file is an error unless a byte limit asks for a prefix") {
         const fs::path dir = fs::temp_directory_path() / ("tom_stream_" + std::to_string(::getpid()));

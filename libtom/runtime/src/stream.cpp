@@ -217,7 +217,7 @@ struct StreamDecoder::Impl {
     uint64_t received = 0, consumed = 0;
     bool failed = false, directory = false, verify = true;
     uint64_t declared_bytes = 0;
-    uint32_t meshes_declared = 0, chunks_declared = 0;
+    uint32_t meshes_declared = 0, chunks_declared = 0, minor = 0;
     uint64_t directory_bytes = 0;
     std::vector<layout::PendingSection> file_sections;  // MATL, INST, PROV, IMAG, GLTF as stored
     std::vector<MeshState> meshes;
@@ -355,6 +355,7 @@ void StreamDecoder::Impl::read_header() {
     if (major != version_major)
         fail(h_version_major, "version_major", 31, "unsupported stream version " + std::to_string(major) + "." + std::to_string(load_u32(h + h_version_minor)) + " (this reader reads 1.x)");
     if (verify && crc32(h, h_header_checksum) != load_u32(h + h_header_checksum)) fail(h_header_checksum, "header_checksum", 31, "header checksum mismatch");
+    minor = load_u32(h + h_version_minor);
     const uint64_t file = load_u64(h + h_file_bytes);
     directory_bytes = load_u64(h + h_directory_bytes);
     meshes_declared = load_u32(h + h_mesh_count);
@@ -614,30 +615,35 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
     return out;
 }
 
-/// Adds residuals to the predicted grid values, `lanes` values of type T per vertex; `rings`
-/// (the mesh's, or null: the substitutes predict) gives the neighbours.
+/// An attribute block's prediction (the u32 before it, stream_layout::predict_neighbours and
+/// predict_byte_form) and its residuals, decoded, in byte form with the lanes' sums taken back.
+struct Residuals {
+    uint32_t prediction = 0;
+    std::vector<uint8_t> elements;
+    const uint8_t* at(uint32_t i, uint32_t element) const { return elements.data() + size_t(i) * element; }
+};
+
 template <class T>
-void predict(std::vector<T>& values, const std::vector<uint32_t>& substitute, const MeshState* rings, const uint8_t* residuals, uint32_t element, uint32_t a,
-             uint32_t b, int lanes) {
-    values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
-    for (uint32_t v = a; v < b; ++v) {
-        T* out = &values[size_t(v) * lanes];
-        const size_t i = v - a, from = !rings || !i ? 0 : rings->ring_ends[i - 1], to = rings ? rings->ring_ends[i] : 0;
-        prediction(values.data(), lanes, v, substitute[v], rings ? rings->ring_items.data() + from : nullptr, to - from, out);
-        for (int k = 0; k < lanes; ++k) {
-            T r;
-            std::memcpy(&r, residuals + size_t(v - a) * element + k * sizeof(T), sizeof(T));
-            out[k] = T(out[k] + unzigzag(r));
-        }
-    }
+T residual(const Residuals& r, const uint8_t* at) {
+    if (r.prediction & predict_byte_form) return residual_from_bytes<T>(at);
+    T z;
+    std::memcpy(&z, at, sizeof(T));
+    return unzigzag(z);
 }
 
-/// The u32 before an attribute block: its prediction, the substitute's values (null) or the
-/// neighbours' mean (the mesh, whose rings the chunk's splits listed).
-const MeshState* predictor_of(ChunkReader& in, const MeshState& m) {
-    const uint32_t p = in.u32();
-    if (p > 1) in.fail("prediction " + std::to_string(p) + " is not 0 (substitute) or 1 (neighbours)");
-    return p ? &m : nullptr;
+/// Adds residuals to the predicted grid values, `lanes` values of type T per vertex; `m` gives the
+/// substitutes and, for a neighbours' prediction, the rings the chunk's splits listed.
+template <class T>
+void predict(std::vector<T>& values, const MeshState& m, const Residuals& r, uint32_t element, uint32_t a, uint32_t b, int lanes) {
+    values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
+    const bool rings = r.prediction & predict_neighbours;
+    for (uint32_t v = a; v < b; ++v) {
+        T* out = &values[size_t(v) * lanes];
+        const size_t i = v - a, from = !rings || !i ? 0 : m.ring_ends[i - 1], to = rings ? m.ring_ends[i] : 0;
+        prediction(values.data(), lanes, v, m.substitute[v], rings ? m.ring_items.data() + from : nullptr, to - from, out);
+        const uint8_t* in = r.at(v - a, element);
+        for (int k = 0; k < lanes; ++k) out[k] = T(out[k] + residual<T>(r, in + k * sizeof(T)));
+    }
 }
 
 /// corner() below, of a mesh with several parts: the part's range first.
@@ -851,9 +857,14 @@ void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_
     const StreamQuantization& q = m.quantization;
     // each attribute block: its prediction (a u32), then the residuals
     auto attribute = [&](auto& values, uint32_t element, const char* name, int lanes) {
-        const MeshState* rings = predictor_of(in, m);
-        const std::vector<uint8_t> residuals = vertex_block(codecs, in, count, element, name);
-        predict(values, m.substitute, rings, residuals.data(), element, a, b, lanes);
+        Residuals r;
+        r.prediction = in.u32();
+        if (r.prediction >= (minor >= 2 ? prediction_count : predict_byte_form))
+            in.fail(std::string(name) + " prediction " + std::to_string(r.prediction) + " is not 0 to " + std::to_string(minor >= 2 ? 3 : 1) +
+                    " (stream version 1." + std::to_string(minor) + ")");
+        r.elements = vertex_block(codecs, in, count, element, name);
+        if (r.prediction & predict_byte_form) difference_lanes(r.elements.data(), count, element);
+        predict(values, m, r, element, a, b, lanes);
     };
     attribute(m.positions, position_element, "POSI", 3);
     for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)

@@ -97,20 +97,28 @@ std::vector<uint32_t> chunk_ends(const MeshView& m, const StreamOptions& o) {
 }
 
 /// The residuals of vertices [a, b) against their predictions (stream_layout::prediction), each
-/// element `lanes` values of T padded to `element` bytes: what the decoder adds back.
+/// element `lanes` values of T padded to `element` bytes, zigzag-coded or in byte form with the
+/// lanes summed (stream_layout::residual_to_bytes): what the decoder adds back.
 template <class T>
-std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, const std::vector<std::vector<uint32_t>>* rings, uint32_t a, uint32_t b, int lanes,
-                               uint32_t element) {
+std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, const std::vector<std::vector<uint32_t>>* rings, uint32_t a, uint32_t b,
+                               int lanes, uint32_t element, bool byte_form) {
     std::vector<uint8_t> out(size_t(b - a) * element, 0);
     for (uint32_t v = a; v < b; ++v) {
         const std::vector<uint32_t>* ring = rings && v >= m.min_vertex_count ? &(*rings)[v - m.min_vertex_count] : nullptr;
         T base[4];
         prediction(values.data(), lanes, v, m.substitute_at(v), ring ? ring->data() : nullptr, ring ? ring->size() : 0, base);
         for (int k = 0; k < lanes; ++k) {
-            const T r = zigzag(T(values[size_t(v) * lanes + k] - base[k]));
-            std::memcpy(&out[size_t(v - a) * element + k * sizeof(T)], &r, sizeof(T));
+            const T r = T(values[size_t(v) * lanes + k] - base[k]);
+            uint8_t* at = &out[size_t(v - a) * element + k * sizeof(T)];
+            if (byte_form) {
+                residual_to_bytes(r, at);
+            } else {
+                const T z = zigzag(r);
+                std::memcpy(at, &z, sizeof(T));
+            }
         }
     }
+    if (byte_form) sum_lanes(out.data(), b - a, element);
     return out;
 }
 
@@ -298,18 +306,21 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
     out.insert(out.end(), w.bytes.begin(), w.bytes.end());
 }
 
-/// An attribute block with the prediction that codes it smaller: a u32 saying which (0 the
-/// substitute's values, 1 the neighbours' mean), then the residuals. Smooth surfaces favour the
-/// mean; hard edges, seams and flat CAD faces the substitute.
+/// An attribute block with the prediction that codes it smaller: a u32 saying which
+/// (stream_layout::predict_neighbours, predict_byte_form), then the residuals. Smooth surfaces
+/// favour the neighbours' mean; hard edges, seams and flat CAD faces the substitute; the byte
+/// form wins where consecutive residuals are independent, the zigzag form where they are alike
+/// (the codec then codes their difference).
 template <class T>
 void put_attribute(std::vector<uint8_t>& out, const std::vector<T>& values, const MeshView& m, const Connectivity& conn, uint32_t a, uint32_t b, int lanes,
                    uint32_t element) {
     std::vector<uint8_t> best;
     uint32_t chosen = 0;
-    for (uint32_t predictor : {0u, 1u}) {
+    for (uint32_t p = 0; p < prediction_count; ++p) {
         std::vector<uint8_t> block;
-        put_vertex_block(block, residuals(values, m, predictor ? &conn.rings : nullptr, a, b, lanes, element), b - a, element);
-        if (best.empty() || block.size() < best.size()) best.swap(block), chosen = predictor;
+        const auto* rings = p & predict_neighbours ? &conn.rings : nullptr;
+        put_vertex_block(block, residuals(values, m, rings, a, b, lanes, element, p & predict_byte_form), b - a, element);
+        if (best.empty() || block.size() < best.size()) best.swap(block), chosen = p;
     }
     put_u32(out, chosen);
     out.insert(out.end(), best.begin(), best.end());
