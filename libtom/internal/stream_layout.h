@@ -131,13 +131,29 @@ T residual_from_bytes(const uint8_t* in) {
     for (size_t j = sizeof(T); j-- > 0;) r = U(U(r << 8) + U(int64_t(int8_t(in[j]))));
     return T(r);
 }
-/// Each byte lane summed over `count` elements of `element` bytes (modulo 256), in place; and back.
-inline void sum_lanes(uint8_t* elements, size_t count, size_t element) {
-    for (size_t i = element; i < count * element; ++i) elements[i] = uint8_t(elements[i] + elements[i - element]);
+/// The byte lanes [0, width) of `count` elements `stride` bytes apart, each summed over the
+/// elements (modulo 256), in place; and back.
+inline void sum_lanes(uint8_t* first, size_t count, size_t stride, size_t width) {
+    for (size_t i = 1; i < count; ++i)
+        for (size_t j = 0; j < width; ++j) first[i * stride + j] = uint8_t(first[i * stride + j] + first[(i - 1) * stride + j]);
 }
-inline void difference_lanes(uint8_t* elements, size_t count, size_t element) {
-    for (size_t i = count * element; i-- > element;) elements[i] = uint8_t(elements[i] - elements[i - element]);
+inline void difference_lanes(uint8_t* first, size_t count, size_t stride, size_t width) {
+    for (size_t i = count; i-- > 1;)
+        for (size_t j = 0; j < width; ++j) first[i * stride + j] = uint8_t(first[i * stride + j] - first[(i - 1) * stride + j]);
 }
+
+/// The attribute streams of a chunk, in their order there (FORMAT.md, "Streamed files"): the
+/// mesh's attribute bit (0 for positions, always present), element size and section name.
+struct AttributeSlot {
+    uint32_t bit, element;
+    const char* name;
+};
+constexpr AttributeSlot attribute_slots[6] = {{0, position_element, "POSI"},
+                                              {layout::attr_normals, normal_element, "NORM"},
+                                              {layout::attr_texcoords, texcoord_element, "TEX0"},
+                                              {layout::attr_colors, color_element, "COL0"},
+                                              {layout::attr_texcoords1, texcoord_element, "TEX1"},
+                                              {layout::attr_tangents, tangent_element, "TANG"}};
 
 /// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.
 inline uint32_t index_bits(uint32_t v) { return v <= 1 ? 0 : 32 - uint32_t(__builtin_clz(v - 1)); }

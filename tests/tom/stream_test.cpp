@@ -19,6 +19,7 @@
 #include "tom/errors.h"
 #include "tom/extract.h"
 #include "tom/format.h"
+#include "tom/builder/generate.h"
 #include "tom/builder/writer.h"
 #include "tom/io/import.h"
 #include "tom/stream/stream_file.h"
@@ -67,21 +68,34 @@ void check_prefix_mesh(const tom::MeshView& o, const tom::MeshView& d, const tom
     for (const uint32_t coarser : {o.min_vertex_count, d.whole_groups_below(std::max(o.min_vertex_count, n / 2))}) CHECK(level(d, coarser) == level(o, coarser));
     REQUIRE(tom::part_count(d) == tom::part_count(o));
     for (uint32_t p = 0; p < tom::part_count(d); ++p) CHECK(tom::part_at(d, p).material == tom::part_at(o, p).material);
-    float worst_position = 0, worst_normal = 0, worst_uv = 0;
+    float worst_position = 0, worst_normal = 0, worst_uv = 0, worst_color = 0, worst_tangent = 0;
     for (uint32_t v = 0; v < n; ++v) {
         REQUIRE(d.substitute_at(v) == o.substitute_at(v));
         CHECK(d.splits_pair(v) == (v < n && o.splits_pair(v)));
         for (int k = 0; k < 3; ++k) worst_position = std::max(worst_position, std::fabs(d.positions[3 * v + k] - o.positions[3 * v + k]));
         if (o.normals) worst_normal = std::max(worst_normal, distance3(d.normals + 3 * v, o.normals + 3 * v));
-        if (o.texcoords)
-            for (int k = 0; k < 2; ++k)
-                worst_uv = std::max(worst_uv, std::fabs(d.texcoords[2 * v + k] - o.texcoords[2 * v + k]) / q.texcoord_step[0][k]);
+        for (int t = 0; t < 2; ++t) {
+            const float *dt = t ? d.texcoords1 : d.texcoords, *ot = t ? o.texcoords1 : o.texcoords;
+            REQUIRE(!dt == !ot);
+            if (ot)
+                for (int k = 0; k < 2; ++k) worst_uv = std::max(worst_uv, std::fabs(dt[2 * v + k] - ot[2 * v + k]) / q.texcoord_step[t][k]);
+        }
+        REQUIRE(!d.colors == !o.colors);
+        if (o.colors)
+            for (int k = 0; k < 4; ++k) worst_color = std::max(worst_color, std::fabs(d.colors[4 * v + k] - o.colors[4 * v + k]));
+        REQUIRE(!d.tangents == !o.tangents);
+        if (o.tangents) {
+            worst_tangent = std::max(worst_tangent, distance3(d.tangents + 4 * v, o.tangents + 4 * v));
+            CHECK(d.tangents[4 * v + 3] == o.tangents[4 * v + 3]);  // handedness kept exactly
+        }
     }
     // half a grid step, and the float rounding of the step's multiples
     CHECK(worst_position <= 0.5f * q.position_step * 1.001f + 1e-6f * (1 + std::fabs(q.position_min[0]) + std::fabs(q.position_min[1]) + std::fabs(q.position_min[2])));
     // octahedral pairs of b bits: a unit vector within 2.5 grid steps of 1 / (2^(b-1) - 1) (chord)
     CHECK(worst_normal <= 2.5f / float((1 << (q.normal_bits - 1)) - 1));
     CHECK(worst_uv <= 0.5001f);
+    CHECK(worst_color <= 0.5f / 255.0f + 1e-6f);  // 8-bit colours
+    CHECK(worst_tangent <= 2.5f / float((1 << (q.normal_bits - 1)) - 1));  // octahedral, as normals
     REQUIRE(d.extra_stream_count == o.extra_stream_count);
     for (uint32_t s = 0; s < d.extra_stream_count; ++s) {
         const tom::VertexStreamView &x = d.extra_streams[s], &y = o.extra_streams[s];
@@ -208,11 +222,15 @@ TEST_CASE("residuals in byte form come back exactly, small ones in small bytes",
         residual_to_bytes(uint8_t(x), &b);
         CHECK(residual_from_bytes<uint8_t>(&b) == uint8_t(x));
     }
-    // a block's lanes summed and taken back
+    // a block's lanes summed and taken back: all of an element's, or one attribute's among others
     const std::vector<uint8_t> kept = lanes;
-    sum_lanes(lanes.data(), lanes.size() / 4, 4);
+    sum_lanes(lanes.data(), lanes.size() / 4, 4, 4);
     CHECK(lanes != kept);
-    difference_lanes(lanes.data(), lanes.size() / 4, 4);
+    difference_lanes(lanes.data(), lanes.size() / 4, 4, 4);
+    CHECK(lanes == kept);
+    sum_lanes(lanes.data() + 2, lanes.size() / 4, 4, 2);
+    for (size_t i = 0; i < lanes.size(); i += 4) CHECK((lanes[i] == kept[i] && lanes[i + 1] == kept[i + 1]));
+    difference_lanes(lanes.data() + 2, lanes.size() / 4, 4, 2);
     CHECK(lanes == kept);
 }
 
@@ -228,6 +246,55 @@ TEST_CASE("streamed meshes made here, at every precision, decode to their levels
         fine.position_bits = 16, fine.normal_bits = 16, fine.texcoord_bits = 16, fine.growth = 2;
         check_every_prefix(m.name + " at 16 bits", image, fine);
     }
+}
+
+TEST_CASE("a streamed mesh with every attribute decodes each to its own", "[stream]") {
+    // normals, both texture coordinate sets, colours and tangents, each a different function of
+    // the position, so that one read in another's place differs
+    tom::Mesh m = tom::make_sphere(16, 20, 1.0f, 0.05f);
+    const size_t n = m.vertex_count();
+    for (size_t v = 0; v < n; ++v) {
+        const float x = m.positions[3 * v], y = m.positions[3 * v + 1], z = m.positions[3 * v + 2];
+        m.texcoords.insert(m.texcoords.end(), {0.5f + 0.4f * x, 0.5f + 0.4f * y});
+        m.texcoords1.insert(m.texcoords1.end(), {0.25f * z + 0.5f, 0.1f + 0.3f * x * y});
+        m.colors.insert(m.colors.end(), {0.5f + 0.45f * y, 0.5f + 0.45f * z, 0.5f - 0.45f * x, 1.0f});  // in [0, 1]
+        // a unit tangent orthogonal to the radial normal: the direction of growing longitude
+        const float r = std::sqrt(x * x + y * y);
+        if (r > 1e-6f)
+            m.tangents.insert(m.tangents.end(), {-y / r, x / r, 0.0f, v % 2 ? 1.0f : -1.0f});
+        else  // a pole
+            m.tangents.insert(m.tangents.end(), {1.0f, 0.0f, 0.0f, 1.0f});
+    }
+    tom::compute_normals(m);
+    check_every_prefix("sphere with every attribute", tom::serialize({tom::build(m)}));
+}
+
+TEST_CASE("a stream written at version 1.1 decodes to its levels", "[stream]") {
+    // tests/data/stream: grid9.obj (normals, texture coordinates) built by the toolkit of stream
+    // version 1.1 (a prediction and a block per attribute, no byte form), streamed and ordinary
+    auto bytes = [](const char* name) {
+        std::ifstream in(std::string(TOM_TEST_DATA_DIR) + "/stream/" + name, std::ios::binary);
+        return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    };
+    const std::vector<uint8_t> stream = bytes("grid9-stream-1.1.tom"), image = bytes("grid9.tom");
+    REQUIRE(stream.size() > 64);
+    REQUIRE(tom::layout::load_u32(&stream[12]) == 1);  // version_minor
+    const tom::File original = tom::File::from_bytes(image.data(), image.size(), "grid9.tom");
+    REQUIRE((original.mesh(0).normals && original.mesh(0).texcoords));
+    tom::StreamDecoder d(tom::meshopt_codecs(), "grid9-stream-1.1.tom");
+    d.append(stream.data(), 64);
+    d.append(stream.data() + 64, d.next_boundary() - 64);
+    REQUIRE(d.has_directory());
+    const std::vector<tom::StreamChunk> chunks = d.chunks();
+    uint64_t fed = chunks[0].begin_byte;  // the header and the directory
+    REQUIRE(chunks.size() > 2);
+    for (const tom::StreamChunk& c : chunks) {
+        d.append(stream.data() + fed, c.end_byte - fed);
+        fed = c.end_byte;
+        check_prefix_mesh(original.mesh(0), d.file().mesh(0), d.quantization(0));
+    }
+    d.append(stream.data() + fed, stream.size() - fed);
+    CHECK(d.complete());
 }
 
 TEST_CASE("streamed scenes keep parts, materials, textures, groups and carried streams", "[stream]") {

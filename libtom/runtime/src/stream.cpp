@@ -98,6 +98,8 @@ struct SplitScratch {
     uint32_t candidate_count() const { return uint32_t(near_p.size() + v_only.size()); }
 };
 
+struct Residuals;  // an attribute's residuals in a chunk, below
+
 /// A mesh as the directory declares it and as far as its chunks are decoded.
 struct MeshState {
     // declared
@@ -253,6 +255,7 @@ struct StreamDecoder::Impl {
     uint64_t born_counts(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left);
     void bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t part);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
+    void decode_attributes(MeshState& m, ChunkReader& in, const Residuals* r, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
     std::vector<layout::PendingSection> mesh_sections(const MeshState& m, uint32_t index) const;
@@ -615,12 +618,14 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
     return out;
 }
 
-/// An attribute block's prediction (the u32 before it, stream_layout::predict_neighbours and
-/// predict_byte_form) and its residuals, decoded, in byte form with the lanes' sums taken back.
+/// An attribute's prediction (stream_layout::predict_neighbours, predict_byte_form) and its
+/// residuals as decoded: element i at base + i * stride, in byte form with the lanes' sums taken
+/// back.
 struct Residuals {
-    uint32_t prediction = 0;
-    std::vector<uint8_t> elements;
-    const uint8_t* at(uint32_t i, uint32_t element) const { return elements.data() + size_t(i) * element; }
+    uint32_t prediction = 0, offset = 0;
+    const uint8_t* base = nullptr;
+    uint32_t stride = 0;
+    const uint8_t* at(uint32_t i) const { return base + size_t(i) * stride; }
 };
 
 template <class T>
@@ -634,14 +639,14 @@ T residual(const Residuals& r, const uint8_t* at) {
 /// Adds residuals to the predicted grid values, `lanes` values of type T per vertex; `m` gives the
 /// substitutes and, for a neighbours' prediction, the rings the chunk's splits listed.
 template <class T>
-void predict(std::vector<T>& values, const MeshState& m, const Residuals& r, uint32_t element, uint32_t a, uint32_t b, int lanes) {
+void predict(std::vector<T>& values, const MeshState& m, const Residuals& r, uint32_t a, uint32_t b, int lanes) {
     values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
     const bool rings = r.prediction & predict_neighbours;
     for (uint32_t v = a; v < b; ++v) {
         T* out = &values[size_t(v) * lanes];
         const size_t i = v - a, from = !rings || !i ? 0 : m.ring_ends[i - 1], to = rings ? m.ring_ends[i] : 0;
         prediction(values.data(), lanes, v, m.substitute[v], rings ? m.ring_items.data() + from : nullptr, to - from, out);
-        const uint8_t* in = r.at(v - a, element);
+        const uint8_t* in = r.at(v - a);
         for (int k = 0; k < lanes; ++k) out[k] = T(out[k] + residual<T>(r, in + k * sizeof(T)));
     }
 }
@@ -852,37 +857,57 @@ void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint
 }
 
 void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b) {
-    using namespace layout;
     const size_t count = b - a;
-    const StreamQuantization& q = m.quantization;
-    // each attribute block: its prediction (a u32), then the residuals
-    auto attribute = [&](auto& values, uint32_t element, const char* name, int lanes) {
-        Residuals r;
-        r.prediction = in.u32();
-        if (r.prediction >= (minor >= 2 ? prediction_count : predict_byte_form))
-            in.fail(std::string(name) + " prediction " + std::to_string(r.prediction) + " is not 0 to " + std::to_string(minor >= 2 ? 3 : 1) +
+    // each attribute's residuals: since 1.2 every prediction, then one block of all the
+    // attributes' elements side by side; in 1.0 and 1.1 a prediction and a block each
+    Residuals r[6];
+    std::vector<uint8_t> blocks[6];
+    uint32_t stride = 0;
+    for (int i = 0; i < 6; ++i) {
+        const AttributeSlot& s = attribute_slots[i];
+        if (s.bit && !(m.attributes & s.bit)) continue;
+        r[i].prediction = in.u32();
+        if (r[i].prediction >= (minor >= 2 ? prediction_count : predict_byte_form))
+            in.fail(std::string(s.name) + " prediction " + std::to_string(r[i].prediction) + " is not 0 to " + std::to_string(minor >= 2 ? 3 : 1) +
                     " (stream version 1." + std::to_string(minor) + ")");
-        r.elements = vertex_block(codecs, in, count, element, name);
-        if (r.prediction & predict_byte_form) difference_lanes(r.elements.data(), count, element);
-        predict(values, m, r, element, a, b, lanes);
-    };
-    attribute(m.positions, position_element, "POSI", 3);
-    for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)
-        if (m.positions[i] >> q.position_bits) in.fail("vertex " + std::to_string(i / 3) + " position is off its " + std::to_string(q.position_bits) + "-bit grid", 36);
-    if (m.attributes & attr_normals) attribute(m.normals, normal_element, "NORM", 2);
-    for (int t = 0; t < 2; ++t) {
-        if (!(m.attributes & (t ? attr_texcoords1 : attr_texcoords))) continue;
-        attribute(m.texcoords[t], texcoord_element, t ? "TEX1" : "TEX0", 2);
-        for (size_t i = size_t(a) * 2; i < m.texcoords[t].size(); ++i)
-            if (m.texcoords[t][i] >> q.texcoord_bits) in.fail("vertex " + std::to_string(i / 2) + " texture coordinate is off its grid", 36);
+        if (minor >= 2) {
+            r[i].offset = stride, stride += s.element;
+            continue;
+        }
+        blocks[i] = vertex_block(codecs, in, count, s.element, s.name);
+        r[i].base = blocks[i].data(), r[i].stride = s.element;
     }
-    if (m.attributes & attr_colors) attribute(m.colors, color_element, "COL0", 4);
-    if (m.attributes & attr_tangents) attribute(m.tangents, tangent_element, "TANG", 3);
+    if (minor >= 2) blocks[0] = vertex_block(codecs, in, count, stride, "attributes");
+    for (int i = 0; i < 6; ++i) {
+        if (minor >= 2) r[i].base = blocks[0].data() + r[i].offset, r[i].stride = stride;
+        if (r[i].prediction & predict_byte_form)
+            difference_lanes(blocks[minor >= 2 ? 0 : i].data() + r[i].offset, count, r[i].stride, attribute_slots[i].element);
+    }
+    decode_attributes(m, in, r, a, b);
     for (Carried& c : m.carried) {
         const uint32_t size = padded_element(c.element_bytes);
         const std::vector<uint8_t> raw = vertex_block(codecs, in, count, size, "XATT");
         for (size_t v = 0; v < count; ++v) c.data.insert(c.data.end(), raw.begin() + v * size, raw.begin() + v * size + c.element_bytes);
     }
+}
+
+// The grid values of the chunk's vertices [a, b): each attribute's residuals added to its
+// prediction, in the order of stream_layout::attribute_slots.
+void StreamDecoder::Impl::decode_attributes(MeshState& m, ChunkReader& in, const Residuals* r, uint32_t a, uint32_t b) {
+    using namespace layout;
+    const StreamQuantization& q = m.quantization;
+    predict(m.positions, m, r[0], a, b, 3);
+    for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)
+        if (m.positions[i] >> q.position_bits) in.fail("vertex " + std::to_string(i / 3) + " position is off its " + std::to_string(q.position_bits) + "-bit grid", 36);
+    if (m.attributes & attr_normals) predict(m.normals, m, r[1], a, b, 2);
+    for (int t = 0; t < 2; ++t) {
+        if (!(m.attributes & (t ? attr_texcoords1 : attr_texcoords))) continue;
+        predict(m.texcoords[t], m, r[t ? 4 : 2], a, b, 2);
+        for (size_t i = size_t(a) * 2; i < m.texcoords[t].size(); ++i)
+            if (m.texcoords[t][i] >> q.texcoord_bits) in.fail("vertex " + std::to_string(i / 2) + " texture coordinate is off its grid", 36);
+    }
+    if (m.attributes & attr_colors) predict(m.colors, m, r[3], a, b, 4);
+    if (m.attributes & attr_tangents) predict(m.tangents, m, r[5], a, b, 3);
 }
 
 // The rotation block after an index block: the index codec may turn a triangle's corners, and

@@ -118,7 +118,7 @@ std::vector<uint8_t> residuals(const std::vector<T>& values, const MeshView& m, 
             }
         }
     }
-    if (byte_form) sum_lanes(out.data(), b - a, element);
+    if (byte_form) sum_lanes(out.data(), b - a, element, element);
     return out;
 }
 
@@ -306,24 +306,45 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
     out.insert(out.end(), w.bytes.begin(), w.bytes.end());
 }
 
-/// An attribute block with the prediction that codes it smaller: a u32 saying which
-/// (stream_layout::predict_neighbours, predict_byte_form), then the residuals. Smooth surfaces
-/// favour the neighbours' mean; hard edges, seams and flat CAD faces the substitute; the byte
-/// form wins where consecutive residuals are independent, the zigzag form where they are alike
-/// (the codec then codes their difference).
+/// One attribute's residuals in the form that codes them smaller (stream_layout::predict_neighbours,
+/// predict_byte_form). Smooth surfaces favour the neighbours' mean; hard edges, seams and flat CAD
+/// faces the substitute; the byte form wins where consecutive residuals are independent, the
+/// zigzag form where they are alike (the codec then codes their difference). Each is tried in a
+/// block of its own: the vertex codec codes each byte lane on its own, so the choice holds in the
+/// chunk's block of every attribute.
+struct AttributeResiduals {
+    uint32_t prediction = 0, element = 0;
+    std::vector<uint8_t> elements;
+};
+
 template <class T>
-void put_attribute(std::vector<uint8_t>& out, const std::vector<T>& values, const MeshView& m, const Connectivity& conn, uint32_t a, uint32_t b, int lanes,
-                   uint32_t element) {
-    std::vector<uint8_t> best;
-    uint32_t chosen = 0;
+AttributeResiduals smallest_residuals(const std::vector<T>& values, const MeshView& m, const Connectivity& conn, uint32_t a, uint32_t b, int lanes,
+                                      uint32_t element) {
+    AttributeResiduals best;
+    size_t best_bytes = 0;
     for (uint32_t p = 0; p < prediction_count; ++p) {
-        std::vector<uint8_t> block;
         const auto* rings = p & predict_neighbours ? &conn.rings : nullptr;
-        put_vertex_block(block, residuals(values, m, rings, a, b, lanes, element, p & predict_byte_form), b - a, element);
-        if (best.empty() || block.size() < best.size()) best.swap(block), chosen = p;
+        std::vector<uint8_t> elements = residuals(values, m, rings, a, b, lanes, element, p & predict_byte_form);
+        std::vector<uint8_t> block;
+        put_vertex_block(block, elements, b - a, element);
+        if (p == 0 || block.size() < best_bytes) best = {p, element, std::move(elements)}, best_bytes = block.size();
     }
-    put_u32(out, chosen);
-    out.insert(out.end(), best.begin(), best.end());
+    return best;
+}
+
+/// The attributes of a chunk's vertices (since stream 1.2): each one's prediction, then one block
+/// of their elements side by side, so that a chunk pays the vertex codec's fixed cost (its header
+/// and a tail of 32 bytes) once rather than per attribute.
+void put_attributes(std::vector<uint8_t>& out, const std::vector<AttributeResiduals>& attributes, uint32_t count) {
+    uint32_t stride = 0;
+    for (const AttributeResiduals& r : attributes) put_u32(out, r.prediction), stride += r.element;
+    std::vector<uint8_t> elements(size_t(count) * stride);
+    uint32_t offset = 0;
+    for (const AttributeResiduals& r : attributes) {
+        for (uint32_t i = 0; i < count; ++i) std::memcpy(&elements[size_t(i) * stride + offset], &r.elements[size_t(i) * r.element], r.element);
+        offset += r.element;
+    }
+    put_vertex_block(out, elements, count, stride);
 }
 
 /// One chunk of a mesh before it is placed in the file.
@@ -350,12 +371,13 @@ std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const 
         for (uint32_t p = 0; p < parts; ++p)
             if (!conn.base[p].empty()) put_index_block(out, conn.base[p].data(), conn.base[p].size(), S);
     put_splits(out, conn, S, a, b);
-    put_attribute(out, q.positions, m, conn, a, b, 3, position_element);
-    if (m.normals) put_attribute(out, q.normals, m, conn, a, b, 2, normal_element);
-    if (m.texcoords) put_attribute(out, q.texcoords[0], m, conn, a, b, 2, texcoord_element);
-    if (m.colors) put_attribute(out, q.colors, m, conn, a, b, 4, color_element);
-    if (m.texcoords1) put_attribute(out, q.texcoords[1], m, conn, a, b, 2, texcoord_element);
-    if (m.tangents) put_attribute(out, q.tangents, m, conn, a, b, 3, tangent_element);
+    std::vector<AttributeResiduals> attributes{smallest_residuals(q.positions, m, conn, a, b, 3, position_element)};
+    if (m.normals) attributes.push_back(smallest_residuals(q.normals, m, conn, a, b, 2, normal_element));
+    if (m.texcoords) attributes.push_back(smallest_residuals(q.texcoords[0], m, conn, a, b, 2, texcoord_element));
+    if (m.colors) attributes.push_back(smallest_residuals(q.colors, m, conn, a, b, 4, color_element));
+    if (m.texcoords1) attributes.push_back(smallest_residuals(q.texcoords[1], m, conn, a, b, 2, texcoord_element));
+    if (m.tangents) attributes.push_back(smallest_residuals(q.tangents, m, conn, a, b, 3, tangent_element));
+    put_attributes(out, attributes, count);
     for (uint32_t s = 0; s < m.extra_stream_count; ++s) {
         const VertexStreamView& x = m.extra_streams[s];
         const uint32_t element = x.components * component_bytes(x.component_type), size = padded_element(element);
