@@ -164,11 +164,47 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
     CHECK(fed == stream.size());
 }
 
-/// Byte offset of chunk k's record in the directory (FORMAT.md: header, kept entries,
-/// quantization records, then the chunk table).
-uint64_t chunk_record(const std::vector<uint8_t>& s, uint32_t k) {
+/// The directory's chunk table (FORMAT.md: after the header, the kept entries and the
+/// quantization records): where it starts and ends, and its records.
+struct Table {
+    uint64_t begin = 0, end = 0;
+    std::vector<tom::stream_layout::ChunkRecord> records;
+};
+
+Table chunk_table(const std::vector<uint8_t>& s) {
     using namespace tom::layout;
-    return 64 + 16 + 16 * uint64_t(load_u32(&s[64])) + 64 * uint64_t(load_u32(&s[24])) + 24 * uint64_t(k);
+    using tom::stream_layout::get_varint;
+    Table t;
+    t.begin = 64 + 16 + 16 * uint64_t(load_u32(&s[64])) + 64 * uint64_t(load_u32(&s[24]));
+    const uint64_t directory_end = 64 + load_u64(&s[32]);
+    std::vector<tom::stream_layout::ChunkRecord> last(load_u32(&s[24]));
+    uint64_t at = t.begin;
+    for (uint32_t k = 0; k < load_u32(&s[28]); ++k) {
+        tom::stream_layout::ChunkRecord r;
+        uint32_t vertices = 0, triangles = 0;
+        REQUIRE((get_varint(s.data(), directory_end, at, r.mesh) && r.mesh < last.size()));
+        REQUIRE((get_varint(s.data(), directory_end, at, vertices) && get_varint(s.data(), directory_end, at, triangles)));
+        REQUIRE(get_varint(s.data(), directory_end, at, r.bytes));
+        r.vertex_end = last[r.mesh].vertex_end + vertices, r.triangle_end = last[r.mesh].triangle_end + triangles;
+        r.checksum = load_u32(&s[at]);
+        at += 4;
+        t.records.push_back(last[r.mesh] = r);
+    }
+    t.end = at;
+    return t;
+}
+
+/// Puts a changed table in place of the stream's, the directory and the file growing or
+/// shrinking with it (reseal() then mends the checksums).
+void put_table(std::vector<uint8_t>& s, const Table& t) {
+    using namespace tom::layout;
+    std::vector<uint8_t> bytes;
+    tom::stream_layout::put_chunk_table(bytes, t.records, load_u32(&s[24]));
+    s.erase(s.begin() + int64_t(t.begin), s.begin() + int64_t(t.end));
+    s.insert(s.begin() + int64_t(t.begin), bytes.begin(), bytes.end());
+    const uint64_t grown = bytes.size() - (t.end - t.begin);  // (modulo 2^64: it may shrink)
+    store_u64(&s[32], load_u64(&s[32]) + grown);
+    store_u64(&s[16], load_u64(&s[16]) + grown);
 }
 
 /// The deferred block's size: the data of the directory's last deferred_count kept entries.
@@ -185,18 +221,19 @@ uint64_t deferred_bytes(const std::vector<uint8_t>& s) {
 void reseal(std::vector<uint8_t>& s) {
     using namespace tom::layout;
     const uint64_t directory = load_u64(&s[32]), deferred = deferred_bytes(s);
+    Table table = chunk_table(s);
     uint64_t at = 64 + directory;
-    for (uint32_t k = 0; k <= load_u32(&s[28]); ++k) {
+    for (uint32_t k = 0; k <= table.records.size(); ++k) {
         if (k == load_u32(&s[72]) && deferred) {
             store_u32(&s[76], tom::crc32(&s[at], deferred));
             at += deferred;
         }
-        if (k == load_u32(&s[28])) break;
-        const uint64_t r = chunk_record(s, k);
-        const uint32_t bytes = load_u32(&s[r + 16]);
-        if (at + bytes <= s.size()) store_u32(&s[r + 20], tom::crc32(&s[at], bytes));
+        if (k == table.records.size()) break;
+        const uint32_t bytes = table.records[k].bytes;
+        if (at + bytes <= s.size()) table.records[k].checksum = tom::crc32(&s[at], bytes);
         at += bytes;
     }
+    put_table(s, table);  // the same size: checksums are raw u32
     store_u32(&s[40], tom::crc32(&s[64], directory));
     store_u32(&s[44], tom::crc32(s.data(), 44));
 }
@@ -295,6 +332,18 @@ TEST_CASE("a stream written at version 1.1 decodes to its levels", "[stream]") {
     }
     d.append(stream.data() + fed, stream.size() - fed);
     CHECK(d.complete());
+    // the byte form (predictions 2 and 3) is new in 1.2: chunk 1's POSI prediction set to 2,
+    // after its part's (base, born) and its splits block, and the chunk's checksum mended in its
+    // 24-byte record
+    std::vector<uint8_t> bad = stream;
+    const uint64_t at = chunks[1].begin_byte + 8, prediction = at + 4 + tom::layout::load_u32(&bad[at]);
+    tom::layout::store_u32(&bad[prediction], 2);
+    const uint64_t record = 64 + 16 + 16 * uint64_t(tom::layout::load_u32(&bad[64])) + 64 + 24;
+    tom::layout::store_u32(&bad[record + 20], tom::crc32(&bad[chunks[1].begin_byte], chunks[1].end_byte - chunks[1].begin_byte));
+    tom::layout::store_u32(&bad[40], tom::crc32(&bad[64], tom::layout::load_u64(&bad[32])));
+    tom::layout::store_u32(&bad[44], tom::crc32(bad.data(), 44));
+    CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "o.tom").append(bad.data(), bad.size()),
+                      Catch::Contains("o.tom") && Catch::Contains("POSI prediction 2 is not 0 to 1 (stream version 1.1)"));
 }
 
 TEST_CASE("streamed scenes keep parts, materials, textures, groups and carried streams", "[stream]") {
@@ -384,8 +433,9 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         // a chunk that decodes whole and only then is found to lie (its live triangle count, the
         // last check): its splits are undone, and what came before is the prefix it was
         std::vector<uint8_t> late = stream;
-        const uint64_t record = chunk_record(late, 3);
-        tom::layout::store_u32(&late[record + 8], tom::layout::load_u32(&late[record + 8]) + 1);
+        Table lying = chunk_table(late);
+        ++lying.records[3].triangle_end;
+        put_table(late, lying);
         reseal(late);
         tom::StreamDecoder undone(tom::meshopt_codecs(), "late.tom");
         CHECK_THROWS_WITH(undone.append(late.data(), late.size()), Catch::Contains("late.tom") && Catch::Contains("live triangles"));
@@ -399,9 +449,24 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         CHECK(undone.tom_bytes() == three.tom_bytes());
         // a chunk table entry past the mesh's vertices
         std::vector<uint8_t> table = stream;
-        tom::layout::store_u32(&table[chunk_record(table, 1) + 4], 1u << 30);
+        Table past = chunk_table(table);
+        past.records.back().vertex_end = 1u << 30;
+        put_table(table, past);
         reseal(table);
-        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "t.tom").append(table.data(), table.size()), Catch::Contains("t.tom") && Catch::Contains("chunk 1 vertex_end"));
+        const std::string last = "chunk " + std::to_string(past.records.size() - 1) + " vertex_end";
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "t.tom").append(table.data(), table.size()), Catch::Contains("t.tom") && Catch::Contains(last));
+        // a table entry that is not a varint of 32 bits: chunk 0's mesh in six bytes
+        std::vector<uint8_t> wide = stream;
+        const Table whole = chunk_table(wide);
+        wide.erase(wide.begin() + int64_t(whole.begin));  // mesh 0's one byte
+        const uint8_t six[6] = {0x80, 0x80, 0x80, 0x80, 0x80, 0x01};
+        wide.insert(wide.begin() + int64_t(whole.begin), six, six + 6);
+        tom::layout::store_u64(&wide[32], tom::layout::load_u64(&wide[32]) + 5);
+        tom::layout::store_u64(&wide[16], tom::layout::load_u64(&wide[16]) + 5);
+        tom::layout::store_u32(&wide[40], tom::crc32(&wide[64], tom::layout::load_u64(&wide[32])));
+        tom::layout::store_u32(&wide[44], tom::crc32(wide.data(), 44));
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "w.tom").append(wide.data(), wide.size()),
+                          Catch::Contains("w.tom") && Catch::Contains("chunk 0 mesh") && Catch::Contains("not a varint"));
         // a deferred block placed past the chunks, and a deferred section a frame needs
         std::vector<uint8_t> placed = stream;
         tom::layout::store_u32(&placed[72], tom::layout::load_u32(&placed[28]) + 1);
@@ -422,13 +487,6 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         reseal(bad);
         CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "q.tom").append(bad.data(), bad.size()),
                           Catch::Contains("q.tom") && Catch::Contains("POSI prediction 4 is not 0 to 3"));
-        // the byte form (predictions 2 and 3) is new in 1.2
-        std::vector<uint8_t> old = stream;
-        tom::layout::store_u32(&old[prediction], 2);
-        tom::layout::store_u32(&old[12], 1);
-        reseal(old);
-        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "o.tom").append(old.data(), old.size()),
-                          Catch::Contains("o.tom") && Catch::Contains("prediction 2 is not 0 to 1 (stream version 1.1)"));
     }
     SECTION("a truncated file is an error unless a byte limit asks for a prefix") {
         const fs::path dir = fs::temp_directory_path() / ("tom_stream_" + std::to_string(::getpid()));

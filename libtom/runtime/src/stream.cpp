@@ -100,6 +100,13 @@ struct SplitScratch {
 
 struct Residuals;  // an attribute's residuals in a chunk, below
 
+/// A chunk's record as the directory's table holds it, with the file offsets of its fields (for
+/// the errors that name them).
+struct TableRecord {
+    ChunkRecord r;
+    uint64_t at_mesh = 0, at_vertex_end = 0, at_triangle_end = 0, at_bytes = 0;
+};
+
 /// A mesh as the directory declares it and as far as its chunks are decoded.
 struct MeshState {
     // declared
@@ -245,7 +252,8 @@ struct StreamDecoder::Impl {
     void read_directory();
     void read_kept_section(uint32_t type, uint32_t mesh, const uint8_t* data, uint64_t bytes, uint64_t offset);
     void read_quantization(MeshState& m, const uint8_t* q, uint64_t offset, const std::string& field);
-    void read_chunk_table(const uint8_t* table, uint64_t offset, uint64_t deferred_bytes);
+    uint64_t read_table_records(const uint8_t* d, uint64_t table, std::vector<TableRecord>& records);
+    void read_chunk_table(const std::vector<TableRecord>& records, uint64_t offset, uint64_t deferred_bytes);
     void read_deferred(const uint8_t* data);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
@@ -366,7 +374,8 @@ void StreamDecoder::Impl::read_header() {
     if (directory_bytes > file || file - directory_bytes < header_bytes)
         fail(h_directory_bytes, "directory_bytes", 31, "a directory of " + std::to_string(directory_bytes) + " bytes does not fit in a file of " + std::to_string(file));
     // every mesh takes at least its kept MESH entry and quantization record, every chunk its record
-    if (uint64_t(meshes_declared) * (kept_entry_bytes + quantization_bytes) + uint64_t(chunks_declared) * chunk_record_bytes > directory_bytes)
+    const uint64_t record_bytes = minor >= 2 ? compact_record_min_bytes : chunk_record_bytes;
+    if (uint64_t(meshes_declared) * (kept_entry_bytes + quantization_bytes) + uint64_t(chunks_declared) * record_bytes > directory_bytes)
         fail(h_mesh_count, "mesh_count", 31, std::to_string(meshes_declared) + " meshes and " + std::to_string(chunks_declared) + " chunks do not fit in a directory of " + std::to_string(directory_bytes) + " bytes");
     declared_bytes = file;
     if (received > declared_bytes) fail(declared_bytes, "file_bytes", 31, "the stream has bytes past its declared end of " + std::to_string(declared_bytes));
@@ -390,10 +399,10 @@ void StreamDecoder::Impl::read_directory() {
     if (!deferred_count && (deferred.after_chunk || deferred_checksum))
         fail(base + d_deferred_after, "directory deferred_after", 32, "nonzero without deferred sections");
     meshes.resize(meshes_declared);
-    uint64_t entries = directory_header_bytes;
-    uint64_t data = entries + kept * kept_entry_bytes + uint64_t(meshes_declared) * quantization_bytes + uint64_t(chunks_declared) * chunk_record_bytes;
-    if (data > directory_bytes) fail(base, "directory kept_count", 32, std::to_string(kept) + " kept sections do not fit in the directory");
-    const uint64_t quant = entries + kept * kept_entry_bytes, table = quant + uint64_t(meshes_declared) * quantization_bytes;
+    const uint64_t entries = directory_header_bytes, quant = entries + kept * kept_entry_bytes, table = quant + uint64_t(meshes_declared) * quantization_bytes;
+    if (table > directory_bytes) fail(base, "directory kept_count", 32, std::to_string(kept) + " kept sections do not fit in the directory");
+    std::vector<TableRecord> records;
+    uint64_t data = read_table_records(d, table, records);
     uint64_t deferred_bytes = 0;
     for (uint64_t k = 0; k < kept; ++k) {
         const uint8_t* e = d + entries + k * kept_entry_bytes;
@@ -422,7 +431,7 @@ void StreamDecoder::Impl::read_directory() {
             fail(base, field + " PAIR", 32, std::to_string(meshes[m].pair_bits.size()) + " bytes where the mesh's vertices require " + std::to_string((uint64_t(meshes[m].vertex_count) + 7) / 8));
         read_quantization(meshes[m], d + quant + uint64_t(m) * quantization_bytes, base + quant + uint64_t(m) * quantization_bytes, field + " quantization");
     }
-    read_chunk_table(d + table, base + table, deferred_bytes);
+    read_chunk_table(records, base + table, deferred_bytes);
     pending.erase(pending.begin(), pending.begin() + header_bytes + directory_bytes);
     consumed = header_bytes + directory_bytes;
     directory = true;
@@ -509,9 +518,59 @@ void StreamDecoder::Impl::read_quantization(MeshState& m, const uint8_t* q, uint
     if (end != m.triangle_count) fail(offset, field + " PART", 32, "the parts hold " + std::to_string(end) + " triangles, not the mesh's " + std::to_string(m.triangle_count));
 }
 
+// rules 32 and 33: the chunk table's records, 24 bytes each in 1.0 and 1.1, compact since 1.2
+// (stream_layout::put_chunk_table), each naming an existing mesh; returns where the table ends in
+// the directory `d`, the table starting at `table`
+uint64_t StreamDecoder::Impl::read_table_records(const uint8_t* d, uint64_t table, std::vector<TableRecord>& records) {
+    const uint64_t base = header_bytes;
+    records.resize(chunks_declared);
+    if (minor < 2) {
+        if (uint64_t(chunks_declared) * chunk_record_bytes > directory_bytes - table) fail(base + table, "chunk table", 32, "runs past the directory's end");
+        for (uint32_t k = 0; k < chunks_declared; ++k) {
+            const uint64_t at = table + uint64_t(k) * chunk_record_bytes;
+            TableRecord& t = records[k];
+            const uint8_t* r = d + at;
+            t.r = {load_u32(r + r_mesh), load_u32(r + r_vertex_end), load_u32(r + r_triangle_end), load_u32(r + r_bytes), load_u32(r + r_checksum)};
+            t.at_mesh = base + at + r_mesh;
+            t.at_vertex_end = base + at + r_vertex_end;
+            t.at_triangle_end = base + at + r_triangle_end;
+            t.at_bytes = base + at + r_bytes;
+            if (t.r.mesh >= meshes_declared)
+                fail(t.at_mesh, "chunk " + std::to_string(k) + " mesh", 33, "mesh " + std::to_string(t.r.mesh) + " does not exist");
+        }
+        return table + uint64_t(chunks_declared) * chunk_record_bytes;
+    }
+    std::vector<ChunkRecord> last(meshes_declared);
+    uint64_t at = table;
+    for (uint32_t k = 0; k < chunks_declared; ++k) {
+        TableRecord& t = records[k];
+        const std::string field = "chunk " + std::to_string(k);
+        auto varint = [&](uint64_t& field_at, const char* name) {
+            field_at = base + at;
+            uint32_t v = 0;
+            if (!get_varint(d, directory_bytes, at, v)) fail(field_at, field + " " + name, 32, "not a varint of at most 32 bits within the directory");
+            return v;
+        };
+        t.r.mesh = varint(t.at_mesh, "mesh");
+        if (t.r.mesh >= meshes_declared) fail(t.at_mesh, field + " mesh", 33, "mesh " + std::to_string(t.r.mesh) + " does not exist");
+        const ChunkRecord& before = last[t.r.mesh];
+        const uint64_t vertex_end = uint64_t(before.vertex_end) + varint(t.at_vertex_end, "vertex_end");
+        const uint64_t triangle_end = uint64_t(before.triangle_end) + varint(t.at_triangle_end, "triangle_end");
+        if (vertex_end > UINT32_MAX) fail(t.at_vertex_end, field + " vertex_end", 33, "past 2^32 - 1");
+        if (triangle_end > UINT32_MAX) fail(t.at_triangle_end, field + " triangle_end", 33, "past 2^32 - 1");
+        t.r.vertex_end = uint32_t(vertex_end), t.r.triangle_end = uint32_t(triangle_end);
+        t.r.bytes = varint(t.at_bytes, "bytes");
+        if (directory_bytes - at < 4) fail(base + at, field + " checksum", 32, "runs past the directory's end");
+        t.r.checksum = load_u32(d + at);
+        at += 4;
+        last[t.r.mesh] = t.r;
+    }
+    return at;
+}
+
 // rule 33: every chunk adds vertices to one mesh, from where its previous chunk ended, without
 // splitting a group of copies; the first reaches the survivors, the last the whole mesh
-void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset, uint64_t deferred_bytes) {
+void StreamDecoder::Impl::read_chunk_table(const std::vector<TableRecord>& records, uint64_t offset, uint64_t deferred_bytes) {
     std::vector<uint32_t> end(meshes.size(), 0);
     uint64_t at = header_bytes + directory_bytes;
     auto place_deferred = [&] {
@@ -521,31 +580,32 @@ void StreamDecoder::Impl::read_chunk_table(const uint8_t* table, uint64_t offset
     };
     for (uint32_t k = 0; k < chunks_declared; ++k) {
         if (k == deferred.after_chunk) place_deferred();
-        const uint8_t* r = table + uint64_t(k) * chunk_record_bytes;
-        const uint64_t ro = offset + uint64_t(k) * chunk_record_bytes;
+        const TableRecord& r = records[k];
         const std::string field = "chunk " + std::to_string(k);
         StreamChunk c;
-        c.mesh = load_u32(r + r_mesh);
-        if (c.mesh >= meshes.size()) fail(ro + r_mesh, field + " mesh", 33, "mesh " + std::to_string(c.mesh) + " does not exist");
+        c.mesh = r.r.mesh;  // (an existing one: read_table_records)
         const MeshState& m = meshes[c.mesh];
         MeshView groups;  // the mesh's groups of copies (PAIR, its size checked with the directory)
         groups.vertex_count = m.vertex_count;
         groups.pair_bits = m.pair_bits.empty() ? nullptr : m.pair_bits.data();
         c.vertex_begin = end[c.mesh];
-        c.vertex_end = load_u32(r + r_vertex_end);
-        c.triangles = load_u32(r + r_triangle_end);
+        c.vertex_end = r.r.vertex_end;
+        c.triangles = r.r.triangle_end;
         if (c.vertex_end <= c.vertex_begin || c.vertex_end > m.vertex_count)
-            fail(ro + r_vertex_end, field + " vertex_end", 33, std::to_string(c.vertex_end) + " is not in (" + std::to_string(c.vertex_begin) + ", " + std::to_string(m.vertex_count) + "]");
-        if (c.vertex_end < m.min_vertex_count) fail(ro + r_vertex_end, field + " vertex_end", 33, "the mesh's first chunk holds its " + std::to_string(m.min_vertex_count) + " survivors");
-        if (groups.splits_pair(c.vertex_end)) fail(ro + r_vertex_end, field + " vertex_end", 33, "ends inside a group of copies");
-        if (c.triangles > m.triangle_count) fail(ro + r_triangle_end, field + " triangle_end", 33, "past the mesh's " + std::to_string(m.triangle_count) + " triangles");
+            fail(r.at_vertex_end, field + " vertex_end", 33,
+                 std::to_string(c.vertex_end) + " is not in (" + std::to_string(c.vertex_begin) + ", " + std::to_string(m.vertex_count) + "]");
+        if (c.vertex_end < m.min_vertex_count)
+            fail(r.at_vertex_end, field + " vertex_end", 33, "the mesh's first chunk holds its " + std::to_string(m.min_vertex_count) + " survivors");
+        if (groups.splits_pair(c.vertex_end)) fail(r.at_vertex_end, field + " vertex_end", 33, "ends inside a group of copies");
+        if (c.triangles > m.triangle_count)
+            fail(r.at_triangle_end, field + " triangle_end", 33, "past the mesh's " + std::to_string(m.triangle_count) + " triangles");
         end[c.mesh] = c.vertex_end;
         c.begin_byte = at;
-        c.end_byte = at + load_u32(r + r_bytes);
-        if (c.end_byte > declared_bytes) fail(ro + r_bytes, field + " bytes", 33, "runs past the file's end");
+        c.end_byte = at + r.r.bytes;
+        if (c.end_byte > declared_bytes) fail(r.at_bytes, field + " bytes", 33, "runs past the file's end");
         at = c.end_byte;
         chunks.push_back(c);
-        chunk_checksums.push_back(load_u32(r + r_checksum));
+        chunk_checksums.push_back(r.r.checksum);
     }
     if (deferred.after_chunk == chunks_declared) place_deferred();
     if (at != declared_bytes) fail(h_file_bytes, "file_bytes", 33, "the chunks end at byte " + std::to_string(at) + ", not at the file's " + std::to_string(declared_bytes));

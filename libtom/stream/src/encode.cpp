@@ -489,15 +489,9 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         store_u32(&directory[d_deferred_after], uint32_t(after));
         store_u32(&directory[d_deferred_checksum], crc32(deferred.data(), deferred.size()));
     }
-    for (const Chunk& c : chunks) {
-        const size_t r = directory.size();
-        directory.resize(r + chunk_record_bytes, 0);
-        store_u32(&directory[r + r_mesh], c.mesh);
-        store_u32(&directory[r + r_vertex_end], c.vertex_end);
-        store_u32(&directory[r + r_triangle_end], c.triangles);
-        store_u32(&directory[r + r_bytes], uint32_t(c.bytes.size()));
-        store_u32(&directory[r + r_checksum], crc32(c.bytes.data(), c.bytes.size()));
-    }
+    std::vector<ChunkRecord> records;
+    for (const Chunk& c : chunks) records.push_back({c.mesh, c.vertex_end, c.triangles, uint32_t(c.bytes.size()), crc32(c.bytes.data(), c.bytes.size())});
+    put_chunk_table(directory, records, file.mesh_count());
     for (size_t k = 0; k < front; ++k) directory.insert(directory.end(), kept[k].bytes.begin(), kept[k].bytes.end());
     // header, directory, chunks with the deferred block among them
     std::vector<uint8_t> out(header_bytes, 0);
