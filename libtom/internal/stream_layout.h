@@ -217,7 +217,24 @@ inline void sort_short(uint32_t* first, uint32_t* last) {
 /// (v, p, x) it is, v the split vertex, p its substitute, x the third corner. Orders 0-2 turn
 /// v -> p -> x, orders 3-5 p -> v -> x.
 constexpr uint8_t born_orders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {1, 0, 2}, {0, 2, 1}, {2, 1, 0}};
-constexpr uint32_t order_bits = 3;
+constexpr uint32_t order_bits = 3;  // 1.0 and 1.1: the order in three bits
+
+/// Since 1.2 a born triangle's order is coded against the orientation its neighbours predict:
+/// on a consistently oriented surface the live triangle across its edge (p, x) runs that edge the
+/// other way. Predicted: 1 (orders 3-5, p -> v -> x, which runs x -> p) when a live triangle
+/// holding p, of the corners [first, last) (3 t + k, `triangle(g)` its three corners), holds x
+/// right after p; else 0. The code: two bits of the turn (order % 3) when the orientation is the
+/// predicted one, else two bits of 3 and two of the turn.
+constexpr uint32_t turn_bits = 2, other_orientation = 3;
+template <class Triangle>
+uint32_t predicted_orientation(const uint32_t* first, const uint32_t* last, Triangle&& triangle, uint32_t p, uint32_t x) {
+    for (const uint32_t* g = first; g != last; ++g) {
+        const uint32_t* c = triangle(*g);
+        const uint32_t k = *g % 3;
+        if (c[k] == p && c[(k + 1) % 3] == x) return 1;
+    }
+    return 0;
+}
 
 /// Scratch of gather_neighbours: per vertex, the gathering that last listed it, so that each
 /// neighbour is listed once without sorting the repeats (a vertex's ~18 corners name ~6 others;

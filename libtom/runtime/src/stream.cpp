@@ -898,8 +898,8 @@ uint64_t StreamDecoder::Impl::born_counts(MeshState& m, ChunkReader& in, BitRead
 // new, the corner to v's ring (the ring's last entries since p).
 void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t q) {
     SplitScratch& s = m.split;
-    const uint32_t order = r.bits(order_bits), index = r.gamma() - 1, candidates = s.candidate_count();
-    if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
+    uint32_t order = minor < 2 ? r.bits(order_bits) : 0;  // (since 1.2 after x, below)
+    const uint32_t index = r.gamma() - 1, candidates = s.candidate_count();
     uint32_t x = 0;
     if (index < candidates) {
         x = candidate(s, index);
@@ -909,6 +909,16 @@ void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint
     } else {
         in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates), 36);
     }
+    if (minor >= 2) {  // the turn, after two bits of 3 when the orientation is not the predicted one
+        const uint32_t predicted = predicted_orientation(
+            m.incident.begin(p), m.incident.end(p), [&](uint32_t g) { return triangle_of(m, g); }, p, x);
+        uint32_t turn = r.bits(turn_bits);
+        order = 3 * predicted;
+        if (turn == other_orientation) turn = r.bits(turn_bits), order = 3 * (1 - predicted);
+        if (turn > 2) in.fail("vertex " + std::to_string(v) + " born triangle turn " + std::to_string(turn) + " is not 0 to 2", 36);
+        order += turn;
+    }
+    if (order > 5) in.fail("vertex " + std::to_string(v) + " born triangle order " + std::to_string(order) + " is not 0 to 5", 36);
     const uint32_t role[3] = {v, p, x};
     const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
     add_triangle(m, q, c);

@@ -186,7 +186,8 @@ struct Split {
     std::vector<uint32_t> born_count;   // per part
     struct Born {
         uint8_t order;
-        uint32_t index;  // among the candidates; their count: an escape, then x
+        uint8_t predicted;  // the orientation the live triangles predict (predicted_orientation)
+        uint32_t index;     // among the candidates; their count: an escape, then x
         uint32_t x;
         bool escape;
     };
@@ -252,6 +253,9 @@ Connectivity connectivity(const MeshView& m) {
             gather_neighbours(incident[v], triangle, p, v, seen, around[1]);
             order_candidates(around[0], around[1], candidates);
         }
+        // p's live corners as the decoder holds them at each born triangle: p's side, then the
+        // split's born triangles before it
+        std::vector<uint32_t> p_corners = incident[p];
         for (uint32_t t : born) {
             const uint32_t* c = &cur[3 * size_t(t)];
             uint8_t role[3];
@@ -263,7 +267,9 @@ Connectivity connectivity(const MeshView& m) {
             uint8_t order = 0;
             while (!(born_orders[order][0] == role[0] && born_orders[order][1] == role[1] && born_orders[order][2] == role[2])) ++order;
             const uint32_t index = uint32_t(std::find(candidates.begin(), candidates.end(), x) - candidates.begin());
-            s.born.push_back({order, index, x, index == candidates.size()});
+            const uint32_t predicted = predicted_orientation(p_corners.data(), p_corners.data() + p_corners.size(), triangle, p, x);
+            s.born.push_back({order, uint8_t(predicted), index, x, index == candidates.size()});
+            p_corners.push_back(3 * t + uint32_t(std::find(c, c + 3, p) - c));
         }
         // v's other corners were p's before the split: p's list in order, marked
         std::vector<uint32_t> merged = incident[p];
@@ -297,9 +303,10 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
         for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
         put_born_counts(w, s.born_count);
         for (const Split::Born& t : s.born) {
-            w.put(t.order, order_bits);
             w.gamma(t.index + 1);
             if (t.escape) w.put(t.x, index_bits(v));
+            if (t.order / 3 != t.predicted) w.put(other_orientation, turn_bits);
+            w.put(t.order % 3, turn_bits);
         }
     }
     put_u32(out, uint32_t(w.bytes.size()));
