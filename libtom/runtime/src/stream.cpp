@@ -98,6 +98,8 @@ struct SplitScratch {
     uint32_t candidate_count() const { return uint32_t(near_p.size() + v_only.size()); }
 };
 
+constexpr uint32_t none = UINT32_MAX;  // no vertex
+
 struct Residuals;  // an attribute's residuals in a chunk, below
 
 /// A chunk's record as the directory's table holds it, with the file offsets of its fields (for
@@ -261,7 +263,7 @@ struct StreamDecoder::Impl {
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
     void split_vertex(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left);
     uint64_t born_counts(MeshState& m, ChunkReader& in, BitReader& r, uint32_t v, std::vector<uint32_t>& left);
-    void bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t part);
+    void bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t part, uint32_t paired);
     void decode_vertices(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b);
     void decode_attributes(MeshState& m, ChunkReader& in, const Residuals* r, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
@@ -867,14 +869,20 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
     if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
     m.substitute.push_back(p);
     move_corners(m, r, p, v);
-    if (!born_counts(m, in, r, v, left)) {  // v's triangles are the ones it took from p
+    const uint64_t births = born_counts(m, in, r, v, left);
+    if (!births) {  // v's triangles are the ones it took from p
         ring_of(m, v, m.ring_items);
     } else {  // the ring: v's neighbours before the births, p, the third corners born
         list_neighbourhood(m, p, v, m.ring_items);
         m.ring_items.push_back(p);
         m.split.born_from = m.ring_items.size();
-        for (size_t q = 0; q < m.parts.size(); ++q)
-            for (uint32_t i = 0; i < m.births[q]; ++i) bear(m, in, r, p, v, q);
+        // since 1.2 a manifold split's two born triangles take the two candidates near both p and v,
+        // one bit saying which the first takes (FORMAT.md: the pair bit)
+        SplitScratch& s = m.split;
+        const bool pair = minor >= 2 && births == 2 && s.common.size() == 2 && r.bits(1);
+        const uint32_t first = pair ? r.bits(1) : 0;
+        for (size_t q = 0, k = 0; q < m.parts.size(); ++q)
+            for (uint32_t i = 0; i < m.births[q]; ++i, ++k) bear(m, in, r, p, v, q, pair ? s.common[k ^ first] : none);
     }
     m.ring_ends.push_back(m.ring_items.size());
 }
@@ -896,12 +904,14 @@ uint64_t StreamDecoder::Impl::born_counts(MeshState& m, ChunkReader& in, BitRead
 
 // One triangle born with v in part q: its order and third corner, added to the part and, when
 // new, the corner to v's ring (the ring's last entries since p).
-void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t q) {
+void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint32_t p, uint32_t v, size_t q, uint32_t paired) {
     SplitScratch& s = m.split;
     uint32_t order = minor < 2 ? r.bits(order_bits) : 0;  // (since 1.2 after x, below)
-    const uint32_t index = r.gamma() - 1, candidates = s.candidate_count();
+    const uint32_t index = paired != none ? 0 : r.gamma() - 1, candidates = s.candidate_count();
     uint32_t x = 0;
-    if (index < candidates) {
+    if (paired != none) {
+        x = paired;
+    } else if (index < candidates) {
         x = candidate(s, index);
     } else if (index == candidates) {
         x = r.bits(index_bits(v));

@@ -192,6 +192,7 @@ struct Split {
         bool escape;
     };
     std::vector<Born> born;             // part by part, in file order
+    uint32_t common = 0;                // candidates that share a triangle with both p and v
 };
 
 /// A mesh's connectivity as the stream codes it: the triangles live at the coarsest resolution
@@ -252,6 +253,9 @@ Connectivity connectivity(const MeshView& m) {
             gather_neighbours(incident[p], triangle, p, v, seen, around[0]);
             gather_neighbours(incident[v], triangle, p, v, seen, around[1]);
             order_candidates(around[0], around[1], candidates);
+            std::vector<uint32_t> both;
+            std::set_intersection(around[0].begin(), around[0].end(), around[1].begin(), around[1].end(), std::back_inserter(both));
+            s.common = uint32_t(both.size());
         }
         // p's live corners as the decoder holds them at each born triangle: p's side, then the
         // split's born triangles before it
@@ -295,6 +299,13 @@ void put_born_counts(BitWriter& w, const std::vector<uint32_t>& counts) {
     for (uint32_t count : counts) w.gamma(count + 1);
 }
 
+/// A manifold split (since 1.2): two born triangles and two candidates near both p and v, the
+/// triangles' third corners those two. One bit says so, one which the first takes, and the
+/// triangles name no candidate.
+bool split_pair(const Split& s) {
+    return s.born.size() == 2 && s.common == 2 && s.born[0].index < 2 && s.born[1].index < 2 && s.born[0].index != s.born[1].index;
+}
+
 void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
     BitWriter w;
     for (uint32_t v = std::max(a, S); v < b; ++v) {
@@ -302,8 +313,13 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
         w.put(s.p, index_bits(v));
         for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
         put_born_counts(w, s.born_count);
+        const bool pair = split_pair(s);
+        if (s.born.size() == 2 && s.common == 2) {
+            w.put(pair ? 1 : 0, 1);
+            if (pair) w.put(s.born[0].index, 1);
+        }
         for (const Split::Born& t : s.born) {
-            w.gamma(t.index + 1);
+            if (!pair) w.gamma(t.index + 1);
             if (t.escape) w.put(t.x, index_bits(v));
             if (t.order / 3 != t.predicted) w.put(other_orientation, turn_bits);
             w.put(t.order % 3, turn_bits);
