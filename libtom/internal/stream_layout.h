@@ -294,13 +294,15 @@ void gather_neighbours(const std::vector<uint32_t>& incident, Triangle triangle,
 
 /// The candidates for a born triangle's third corner x: the vertices that share a live triangle
 /// with both p and v (`around_p` and `around_v`: each one's neighbours, ascending, without p and
-/// v) first, where a manifold split's x lies, then the others; each group ascending.
-inline void order_candidates(const std::vector<uint32_t>& around_p, const std::vector<uint32_t>& around_v, std::vector<uint32_t>& out) {
+/// v) first, where a manifold split's x lies, then the others; each group ascending. Returns the
+/// size of the first group.
+inline size_t order_candidates(const std::vector<uint32_t>& around_p, const std::vector<uint32_t>& around_v, std::vector<uint32_t>& out) {
     out.clear();
     std::set_intersection(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
     const size_t common = out.size();
     std::set_symmetric_difference(around_p.begin(), around_p.end(), around_v.begin(), around_v.end(), std::back_inserter(out));
     sort_short(out.data() + common, out.data() + out.size());
+    return common;
 }
 
 /// The prediction of vertex v's grid values, its `lanes` lanes into `out`: for positions (`ring`,

@@ -685,7 +685,7 @@ std::vector<uint8_t> vertex_block(const StreamCodecs& codecs, ChunkReader& in, s
 /// back.
 struct Residuals {
     uint32_t prediction = 0, offset = 0;
-    const uint8_t* base = nullptr;
+    uint8_t* base = nullptr;
     uint32_t stride = 0;
     const uint8_t* at(uint32_t i) const { return base + size_t(i) * stride; }
 };
@@ -960,8 +960,7 @@ void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_
     if (minor >= 2) blocks[0] = vertex_block(codecs, in, count, stride, "attributes");
     for (int i = 0; i < 6; ++i) {
         if (minor >= 2) r[i].base = blocks[0].data() + r[i].offset, r[i].stride = stride;
-        if (r[i].prediction & predict_byte_form)
-            difference_lanes(blocks[minor >= 2 ? 0 : i].data() + r[i].offset, count, r[i].stride, attribute_slots[i].element);
+        if (r[i].prediction & predict_byte_form) difference_lanes(r[i].base, count, r[i].stride, attribute_slots[i].element);
     }
     decode_attributes(m, in, r, a, b);
     for (Carried& c : m.carried) {

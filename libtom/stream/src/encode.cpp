@@ -252,10 +252,7 @@ Connectivity connectivity(const MeshView& m) {
             std::vector<uint32_t> around[2];
             gather_neighbours(incident[p], triangle, p, v, seen, around[0]);
             gather_neighbours(incident[v], triangle, p, v, seen, around[1]);
-            order_candidates(around[0], around[1], candidates);
-            std::vector<uint32_t> both;
-            std::set_intersection(around[0].begin(), around[0].end(), around[1].begin(), around[1].end(), std::back_inserter(both));
-            s.common = uint32_t(both.size());
+            s.common = uint32_t(order_candidates(around[0], around[1], candidates));
         }
         // p's live corners as the decoder holds them at each born triangle: p's side, then the
         // split's born triangles before it
