@@ -240,6 +240,23 @@ TEST_CASE("with positions, normals and 32-bit indices a mesh takes at most 109% 
     }
 }
 
+TEST_CASE("CRC-32 is zlib's: the check value, and any split of the bytes gives the same", "[format]") {
+    const std::string check = "123456789";
+    CHECK(tom::crc32(check.data(), check.size()) == 0xCBF43926u);  // the polynomial's published check value
+    std::mt19937 rng(7);
+    std::vector<uint8_t> bytes(1000);
+    for (uint8_t& b : bytes) b = uint8_t(rng());
+    const uint32_t whole = tom::crc32(bytes.data(), bytes.size());
+    for (size_t split : {size_t(0), size_t(1), size_t(7), size_t(8), size_t(9), size_t(501), size_t(999)})  // around the 8-byte steps
+        CHECK(tom::crc32(bytes.data() + split, bytes.size() - split, tom::crc32(bytes.data(), split)) == whole);
+    // one byte changed anywhere changes the value
+    for (size_t at : {size_t(0), size_t(3), size_t(8), size_t(999)}) {
+        std::vector<uint8_t> changed = bytes;
+        changed[at] ^= 0x10;
+        CHECK(tom::crc32(changed.data(), changed.size()) != whole);
+    }
+}
+
 TEST_CASE("rule 1: shorter than the header", "[format][corrupt]") {
     const std::vector<uint8_t> good = tom::serialize({small_mesh()});
     for (size_t n = 0; n < kHeaderBytes; ++n) CHECK(rule_of(std::vector<uint8_t>(good.begin(), good.begin() + n)) == 1);
