@@ -100,6 +100,31 @@ print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': sys.argv[3]
                   'source_triangles': d['original_triangles'], 'mean': d['mean'], 'hausdorff': d['hausdorff'],
                   'normal_degrees': a['normal_mean_degrees'], 'uv': a['uv_mean']}))" "$(basename "$1")" "$2" "$3" "$4" "$json" >> "$work/results.jsonl"
 }
+# A skinned and animated asset is also measured as it moves: the source and a level posed by the
+# source's first animation at eight times (scripts/pose.py), each pair measured by tomerr, as one
+# JSON line with the mode "posed-MODE": the mean of the poses' mean errors, normal and
+# texture-coordinate deviations, the largest Hausdorff distance. In the bind pose alone a tool
+# blind to skinning can look exact (gltfpack merges vertices that bend apart once joints turn).
+poses() {  # source glb level prefix: true when the asset moves (prefix-0.obj ... written)
+  local status=0
+  /usr/bin/python3 "$root/scripts/pose.py" "$1" "$2" "$3" || status=$?
+  [ "$status" -eq 0 ] || { [ "$status" -eq 3 ] || { echo "real-assets: $2 not posed" >&2; exit 1; }; return 1; }
+}
+measure_posed() {  # asset tool mode ratio level; the source's poses at $out/posed-source-K.obj
+  local k jsons=()
+  poses "$1" "$5" "$out/posed-level" || { echo "real-assets: $5 has no skinned node where its source moves: not posed" >&2; return 1; }
+  for k in 0 1 2 3 4 5 6 7; do
+    jsons+=("$("$tools/tomerr" "$out/posed-source-$k.obj" "$out/posed-level-$k.obj" --json)") || { echo "real-assets: $5 posed not measured" >&2; return 1; }
+  done
+  /usr/bin/python3 -c "
+import json, statistics, sys
+d = [json.loads(x) for x in sys.argv[5:]]
+def mean(f): return None if any(f(x) is None for x in d) else statistics.mean(f(x) for x in d)
+print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': 'posed-' + sys.argv[3], 'ratio': float(sys.argv[4]), 'triangles': d[0]['simplified_triangles'],
+                  'source_triangles': d[0]['original_triangles'], 'mean': mean(lambda x: x['mean']), 'hausdorff': max(x['hausdorff'] for x in d),
+                  'normal_degrees': mean(lambda x: x['attributes']['normal_mean_degrees']), 'uv': mean(lambda x: x['attributes']['uv_mean'])}))" \
+    "$(basename "$1")" "$2" "$3" "$4" "${jsons[@]}" >> "$work/results.jsonl"
+}
 triangles_of() { "$tools/tomerr" "$1" "$1" --json --samples-per-face 0.01 | /usr/bin/python3 -c "import json,sys; print(json.load(sys.stdin)['original_triangles'])"; }
 
 for src in "${assets[@]}"; do
@@ -120,7 +145,9 @@ for src in "${assets[@]}"; do
     "$tools/tomextract" "$tom" --below-floor --scene-budget "$floor_count" --refit -o "$out/tom-at-floor-refit.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
     measure "$src" tom refit-floor-sa 0 "$out/tom-at-floor-refit.glb"
   fi
-  # levels: gltfpack's, and TOM's at the same drawn count
+  # levels: gltfpack's, and TOM's at the same drawn count (an animated skinned asset posed too)
+  moves=false
+  if [[ "$src" == *.glb ]] && poses "$src" "$src" "$out/posed-source"; then moves=true; fi
   for ratio in 0.5 0.25 0.1; do
     for mode in default sv sa; do
       flag=(); [ "$mode" = default ] || flag=("-$mode")
@@ -134,6 +161,11 @@ for src in "${assets[@]}"; do
       # the same level written on its own, its vertices re-fitted (as -sv moves gltfpack's)
       "$tools/tomextract" "$tom" --below-floor --scene-budget "$count" --refit -o "${t%.glb}-refit.glb" --texture-dir "$(dirname "$src")" >/dev/null 2>&1
       measure "$src" tom "refit-$mode" "$ratio" "${t%.glb}-refit.glb"
+      if $moves; then
+        measure_posed "$src" gltfpack "$mode" "$ratio" "$g"
+        measure_posed "$src" tom "at-$mode" "$ratio" "$t"
+        measure_posed "$src" tom "refit-$mode" "$ratio" "${t%.glb}-refit.glb"
+      fi
     done
   done
   echo "$name: measured" >&2
@@ -155,25 +187,36 @@ L = ['## Real assets against gltfpack', '',
      'deviation. Floors: `tomextract --fraction 0 --below-floor` and `gltfpack -si 0 -sa`; TOM\'s usable floor (where its',
      'stored mean error leaves 1% of the diagonal, the level its selections stop at): `tomextract --fraction 0`. "--refit": the',
      'same level written on its own with its vertices re-fitted (`tomextract --refit`, as `-sv` moves gltfpack\'s): what a',
-     'discrete level exported from TOM is; the runtime\'s levels, prefixes of one vertex array, are the columns before.', '',
+     'discrete level exported from TOM is; the runtime\'s levels, prefixes of one vertex array, are the columns before.',
+     'A skinned asset with an animation is also measured as it moves ("posed"): the source and each level posed by the',
+     'source\'s first animation at eight times over it (`scripts/pose.py`), the mean over the poses of the mean error and',
+     'deviations, the largest Hausdorff distance; its medians take the posed figures (in the bind pose a simplifier blind to',
+     'skinning can look exact: gltfpack merges vertices that bend apart once the joints turn).', '',
      '| asset | triangles | mode, ratio | count | mean TOM / gltfpack | Hausdorff TOM / gltfpack | normals TOM / gltfpack | uv TOM / gltfpack | --refit: mean, Hausdorff, normals, uv |',
      '|---|---:|---|---:|---:|---:|---:|---:|---:|']
 ratios = {}
+def row(asset, label, count_note, t, g, f):
+    return '| %s | %d | %s | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s | %s |' % (
+        asset, g['source_triangles'], label, t['triangles'], count_note, g['triangles'], fmt(t['mean']), fmt(g['mean']),
+        fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3),
+        '%s, %s, %s, %s' % (fmt(f['mean']), fmt(f['hausdorff']), fmt(f['normal_degrees'], 3), fmt(f['uv'], 3)) if f else '-')
 for asset in dict.fromkeys(r['asset'] for r in rows):
     for ratio in (0.5, 0.25, 0.1):
         for mode in ('default', 'sv', 'sa'):
             g, t, f = find(asset, 'gltfpack', mode, ratio), find(asset, 'tom', 'at-' + mode, ratio), find(asset, 'tom', 'refit-' + mode, ratio)
             if not g or not t: continue
             reached = t['triangles'] <= 1.02 * g['triangles']  # else TOM stopped above gltfpack's count: not compared
+            # an animated skinned asset is compared as it moves (measure_posed), its bind pose shown too
+            pg, pt, pf = find(asset, 'gltfpack', 'posed-' + mode, ratio), find(asset, 'tom', 'posed-at-' + mode, ratio), find(asset, 'tom', 'posed-refit-' + mode, ratio)
+            compared = (pt, pg, pf) if pg and pt else (t, g, f)
             if reached:
                 for key in ('mean', 'hausdorff', 'normal_degrees', 'uv'):
-                    for which, x in (('', t), ('refit', f)):
-                        if x and g[key] is not None and x[key] is not None:
-                            ratios.setdefault((mode, ratio, key, which), []).append(x[key] / g[key] if g[key] > 0 else 1.0)
-            L.append('| %s | %d | %s %d%% | %d%s / %d | %s / %s | %s / %s | %s / %s | %s / %s | %s |' % (
-                asset, g['source_triangles'], mode, ratio * 100, t['triangles'], '' if reached else ' (floor)', g['triangles'], fmt(t['mean']), fmt(g['mean']),
-                fmt(t['hausdorff']), fmt(g['hausdorff']), fmt(t['normal_degrees'], 3), fmt(g['normal_degrees'], 3), fmt(t['uv'], 3), fmt(g['uv'], 3),
-                '%s, %s, %s, %s' % (fmt(f['mean']), fmt(f['hausdorff']), fmt(f['normal_degrees'], 3), fmt(f['uv'], 3)) if f else '-'))
+                    for which, x in (('', compared[0]), ('refit', compared[2])):
+                        if x and compared[1][key] is not None and x[key] is not None:
+                            ratios.setdefault((mode, ratio, key, which), []).append(x[key] / compared[1][key] if compared[1][key] > 0 else 1.0)
+            label = '%s %d%%' % (mode, ratio * 100)
+            L.append(row(asset, label + (', bind pose' if pg and pt else ''), '' if reached else ' (floor)', t, g, f))
+            if pg and pt: L.append(row(asset, label + ', posed', '' if reached else ' (floor)', pt, pg, pf))
 L += ['', 'Floors: the coarsest level each tool reaches, TOM\'s usable floor, and TOM\'s level at gltfpack -sa\'s floor count.', '',
       '| asset | triangles | TOM floor | mean | TOM usable floor | mean | gltfpack -sa floor | mean | TOM there | mean | Hausdorff TOM / gltfpack | --refit: mean, Hausdorff |',
       '|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|']

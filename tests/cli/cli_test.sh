@@ -254,6 +254,32 @@ shared, proportional = error('$work/spider-budget.glb'), error('$work/spider-fra
 assert shared['simplified_triangles'] <= 1010, shared['simplified_triangles']
 assert shared['forward']['mean_abs'] < 0.5 * proportional['forward']['mean_abs'], (shared['forward'], proportional['forward'])
 "
+# the benchmark's posing (scripts/pose.py, scripts/real-assets.sh): the skinned character's
+# animation moves it from its bind pose (the first key's pose); its full-detail level is posed
+# exactly as its source at every pose, a coarser one departs from it further as it moves, and a
+# model that does not move is refused with status 3
+check "a skinned level posed by its source's animation: exact at full detail, apart at 50%" /usr/bin/python3 -c "
+import json, subprocess
+src, tom = '$conv/FBX/animation_with_skeleton-fbx.glb', '$work/conv/FBX/animation_with_skeleton-fbx.tom'
+def run(*args): return subprocess.run(args, capture_output=True, text=True, check=True).stdout
+run('$tools/tomextract', tom, '--fraction', '1', '-o', '$work/skin100.glb')
+run('$tools/tomextract', tom, '--fraction', '0.5', '-o', '$work/skin50.glb')
+for prefix, level in (('source', src), ('full', '$work/skin100.glb'), ('half', '$work/skin50.glb')):
+    run('/usr/bin/python3', '$src/scripts/pose.py', src, level, '$work/posed-' + prefix, '--poses', '4')
+def error(a, b): return json.loads(run('$tools/tomerr', a, b, '--json'))
+rest = error(src, '$work/posed-source-0.obj')  # the animation's first key is this model's bind pose
+assert rest['hausdorff'] < 1e-3 and rest['attributes']['normal_mean_degrees'] < 1e-3 and rest['attributes']['uv_mean'] < 1e-5, (rest['hausdorff'], rest['attributes'])
+moved = error('$work/posed-source-0.obj', '$work/posed-source-3.obj')
+assert moved['hausdorff'] > 2, moved['hausdorff']  # % of the diagonal: the last pose is not the first
+halves = []
+for k in range(4):
+    full, half = error('$work/posed-source-%d.obj' % k, '$work/posed-full-%d.obj' % k), error('$work/posed-source-%d.obj' % k, '$work/posed-half-%d.obj' % k)
+    assert full['hausdorff'] < 1e-9 and full['attributes']['normal_mean_degrees'] < 1e-3, (k, full['hausdorff'], full['attributes'])
+    assert half['simplified_triangles'] == 1056 and half['mean'] > 1e-3, (k, half['simplified_triangles'], half['mean'])
+    halves.append(half['mean'])
+assert max(halves) > 1.5 * halves[0], halves  # the first pose is the bind pose; moving, the level departs further
+"
+check "a model without an animation is not posed (status 3)" expect_exit 3 /usr/bin/python3 "$src/scripts/pose.py" "$conv/Collada/duck-dae.glb" "$conv/Collada/duck-dae.glb" "$work/duck-posed"
 check "tomextract --lods 100 embeds the stored image" expect_exit 0 "$tools/tomextract" "$work/kept/BoxTextured.tom" --lods 100 -o "$work/kept/box.glb"
 check "the image bytes are the source's" /usr/bin/python3 -c "
 import json, struct
