@@ -8,7 +8,9 @@ spread evenly over SOURCE's first animation, first and last key included. The jo
 are SOURCE's, animated by SOURCE's channels (linear and step samplers; rotations normalised
 lerp), and MESH's nodes and joints are matched to them by name, so that a simplified copy (by
 tombuild and tomextract, or by gltfpack, either of which may renumber nodes) is posed exactly as
-its source is: what the two differ in is only the mesh. A skinned primitive's vertices are
+its source is: what the two differ in is only the mesh. (A joint without a namesake is an
+error; a static mesh's node without one, which a tool merging static meshes may make, keeps its
+own world matrix in MESH, with a warning.) A skinned primitive's vertices are
 sum_k w_k J_k p with J_k = world(joint_k) * inverse_bind_k (WEIGHTS_n normalised to sum 1), its
 normals the same with the matrices' inverse transposes; other meshes take their node's world
 matrix. Texture coordinates are copied. Exit status 3 when SOURCE has no animation or MESH no
@@ -144,6 +146,7 @@ def posed_triangles(source, mesh, world):
         if name not in by_name:
             fail('%s: node %d (%r) has no namesake in %s' % (mesh.path, i, name, source.path))
         return by_name[name]
+    mesh_world = world_matrices(mesh, {})
     positions, normals, texcoords, triangles = [], [], [], []
     for i, node in enumerate(mesh.nodes):
         if 'mesh' not in node:
@@ -152,8 +155,11 @@ def posed_triangles(source, mesh, world):
         if skin:
             inverse_bind = mesh.accessor(skin['inverseBindMatrices']).reshape(-1, 4, 4).transpose(0, 2, 1)
             joints = np.array([world(source_node(j)) @ inverse_bind[k] for k, j in enumerate(skin['joints'])])
+        elif node.get('name') in by_name:
+            node_matrix = world(by_name[node['name']])
         else:
-            node_matrix = world(source_node(i))
+            print('pose.py: %s: node %d (%r) has no namesake in %s: posed as it stands' % (mesh.path, i, node.get('name'), source.path), file=sys.stderr)
+            node_matrix = mesh_world(i)
         for p in mesh.json['meshes'][node['mesh']]['primitives']:
             if p.get('mode', 4) != 4:
                 continue
