@@ -136,9 +136,26 @@ def world_matrices(gltf, animated):
     return world
 
 
-def posed_triangles(source, mesh, world):
-    """MESH's triangles posed by SOURCE's node matrices `world`: positions, normals (or None),
-    texture coordinates (or None) per corner list, and the triangles."""
+class Piece:
+    """One triangle primitive of MESH as posing needs it, read once: its positions, normals (or
+    None) and texture coordinates (or None), and `move(world)`, its vertices' matrices (one
+    matrix, or one per vertex) at the pose of SOURCE's node matrices `world`."""
+
+    def __init__(self, positions, normals, texcoords, move):
+        self.positions, self.normals, self.texcoords, self.move = positions, normals, texcoords, move
+
+
+def skinning(joints, inverse_bind, influences):
+    """The move of a skinned piece: sum_k w_k world(joint_k) inverse_bind_k per vertex, from its
+    (joint, normalised weight) columns `influences`."""
+    def move(world):
+        joint = np.array([world(j) @ b for j, b in zip(joints, inverse_bind)])
+        return sum(w[:, None, None] * joint[j] for j, w in influences)
+    return move
+
+
+def read_pieces(source, mesh):
+    """MESH's triangle primitives (Piece), and their triangles numbered across them."""
     by_name = {n.get('name'): i for i, n in enumerate(source.nodes)}
 
     def source_node(i):
@@ -147,51 +164,53 @@ def posed_triangles(source, mesh, world):
             fail('%s: node %d (%r) has no namesake in %s' % (mesh.path, i, name, source.path))
         return by_name[name]
     mesh_world = world_matrices(mesh, {})
-    positions, normals, texcoords, triangles = [], [], [], []
+    pieces, triangles, base = [], [], 0
     for i, node in enumerate(mesh.nodes):
         if 'mesh' not in node:
             continue
         skin = mesh.json['skins'][node['skin']] if 'skin' in node else None
         if skin:
+            joints = [source_node(j) for j in skin['joints']]
             inverse_bind = mesh.accessor(skin['inverseBindMatrices']).reshape(-1, 4, 4).transpose(0, 2, 1)
-            joints = np.array([world(source_node(j)) @ inverse_bind[k] for k, j in enumerate(skin['joints'])])
         elif node.get('name') in by_name:
-            node_matrix = world(by_name[node['name']])
+            move = lambda world, n=by_name[node['name']]: world(n)
         else:
             print('pose.py: %s: node %d (%r) has no namesake in %s: posed as it stands' % (mesh.path, i, node.get('name'), source.path), file=sys.stderr)
-            node_matrix = mesh_world(i)
+            move = lambda world, m=mesh_world(i): m
         for p in mesh.json['meshes'][node['mesh']]['primitives']:
             if p.get('mode', 4) != 4:
                 continue
             attributes = p['attributes']
             P = mesh.accessor(attributes['POSITION'])
-            N = mesh.accessor(attributes['NORMAL']) if 'NORMAL' in attributes else None
             if skin:
-                M = np.zeros((len(P), 4, 4))
-                total = np.zeros((len(P), 1))
+                influences = []
                 for set_ in range(4):
                     if 'JOINTS_%d' % set_ not in attributes:
                         break
                     J = mesh.accessor(attributes['JOINTS_%d' % set_]).astype(int)
                     W = mesh.accessor(attributes['WEIGHTS_%d' % set_])
-                    for k in range(J.shape[1]):
-                        M += W[:, k, None, None] * joints[J[:, k]]
-                        total += W[:, k:k + 1]
-                M /= np.where(total > 0, total, 1.0)[:, :, None]
-            else:
-                M = np.broadcast_to(node_matrix, (len(P), 4, 4))
-            base = sum(len(x) for x in positions)
-            positions.append(np.einsum('nij,nj->ni', M[:, :3, :3], P) + M[:, :3, 3])
-            if N is not None:
-                n = np.einsum('nij,nj->ni', np.linalg.inv(M[:, :3, :3]).transpose(0, 2, 1), N)
-                normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30))
-            texcoords.append(mesh.accessor(attributes['TEXCOORD_0']) if 'TEXCOORD_0' in attributes else None)
+                    influences += [(J[:, k], W[:, k]) for k in range(J.shape[1])]
+                total = sum(w for _, w in influences)
+                total = np.where(total > 0, total, 1.0)
+                move = skinning(joints, inverse_bind, [(j, w / total) for j, w in influences])
+            pieces.append(Piece(P, mesh.accessor(attributes['NORMAL']) if 'NORMAL' in attributes else None,
+                                mesh.accessor(attributes['TEXCOORD_0']) if 'TEXCOORD_0' in attributes else None, move))
             index = mesh.accessor(p['indices'])[:, 0].astype(int) if 'indices' in p else np.arange(len(P))
             triangles.append(index.reshape(-1, 3) + base)
-    with_normals = len(normals) == len(positions)
-    with_uv = all(t is not None for t in texcoords)
-    return (np.concatenate(positions), np.concatenate(normals) if with_normals else None,
-            np.concatenate(texcoords) if with_uv and texcoords else None, np.concatenate(triangles))
+            base += len(P)
+    return pieces, np.concatenate(triangles)
+
+
+def posed(pieces, world):
+    """The pieces' positions and normals (or None) at SOURCE's node matrices `world`."""
+    positions, normals = [], []
+    for piece in pieces:
+        M = np.broadcast_to(piece.move(world), (len(piece.positions), 4, 4))
+        positions.append(np.einsum('nij,nj->ni', M[:, :3, :3], piece.positions) + M[:, :3, 3])
+        if piece.normals is not None:
+            n = np.einsum('nij,nj->ni', np.linalg.inv(M[:, :3, :3]).transpose(0, 2, 1), piece.normals)
+            normals.append(n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30))
+    return np.concatenate(positions), np.concatenate(normals) if len(normals) == len(pieces) else None
 
 
 def write_obj(path, positions, normals, texcoords, triangles):
@@ -220,9 +239,12 @@ def main():
     if not source.json.get('animations') or not any('skin' in n for n in mesh.nodes):
         sys.exit(3)
     animation = Animation(source)
+    pieces, triangles = read_pieces(source, mesh)
+    texcoords = np.concatenate([p.texcoords for p in pieces]) if all(p.texcoords is not None for p in pieces) else None
     for k in range(poses):
         time = animation.start + (animation.end - animation.start) * k / (poses - 1)
-        write_obj('%s-%d.obj' % (args[2], k), *posed_triangles(source, mesh, world_matrices(source, animation.at(time))))
+        positions, normals = posed(pieces, world_matrices(source, animation.at(time)))
+        write_obj('%s-%d.obj' % (args[2], k), positions, normals, texcoords, triangles)
 
 
 if __name__ == '__main__':

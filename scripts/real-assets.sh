@@ -89,22 +89,28 @@ if [ ${#assets[@]} -eq 0 ]; then
   done
 fi
 
-# one JSON line: a tool's level of an asset measured against the source
+# One JSON line from tomerr's measures of a tool's level (one, or one per pose): the mean of their
+# mean errors, normal and texture-coordinate deviations, their largest Hausdorff distance.
+record() {  # asset tool mode ratio json...
+  /usr/bin/python3 -c "
+import json, statistics, sys
+d = [json.loads(x) for x in sys.argv[5:]]
+def mean(f): return None if any(f(x) is None for x in d) else statistics.mean(f(x) for x in d)
+print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': sys.argv[3], 'ratio': float(sys.argv[4]), 'triangles': d[0]['simplified_triangles'],
+                  'source_triangles': d[0]['original_triangles'], 'mean': mean(lambda x: x['mean']), 'hausdorff': max(x['hausdorff'] for x in d),
+                  'normal_degrees': mean(lambda x: x['attributes']['normal_mean_degrees']), 'uv': mean(lambda x: x['attributes']['uv_mean'])}))" \
+    "$(basename "$1")" "$2" "$3" "$4" "${@:5}" >> "$work/results.jsonl"
+}
+# a tool's level of an asset measured against the source
 measure() {  # asset tool mode ratio file; fails (naming the file) when tomerr cannot read it
   local json
   json="$("$tools/tomerr" "$1" "$5" --json)" || { echo "real-assets: $5 not measured" >&2; return 1; }
-  /usr/bin/python3 -c "
-import json, sys
-d = json.loads(sys.argv[5]); a = d['attributes']
-print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': sys.argv[3], 'ratio': float(sys.argv[4]), 'triangles': d['simplified_triangles'],
-                  'source_triangles': d['original_triangles'], 'mean': d['mean'], 'hausdorff': d['hausdorff'],
-                  'normal_degrees': a['normal_mean_degrees'], 'uv': a['uv_mean']}))" "$(basename "$1")" "$2" "$3" "$4" "$json" >> "$work/results.jsonl"
+  record "$1" "$2" "$3" "$4" "$json"
 }
 # A skinned and animated asset is also measured as it moves: the source and a level posed by the
 # source's first animation at eight times (scripts/pose.py), each pair measured by tomerr, as one
-# JSON line with the mode "posed-MODE": the mean of the poses' mean errors, normal and
-# texture-coordinate deviations, the largest Hausdorff distance. In the bind pose alone a tool
-# blind to skinning can look exact (gltfpack merges vertices that bend apart once joints turn).
+# JSON line with the mode "posed-MODE". In the bind pose alone a tool blind to skinning can look
+# exact (gltfpack merges vertices that bend apart once joints turn).
 poses() {  # source glb level prefix: true when the asset moves (prefix-0.obj ... written)
   local status=0
   /usr/bin/python3 "$root/scripts/pose.py" "$1" "$2" "$3" || status=$?
@@ -116,14 +122,7 @@ measure_posed() {  # asset tool mode ratio level; the source's poses at $out/pos
   for k in 0 1 2 3 4 5 6 7; do
     jsons+=("$("$tools/tomerr" "$out/posed-source-$k.obj" "$out/posed-level-$k.obj" --json)") || { echo "real-assets: $5 posed not measured" >&2; return 1; }
   done
-  /usr/bin/python3 -c "
-import json, statistics, sys
-d = [json.loads(x) for x in sys.argv[5:]]
-def mean(f): return None if any(f(x) is None for x in d) else statistics.mean(f(x) for x in d)
-print(json.dumps({'asset': sys.argv[1], 'tool': sys.argv[2], 'mode': 'posed-' + sys.argv[3], 'ratio': float(sys.argv[4]), 'triangles': d[0]['simplified_triangles'],
-                  'source_triangles': d[0]['original_triangles'], 'mean': mean(lambda x: x['mean']), 'hausdorff': max(x['hausdorff'] for x in d),
-                  'normal_degrees': mean(lambda x: x['attributes']['normal_mean_degrees']), 'uv': mean(lambda x: x['attributes']['uv_mean'])}))" \
-    "$(basename "$1")" "$2" "$3" "$4" "${jsons[@]}" >> "$work/results.jsonl"
+  record "$1" "$2" "posed-$3" "$4" "${jsons[@]}"
 }
 triangles_of() { "$tools/tomerr" "$1" "$1" --json --samples-per-face 0.01 | /usr/bin/python3 -c "import json,sys; print(json.load(sys.stdin)['original_triangles'])"; }
 
