@@ -296,12 +296,11 @@ void put_born_counts(BitWriter& w, const std::vector<uint32_t>& counts) {
     for (uint32_t count : counts) w.gamma(count + 1);
 }
 
-/// A manifold split (since 1.2): two born triangles and two candidates near both p and v, the
-/// triangles' third corners those two. One bit says so, one which the first takes, and the
-/// triangles name no candidate.
-bool split_pair(const Split& s) {
-    return s.born.size() == 2 && s.common == 2 && s.born[0].index < 2 && s.born[1].index < 2 && s.born[0].index != s.born[1].index;
-}
+/// Since 1.2 a split with two born triangles and two candidates near both p and v codes the pair
+/// bit: whether it is a manifold split, the triangles' third corners those two (split_pair). Then
+/// one more bit says which the first takes, and the triangles name no candidate.
+bool has_pair_bit(const Split& s) { return s.born.size() == 2 && s.common == 2; }
+bool split_pair(const Split& s) { return has_pair_bit(s) && s.born[0].index < 2 && s.born[1].index < 2 && s.born[0].index != s.born[1].index; }
 
 void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
     BitWriter w;
@@ -311,7 +310,7 @@ void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S,
         for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
         put_born_counts(w, s.born_count);
         const bool pair = split_pair(s);
-        if (s.born.size() == 2 && s.common == 2) {
+        if (has_pair_bit(s)) {
             w.put(pair ? 1 : 0, 1);
             if (pair) w.put(s.born[0].index, 1);
         }
