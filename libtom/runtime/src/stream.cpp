@@ -95,7 +95,21 @@ struct SplitScratch {
     std::vector<uint32_t> near_p, common, v_only, rest;
     bool rest_listed = false;
     size_t born_from = 0;  // where the born third corners start in the ring being listed
+    // per vertex u, `split` when a live triangle of this split's p has the edge (p, u) in its
+    // order: stream_layout::predicted_orientation's answer for u, kept as the triangles are
+    // listed and born instead of searched for each born triangle
+    std::vector<uint32_t> after_p;
+    uint32_t split = 0;
     uint32_t candidate_count() const { return uint32_t(near_p.size() + v_only.size()); }
+    /// A new split's stamp for after_p (the array cleared when the stamps wrap around).
+    void next_split() {
+        if (++split == 0) std::fill(after_p.begin(), after_p.end(), 0), split = 1;
+    }
+    /// Notes the edge from p in triangle c, which holds p.
+    void note_after_p(const uint32_t* c, uint32_t p) {
+        const int k = c[0] == p ? 0 : c[1] == p ? 1 : 2;
+        after_p[c[(k + 1) % 3]] = split;
+    }
 };
 
 constexpr uint32_t none = UINT32_MAX;  // no vertex
@@ -661,6 +675,7 @@ void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& c
     }
     m.incident.resize(chunk.vertex_end);
     m.split.seen.cover(chunk.vertex_end);
+    if (m.split.after_p.size() < chunk.vertex_end) m.split.after_p.resize(chunk.vertex_end, 0);
     decode_base(m, in, base);
     decode_splits(m, in, chunk.vertex_begin, chunk.vertex_end, born);
     decode_vertices(m, in, chunk.vertex_begin, chunk.vertex_end);
@@ -738,8 +753,11 @@ void MeshUndo::restore(MeshState& m) const {
         if (uint32_t* c = corner(m, r->first)) *c = r->second;
 }
 
+/// Corner `g` of a live triangle (one an incident list holds): corner() without the check.
+inline uint32_t* live_corner(MeshState& m, uint32_t g) { return m.parts.size() == 1 ? &m.corners[0][g] : corner_in_parts(m, g); }
+
 /// The three corners of the live triangle holding corner `g`.
-const uint32_t* triangle_of(MeshState& m, uint32_t g) { return corner(m, g - g % 3); }
+const uint32_t* triangle_of(MeshState& m, uint32_t g) { return live_corner(m, g - g % 3); }
 
 /// Appends a triangle to part p and lists its corners at their vertices.
 void add_triangle(MeshState& m, size_t p, const uint32_t c[3]) {
@@ -786,7 +804,7 @@ void move_corners(MeshState& m, BitReader& r, uint32_t p, uint32_t v) {
         for (uint32_t j = 0; j < n; ++j) {
             const uint32_t g = around[i + j];
             if (moves >> j & 1u) {
-                uint32_t* c = corner(m, g);
+                uint32_t* c = live_corner(m, g);
                 m.rewritten.emplace_back(g, *c);
                 *c = v;
                 m.incident.push(v, g);
@@ -810,8 +828,10 @@ void list_neighbourhood(MeshState& m, uint32_t p, uint32_t v, std::vector<uint32
     std::vector<uint32_t>& by = s.seen.by;
     s.mark_p = s.seen.reserve(2), s.mark_v = s.mark_p + 1;
     s.near_p.clear(), s.common.clear(), s.v_only.clear(), s.rest_listed = false;
+    s.next_split();
     for (const uint32_t* g = m.incident.begin(p); g != m.incident.end(p); ++g) {
         const uint32_t* c = triangle_of(m, *g);
+        s.after_p[c[(*g + 1) % 3]] = s.split;  // c[*g % 3] is p
         for (int k = 0; k < 3; ++k)
             if (c[k] != p && c[k] != v && by[c[k]] != s.mark_p) by[c[k]] = s.mark_p, s.near_p.push_back(c[k]);
     }
@@ -920,8 +940,7 @@ void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint
         in.fail("vertex " + std::to_string(v) + " born triangle names candidate " + std::to_string(index) + " of " + std::to_string(candidates), 36);
     }
     if (minor >= 2) {  // the turn, after two bits of 3 when the orientation is not the predicted one
-        const uint32_t predicted = predicted_orientation(
-            m.incident.begin(p), m.incident.end(p), [&](uint32_t g) { return triangle_of(m, g); }, p, x);
+        const uint32_t predicted = s.after_p[x] == s.split;  // predicted_orientation(p's corners, p, x)
         uint32_t turn = r.bits(turn_bits);
         order = 3 * predicted;
         if (turn == other_orientation) turn = r.bits(turn_bits), order = 3 * (1 - predicted);
@@ -932,6 +951,7 @@ void StreamDecoder::Impl::bear(MeshState& m, ChunkReader& in, BitReader& r, uint
     const uint32_t role[3] = {v, p, x};
     const uint32_t c[3] = {role[born_orders[order][0]], role[born_orders[order][1]], role[born_orders[order][2]]};
     add_triangle(m, q, c);
+    s.note_after_p(c, p);
     std::vector<uint32_t>& ring = m.ring_items;
     if (s.seen.by[x] != s.mark_v && std::find(ring.begin() + s.born_from, ring.end(), x) == ring.end()) ring.push_back(x);
 }
