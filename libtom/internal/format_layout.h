@@ -130,19 +130,31 @@ struct PendingSection {
     std::vector<uint8_t> bytes;
 };
 
+/// A section's data where it already lies, for assemble_file: with its checksum when the caller
+/// knows it (a section kept whole from a stream's directory), so that it is not computed again.
+struct SectionView {
+    uint32_t type, mesh;
+    const uint8_t* data;
+    size_t bytes;
+    bool has_checksum = false;
+    uint32_t checksum = 0;
+};
+
 /// The file image of `sections`, in their order: header, section table, then each section's data
 /// at a multiple of 16 with its checksum. Shared by the writer and the stream decoder, which
-/// validate what it returns.
-inline std::vector<uint8_t> assemble_file(const std::vector<PendingSection>& sections, uint32_t mesh_count) {
+/// validate what it returns. Each byte is written once (no fill before the copies).
+inline std::vector<uint8_t> assemble_file(const std::vector<SectionView>& sections, uint32_t mesh_count) {
     const uint64_t table_offset = header_bytes;
     uint64_t offset = table_offset + uint64_t(sections.size()) * section_entry_bytes;
     std::vector<uint64_t> offsets;
-    for (const PendingSection& s : sections) {
+    for (const SectionView& s : sections) {
         offset = (offset + section_alignment - 1) / section_alignment * section_alignment;
         offsets.push_back(offset);
-        offset += s.bytes.size();
+        offset += s.bytes;
     }
-    std::vector<uint8_t> file(offset, 0);
+    std::vector<uint8_t> file;
+    file.reserve(offset);
+    file.resize(table_offset + sections.size() * section_entry_bytes, 0);
     std::memcpy(file.data(), magic, 8);
     store_u32(&file[h_version_major], format_version_major);
     store_u32(&file[h_version_minor], format_version_minor);
@@ -151,17 +163,26 @@ inline std::vector<uint8_t> assemble_file(const std::vector<PendingSection>& sec
     store_u32(&file[h_section_count], uint32_t(sections.size()));
     store_u64(&file[h_table_offset], table_offset);
     for (size_t i = 0; i < sections.size(); ++i) {
+        const SectionView& s = sections[i];
         uint8_t* e = &file[table_offset + i * section_entry_bytes];
-        store_u32(e + s_type, sections[i].type);
-        store_u32(e + s_mesh, sections[i].mesh);
+        store_u32(e + s_type, s.type);
+        store_u32(e + s_mesh, s.mesh);
         store_u64(e + s_offset, offsets[i]);
-        store_u64(e + s_bytes, sections[i].bytes.size());
-        store_u32(e + s_checksum, crc32(sections[i].bytes.data(), sections[i].bytes.size()));
-        if (!sections[i].bytes.empty()) std::memcpy(&file[offsets[i]], sections[i].bytes.data(), sections[i].bytes.size());
+        store_u64(e + s_bytes, s.bytes);
+        store_u32(e + s_checksum, s.has_checksum ? s.checksum : crc32(s.data, s.bytes));
     }
     store_u32(&file[h_table_checksum], crc32(&file[table_offset], sections.size() * section_entry_bytes));
     store_u32(&file[h_header_checksum], crc32(file.data(), h_header_checksum));
+    for (size_t i = 0; i < sections.size(); ++i) {
+        file.resize(offsets[i], 0);  // the padding before the section
+        file.insert(file.end(), sections[i].data, sections[i].data + sections[i].bytes);
+    }
     return file;
+}
+inline std::vector<uint8_t> assemble_file(const std::vector<PendingSection>& sections, uint32_t mesh_count) {
+    std::vector<SectionView> views;
+    for (const PendingSection& s : sections) views.push_back({s.type, s.mesh, s.bytes.data(), s.bytes.size()});
+    return assemble_file(views, mesh_count);
 }
 
 } // namespace tom::layout

@@ -223,6 +223,20 @@ TEST_CASE("round trip: every stream, count, bound and metadata entry survives", 
     std::filesystem::remove(path);
 }
 
+TEST_CASE("an adopted image is validated and used where it lies, a bad one refused", "[format]") {
+    std::vector<uint8_t> bytes = tom::serialize({small_mesh()});
+    const std::vector<uint8_t> copy = bytes;
+    const uint8_t *first = bytes.data(), *last = bytes.data() + bytes.size();
+    const tom::File file = tom::File::adopt(std::move(bytes), "adopted.tom");
+    const auto* positions = reinterpret_cast<const uint8_t*>(file.mesh(0).positions);
+    CHECK(positions >= first);  // a view into the moved bytes: no copy was made
+    CHECK(positions < last);
+    CHECK(std::memcmp(file.mesh(0).positions, tom::File::from_bytes(copy.data(), copy.size()).mesh(0).positions, 12 * file.mesh(0).vertex_count) == 0);
+    std::vector<uint8_t> bad = copy;
+    bad[0] ^= 1;
+    CHECK_THROWS_WITH(tom::File::adopt(std::move(bad), "bad.tom"), Catch::Contains("bad.tom") && Catch::Contains("magic"));
+}
+
 TEST_CASE("with positions, normals and 32-bit indices a mesh takes at most 109% of face-vertex", "[format][memory]") {
     for (const test::NamedMesh& nm : test::real_meshes()) {
         // the paper's case: about two triangles per vertex (the overhead is 4 bytes per vertex,

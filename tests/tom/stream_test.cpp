@@ -152,6 +152,8 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
         REQUIRE(decoder.decoded_chunks() == k + 1);
         CHECK(decoder.vertex_count(chunks[k].mesh) == chunks[k].vertex_end);
         const tom::File prefix = decoder.file();
+        const std::vector<uint8_t> prefix_image = decoder.tom_bytes();  // its checksums hold (the kept sections' computed on arrival)
+        CHECK_NOTHROW(tom::File::from_bytes(prefix_image.data(), prefix_image.size(), what));
         CHECK(prefix.mesh(chunks[k].mesh).triangle_count == chunks[k].triangles);
         CHECK(prefix.scene().materials.size() == original.scene().materials.size());
         CHECK(prefix.scene().instances.size() == original.scene().instances.size());

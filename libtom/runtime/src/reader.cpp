@@ -426,6 +426,17 @@ File File::from_bytes(const void* bytes, size_t size, const std::string& name, c
     return File(std::move(impl));
 }
 
+File File::adopt(std::vector<uint8_t>&& bytes, const std::string& name, const OpenOptions& options) {
+    auto impl = std::make_unique<Impl>();
+    impl->path = name;
+    impl->owned = std::move(bytes);
+    impl->size = impl->owned.size();
+    if (impl->owned.empty()) impl->owned.reserve(1);  // a non-null data pointer (no copy of the bytes)
+    impl->data = impl->owned.data();
+    impl->validate(options);
+    return File(std::move(impl));
+}
+
 File File::borrow(const void* bytes, size_t size, const std::string& name, const OpenOptions& options) {
     auto impl = std::make_unique<Impl>();
     impl->path = name;

@@ -245,6 +245,7 @@ struct StreamDecoder::Impl {
     uint32_t meshes_declared = 0, chunks_declared = 0, minor = 0;
     uint64_t directory_bytes = 0;
     std::vector<layout::PendingSection> file_sections;  // MATL, INST, PROV, IMAG, GLTF as stored
+    std::vector<uint32_t> file_checksums;               // theirs, computed once
     std::vector<MeshState> meshes;
     std::vector<StreamChunk> chunks;
     std::vector<uint32_t> chunk_checksums;
@@ -282,7 +283,7 @@ struct StreamDecoder::Impl {
     void decode_attributes(MeshState& m, ChunkReader& in, const Residuals* r, uint32_t a, uint32_t b);
     void rotate_back(ChunkReader& in, uint32_t* corners, uint32_t triangles);
     std::vector<uint8_t> assemble() const;
-    std::vector<layout::PendingSection> mesh_sections(const MeshState& m, uint32_t index) const;
+    void mesh_sections(const MeshState& m, uint32_t index, std::vector<std::vector<uint8_t>>& storage, std::vector<layout::SectionView>& views) const;
 };
 
 StreamDecoder::StreamDecoder(const StreamCodecs& codecs, std::string name, const OpenOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -334,10 +335,9 @@ std::vector<uint8_t> StreamDecoder::tom_bytes() const {
 }
 
 File StreamDecoder::file() const {
-    const std::vector<uint8_t> bytes = tom_bytes();
     OpenOptions no_checksums;
     no_checksums.verify_checksums = false;  // just computed
-    return File::from_bytes(bytes.data(), bytes.size(), impl_->path, no_checksums);
+    return File::adopt(tom_bytes(), impl_->path, no_checksums);
 }
 
 // Appends the bytes, then consumes whatever is complete: the header and directory once, then
@@ -459,6 +459,7 @@ void StreamDecoder::Impl::read_kept_section(uint32_t type, uint32_t mesh, const 
     using namespace layout;
     if (mesh == file_level) {
         file_sections.push_back({type, mesh, std::vector<uint8_t>(data, data + bytes)});
+        file_checksums.push_back(crc32(data, bytes));
         return;
     }
     if (mesh >= meshes.size()) fail(offset, "kept section", 32, "names mesh " + std::to_string(mesh) + " of " + std::to_string(meshes.size()));
@@ -1028,11 +1029,17 @@ void StreamDecoder::Impl::rotate_back(ChunkReader& in, uint32_t* corners, uint32
 }
 
 // The .tom of what is decoded: the file-level sections as stored, then every mesh.
+// (The file-level sections, images among them, are viewed where they lie, with the checksums
+// computed when they arrived: a viewer assembles an image after every chunk.)
 std::vector<uint8_t> StreamDecoder::Impl::assemble() const {
-    std::vector<layout::PendingSection> sections = file_sections;
-    for (uint32_t i = 0; i < meshes.size(); ++i)
-        for (layout::PendingSection& s : mesh_sections(meshes[i], i)) sections.push_back(std::move(s));
-    return layout::assemble_file(sections, uint32_t(meshes.size()));
+    std::vector<layout::SectionView> views;
+    for (size_t i = 0; i < file_sections.size(); ++i) {
+        const layout::PendingSection& s = file_sections[i];
+        views.push_back({s.type, s.mesh, s.bytes.data(), s.bytes.size(), true, file_checksums[i]});
+    }
+    std::vector<std::vector<uint8_t>> storage;  // (moving a vector keeps its bytes where they are)
+    for (uint32_t i = 0; i < meshes.size(); ++i) mesh_sections(meshes[i], i, storage, views);
+    return layout::assemble_file(views, uint32_t(meshes.size()));
 }
 
 namespace {
@@ -1056,63 +1063,98 @@ std::vector<uint8_t> clamped_metadata(std::vector<uint8_t> meta, uint32_t resolu
 
 } // namespace
 
-std::vector<layout::PendingSection> StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index) const {
+namespace {
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+constexpr bool little_endian_host = true;
+#else
+constexpr bool little_endian_host = false;
+#endif
+
+/// `count` floats as stored, each `value(i)`, written once.
+template <class Value>
+std::vector<uint8_t> float_section(size_t count, Value&& value) {
+    std::vector<uint8_t> out(count * 4);
+    for (size_t i = 0; i < count; ++i) layout::store_f32(&out[4 * i], value(i));
+    return out;
+}
+
+}  // namespace
+
+// The mesh's sections at its decoded resolution, appended to `views`: the streams dequantized
+// into `storage`, the substitutes and a one-part mesh's corners viewed where the state holds them
+// when they are stored as they lie (32-bit indices on a little-endian host).
+void StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index, std::vector<std::vector<uint8_t>>& storage,
+                                        std::vector<layout::SectionView>& views) const {
     using namespace layout;
     const uint32_t n = m.resolution;
     const StreamQuantization& q = m.quantization;
-    std::vector<PendingSection> out;
+    auto keep = [&](uint32_t type, std::vector<uint8_t>&& bytes) {
+        storage.push_back(std::move(bytes));
+        views.push_back({type, index, storage.back().data(), storage.back().size()});
+    };
+    auto indices = [&](uint32_t type, const std::vector<uint32_t>& values) {
+        if (little_endian_host && m.index_size == 4)
+            views.push_back({type, index, reinterpret_cast<const uint8_t*>(values.data()), 4 * values.size()});
+        else
+            keep(type, index_bytes(values, m.index_size));
+    };
     // positions and bounds
-    std::vector<float> positions(size_t(n) * 3);
     float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    for (size_t i = 0; i < positions.size(); ++i) {
+    std::vector<uint8_t> positions = float_section(size_t(n) * 3, [&](size_t i) {
         const size_t k = i % 3;
-        positions[i] = dequantize(m.positions[i], q.position_min[k], q.position_step);
-        lo[k] = i < 3 ? positions[i] : std::min(lo[k], positions[i]);
-        hi[k] = i < 3 ? positions[i] : std::max(hi[k], positions[i]);
-    }
-    std::vector<uint32_t> tris;  // the parts' live triangles, one after another
-    for (const std::vector<uint32_t>& c : m.corners) tris.insert(tris.end(), c.begin(), c.end());
-    const uint32_t live = uint32_t(tris.size() / 3);
+        const float x = dequantize(m.positions[i], q.position_min[k], q.position_step);
+        lo[k] = i < 3 ? x : std::min(lo[k], x);
+        hi[k] = i < 3 ? x : std::max(hi[k], x);
+        return x;
+    });
+    uint32_t live = 0;
+    for (const std::vector<uint32_t>& c : m.corners) live += uint32_t(c.size() / 3);
     std::vector<uint8_t> head = m.header;
     store_u32(&head[m_vertex_count], n);
     store_u32(&head[m_triangle_count], live);
     store_u32(&head[m_min_vertex_count], n ? m.min_vertex_count : 0);
     for (int k = 0; k < 3; ++k) store_f32(&head[m_bounds_min + 4 * k], lo[k]), store_f32(&head[m_bounds_max + 4 * k], hi[k]);
-    out.push_back({sec_mesh, index, std::move(head)});
-    out.push_back({sec_positions, index, float_bytes(positions)});
+    keep(sec_mesh, std::move(head));
+    keep(sec_positions, std::move(positions));
     // the other streams, in the order of layout::attribute_streams
     if (m.attributes & attr_normals) {
-        std::vector<float> normals(size_t(n) * 3);
-        for (uint32_t v = 0; v < n; ++v) octahedral_decode(m.normals[2 * v], m.normals[2 * v + 1], q.normal_bits, &normals[3 * v]);
-        out.push_back({sec_normals, index, float_bytes(normals)});
+        float normal[3] = {0, 0, 0};
+        keep(sec_normals, float_section(size_t(n) * 3, [&](size_t i) {
+                 if (i % 3 == 0) octahedral_decode(m.normals[2 * (i / 3)], m.normals[2 * (i / 3) + 1], q.normal_bits, normal);
+                 return normal[i % 3];
+             }));
     }
     auto texcoords = [&](int t) {
-        std::vector<float> uv(size_t(n) * 2);
-        for (size_t i = 0; i < uv.size(); ++i) uv[i] = dequantize(m.texcoords[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2]);
-        return float_bytes(uv);
+        return float_section(size_t(n) * 2, [&](size_t i) { return dequantize(m.texcoords[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2]); });
     };
-    if (m.attributes & attr_texcoords) out.push_back({sec_texcoords, index, texcoords(0)});
-    if (m.attributes & attr_colors) {
-        std::vector<float> colors(size_t(n) * 4);
-        for (size_t i = 0; i < colors.size(); ++i) colors[i] = float(m.colors[i]) / 255.0f;
-        out.push_back({sec_colors, index, float_bytes(colors)});
-    }
-    if (m.attributes & attr_texcoords1) out.push_back({sec_texcoords1, index, texcoords(1)});
+    if (m.attributes & attr_texcoords) keep(sec_texcoords, texcoords(0));
+    if (m.attributes & attr_colors) keep(sec_colors, float_section(size_t(n) * 4, [&](size_t i) { return float(m.colors[i]) / 255.0f; }));
+    if (m.attributes & attr_texcoords1) keep(sec_texcoords1, texcoords(1));
     if (m.attributes & attr_tangents) {
-        std::vector<float> tangents(size_t(n) * 4);
-        for (uint32_t v = 0; v < n; ++v) {
-            octahedral_decode(m.tangents[3 * v], m.tangents[3 * v + 1], q.normal_bits, &tangents[4 * v]);
-            tangents[4 * v + 3] = m.tangents[3 * v + 2] < 0 ? -1.0f : 1.0f;
-        }
-        out.push_back({sec_tangents, index, float_bytes(tangents)});
+        float tangent[4] = {0, 0, 0, 0};
+        keep(sec_tangents, float_section(size_t(n) * 4, [&](size_t i) {
+                 const size_t v = i / 4;
+                 if (i % 4 == 0) {
+                     octahedral_decode(m.tangents[3 * v], m.tangents[3 * v + 1], q.normal_bits, tangent);
+                     tangent[3] = m.tangents[3 * v + 2] < 0 ? -1.0f : 1.0f;
+                 }
+                 return tangent[i % 4];
+             }));
     }
-    out.push_back({sec_substitute, index, index_bytes(m.substitute, m.index_size)});
-    out.push_back({sec_triangles, index, index_bytes(tris, m.index_size)});
-    if (!m.metadata.empty()) out.push_back({sec_metadata, index, clamped_metadata(m.metadata, n)});
+    indices(sec_substitute, m.substitute);
+    if (m.corners.size() == 1) {
+        indices(sec_triangles, m.corners[0]);
+    } else {  // the parts' live triangles, one after another
+        std::vector<uint32_t> tris;
+        for (const std::vector<uint32_t>& c : m.corners) tris.insert(tris.end(), c.begin(), c.end());
+        keep(sec_triangles, index_bytes(tris, m.index_size));
+    }
+    if (!m.metadata.empty()) keep(sec_metadata, clamped_metadata(m.metadata, n));
     if (!m.pair_bits.empty() && n > 0) {
         std::vector<uint8_t> bits(m.pair_bits.begin(), m.pair_bits.begin() + (n + 7) / 8);
         for (uint32_t i = n - 1; i < (n + 7) / 8 * 8; ++i) bits[i / 8] &= uint8_t(~(1u << (i % 8)));  // no group past the last vertex
-        out.push_back({sec_pairs, index, std::move(bits)});
+        keep(sec_pairs, std::move(bits));
     }
     if (m.parts.size() > 1) {
         std::vector<uint8_t> parts(parts_header_bytes + part_record_bytes * m.parts.size(), 0);
@@ -1124,18 +1166,17 @@ std::vector<layout::PendingSection> StreamDecoder::Impl::mesh_sections(const Mes
             store_u32(r, first), store_u32(r + 4, count), store_u32(r + 8, uint32_t(m.parts[p].material)), store_u32(r + 12, m.parts[p].attributes);
             first += count;
         }
-        out.push_back({sec_parts, index, std::move(parts)});
+        keep(sec_parts, std::move(parts));
     }
     if (!m.carried.empty()) {
-        std::vector<VertexStreamView> views;
+        std::vector<VertexStreamView> carried;
         for (const Carried& c : m.carried) {
             VertexStreamView v = c.record;
             v.data = c.data.data();
-            views.push_back(v);
+            carried.push_back(v);
         }
-        out.push_back({sec_extra_streams, index, detail::encode_extra_streams(views, n)});
+        keep(sec_extra_streams, detail::encode_extra_streams(carried, n));
     }
-    return out;
 }
 
 } // namespace tom

@@ -43,6 +43,9 @@ public:
     /// Validates `bytes` and uses them in place, without a copy: the caller keeps them alive
     /// and unchanged while the File lives. \throw FormatError.
     static File borrow(const void* bytes, size_t size, const std::string& name = "<memory>", const OpenOptions& options = {});
+    /// Validates `bytes` and keeps them, moved in without a copy (an image built in memory, as
+    /// StreamDecoder::file() builds one). \throw FormatError.
+    static File adopt(std::vector<uint8_t>&& bytes, const std::string& name = "<memory>", const OpenOptions& options = {});
 
     File(File&&) noexcept;
     File& operator=(File&&) noexcept;
