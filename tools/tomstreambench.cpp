@@ -1,6 +1,8 @@
 // tomstreambench: the streamed layout against meshoptimizer's codecs on the same mesh, in one run.
 // For each .tom (ordinary or streamed): the stream's bytes and decode speed (tom::StreamDecoder
-// over every byte, then the .tom image of the whole), and as the reference the full-detail mesh
+// over every byte, then the .tom image of the whole; and progressively, fed to each chunk boundary
+// with an image after every chunk, as a viewer that redraws each chunk uses it), and as the
+// reference the full-detail mesh
 // quantized the same way, vertex-cache and fetch optimized and encoded with meshoptimizer's index
 // and vertex codecs (what gltfpack -cc stores for one level), decoded by meshoptimizer.
 // Medians of --repeats runs. --reference-out DIR writes both sides' bytes for the browser's
@@ -77,7 +79,8 @@ struct Figures {
     std::string file;
     uint64_t stream_bytes = 0, first_chunk_bytes = 0;
     uint32_t vertices = 0, triangles = 0;
-    double decode_s = 0, assemble_s = 0;
+    double decode_s = 0, assemble_s = 0, progressive_s = 0;
+    size_t snapshots = 0;  // images made by the progressive run
     size_t reference_bytes = 0;
     double reference_s = 0;
 };
@@ -104,6 +107,25 @@ void write_reference(const std::string& dir, const std::string& path, const std:
     if (!bin || !index) throw tom::IoError("cannot write the reference into " + dir);
 }
 
+/// The stream fed to one chunk boundary at a time, an image (StreamDecoder::file()) after each
+/// chunk: the seconds of the whole, and the number of images.
+std::pair<double, size_t> progressive(const std::vector<uint8_t>& bytes, const std::string& path) {
+    const auto t0 = Clock::now();
+    tom::StreamDecoder d(tom::meshopt_codecs(), path);
+    size_t images = 0;
+    for (uint64_t at = 0; at < bytes.size();) {
+        const uint64_t next = std::min<uint64_t>(std::max<uint64_t>(d.next_boundary(), at + 1), bytes.size());
+        const size_t before = d.decoded_chunks();
+        d.append(bytes.data() + at, next - at);
+        at = next;
+        if (d.decoded_chunks() > before) {
+            const tom::File snapshot = d.file();
+            ++images;
+        }
+    }
+    return {std::chrono::duration<double>(Clock::now() - t0).count(), images};
+}
+
 Figures measure(const std::string& path, int repeats, const std::string& reference_out) {
     Figures f;
     f.file = path;
@@ -121,6 +143,11 @@ Figures measure(const std::string& path, int repeats, const std::string& referen
         image = d.tom_bytes();
         assemble.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
         f.first_chunk_bytes = d.chunks().front().end_byte;
+    }
+    std::vector<double> progressive_runs;
+    for (int r = 0; r < repeats; ++r) {
+        const auto [seconds, images] = progressive(bytes, path);
+        progressive_runs.push_back(seconds), f.snapshots = images;
     }
     const tom::File file = tom::File::from_bytes(image.data(), image.size(), path);
     for (uint32_t i = 0; i < file.mesh_count(); ++i) f.vertices += file.mesh(i).vertex_count, f.triangles += file.mesh(i).triangle_count;
@@ -142,6 +169,7 @@ Figures measure(const std::string& path, int repeats, const std::string& referen
         ref.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
     }
     f.decode_s = tools::median(decode), f.assemble_s = tools::median(assemble), f.reference_s = tools::median(ref);
+    f.progressive_s = tools::median(progressive_runs);
     return f;
 }
 
@@ -160,26 +188,34 @@ int main(int argc, char** argv) {
     app.footer("Exit codes: 0 ok, 1 a file could not be read, 2 usage error.\nExample: tomstreambench out/bunny00.tom");
     if (const int code = tools::parse(app, argc, argv); code >= 0) return code;
     if (!json)
-        std::printf("%-28s %10s %10s %7s %10s %10s %10s %10s %10s %8s\n", "file", "triangles", "stream B", "first", "meshopt B", "decode ms", "+image ms",
-                    "MB/s", "Mtri/s", "x meshopt");
+        std::printf("%-28s %10s %10s %7s %10s %10s %10s %10s %10s %8s %14s\n", "file", "triangles", "stream B", "first", "meshopt B", "decode ms", "+image ms",
+                    "MB/s", "Mtri/s", "x meshopt", "progressive ms");
     for (const std::string& path : files) {
         try {
             const Figures f = measure(path, repeats, reference_out);
             const double total = f.decode_s + f.assemble_s;
             const double speed = f.triangles / total, ref_speed = f.triangles / f.reference_s;
             if (json) {
-                nlohmann::ordered_json j{{"file", f.file},           {"vertices", f.vertices},
-                                         {"triangles", f.triangles}, {"stream_bytes", f.stream_bytes},
-                                         {"first_chunk_bytes", f.first_chunk_bytes}, {"meshopt_bytes", f.reference_bytes},
-                                         {"decode_ms", f.decode_s * 1e3}, {"image_ms", f.assemble_s * 1e3},
-                                         {"decode_mb_per_s", f.stream_bytes / total / 1e6}, {"decode_tris_per_s", speed},
-                                         {"meshopt_decode_ms", f.reference_s * 1e3}, {"meshopt_tris_per_s", ref_speed},
-                                         {"speed_over_meshopt", speed / ref_speed}};
+                nlohmann::ordered_json j{{"file", f.file},
+                                         {"vertices", f.vertices},
+                                         {"triangles", f.triangles},
+                                         {"stream_bytes", f.stream_bytes},
+                                         {"first_chunk_bytes", f.first_chunk_bytes},
+                                         {"meshopt_bytes", f.reference_bytes},
+                                         {"decode_ms", f.decode_s * 1e3},
+                                         {"image_ms", f.assemble_s * 1e3},
+                                         {"decode_mb_per_s", f.stream_bytes / total / 1e6},
+                                         {"decode_tris_per_s", speed},
+                                         {"meshopt_decode_ms", f.reference_s * 1e3},
+                                         {"meshopt_tris_per_s", ref_speed},
+                                         {"speed_over_meshopt", speed / ref_speed},
+                                         {"progressive_ms", f.progressive_s * 1e3},
+                                         {"progressive_images", f.snapshots}};
                 std::printf("%s\n", j.dump().c_str());
             } else {
-                std::printf("%-28.28s %10u %10llu %6.1f%% %10zu %10.2f %10.2f %10.1f %10.2f %8.2f\n", f.file.c_str(), f.triangles,
+                std::printf("%-28.28s %10u %10llu %6.1f%% %10zu %10.2f %10.2f %10.1f %10.2f %8.2f %14.2f\n", f.file.c_str(), f.triangles,
                             static_cast<unsigned long long>(f.stream_bytes), 100.0 * double(f.first_chunk_bytes) / double(f.stream_bytes), f.reference_bytes,
-                            f.decode_s * 1e3, f.assemble_s * 1e3, f.stream_bytes / total / 1e6, speed / 1e6, speed / ref_speed);
+                            f.decode_s * 1e3, f.assemble_s * 1e3, f.stream_bytes / total / 1e6, speed / 1e6, speed / ref_speed, f.progressive_s * 1e3);
             }
         } catch (const std::exception& e) {
             std::fprintf(stderr, "error: %s\n", e.what());
