@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iterator>
 #include <type_traits>
 #include <vector>
@@ -181,6 +182,19 @@ inline void sum_lanes(uint8_t* first, size_t count, size_t stride, size_t width)
         for (size_t j = 0; j < width; ++j) first[i * stride + j] = uint8_t(first[i * stride + j] + first[(i - 1) * stride + j]);
 }
 inline void difference_lanes(uint8_t* first, size_t count, size_t stride, size_t width) {
+    if (width == stride) {  // every lane: one run over the bytes, last first, eight at a time
+        size_t k = count * stride;
+        for (; k >= stride + 8; k -= 8) {  // bytes [k - 8, k) less [k - 8 - stride, k - stride), both read before the store
+            uint64_t a, b;
+            std::memcpy(&a, first + k - 8, 8);
+            std::memcpy(&b, first + k - 8 - stride, 8);
+            constexpr uint64_t high = 0x8080808080808080ull;  // each byte's difference without a borrow into the next
+            const uint64_t d = ((a | high) - (b & ~high)) ^ ((a ^ ~b) & high);
+            std::memcpy(first + k - 8, &d, 8);
+        }
+        for (; k-- > stride;) first[k] = uint8_t(first[k] - first[k - stride]);
+        return;
+    }
     for (size_t i = count; i-- > 1;)
         for (size_t j = 0; j < width; ++j) first[i * stride + j] = uint8_t(first[i * stride + j] - first[(i - 1) * stride + j]);
 }

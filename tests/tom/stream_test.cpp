@@ -271,6 +271,15 @@ TEST_CASE("residuals in byte form come back exactly, small ones in small bytes",
     for (size_t i = 0; i < lanes.size(); i += 4) CHECK((lanes[i] == kept[i] && lanes[i + 1] == kept[i + 1]));
     difference_lanes(lanes.data() + 2, lanes.size() / 4, 4, 2);
     CHECK(lanes == kept);
+    // whole elements of every size, eight bytes at a time where they reach: each byte's
+    // difference from the one an element before, as one lane at a time takes it
+    for (size_t stride = 1; stride <= 19; ++stride)
+        for (size_t count : {size_t(1), size_t(2), size_t(7), size_t(33)}) {
+            std::vector<uint8_t> block(kept.begin() + stride, kept.begin() + stride + stride * count), expected = block;
+            for (size_t k = stride; k < block.size(); ++k) expected[k] = uint8_t(block[k] - block[k - stride]);
+            difference_lanes(block.data(), count, stride, stride);
+            CHECK(block == expected);
+        }
 }
 
 TEST_CASE("every chunk of a streamed scanned mesh decodes to its level", "[stream]") {

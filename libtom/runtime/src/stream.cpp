@@ -715,9 +715,10 @@ T residual(const Residuals& r, const uint8_t* at) {
 }
 
 /// Adds residuals to the predicted grid values, `lanes` values of type T per vertex; `m` gives the
-/// substitutes and, for a neighbours' prediction, the rings the chunk's splits listed.
-template <class T>
-void predict(std::vector<T>& values, const MeshState& m, const Residuals& r, uint32_t a, uint32_t b, int lanes) {
+/// substitutes and, for a neighbours' prediction, the rings the chunk's splits listed. (`lanes` a
+/// constant: the ring's sums and the residuals' lanes unrolled.)
+template <int lanes, class T>
+void predict(std::vector<T>& values, const MeshState& m, const Residuals& r, uint32_t a, uint32_t b) {
     values.resize(size_t(b) * lanes);  // (vertices below a are decoded: the stream's length was a * lanes)
     const bool rings = r.prediction & predict_neighbours;
     for (uint32_t v = a; v < b; ++v) {
@@ -979,9 +980,14 @@ void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_
         r[i].base = blocks[i].data(), r[i].stride = s.element;
     }
     if (minor >= 2) blocks[0] = vertex_block(codecs, in, count, stride, "attributes");
+    // the byte form's differences, of whole elements at once when every attribute is in it
+    bool whole = minor >= 2;
+    for (int i = 0; i < 6; ++i)
+        if ((!attribute_slots[i].bit || (m.attributes & attribute_slots[i].bit)) && !(r[i].prediction & predict_byte_form)) whole = false;
+    if (whole) difference_lanes(blocks[0].data(), count, stride, stride);
     for (int i = 0; i < 6; ++i) {
         if (minor >= 2) r[i].base = blocks[0].data() + r[i].offset, r[i].stride = stride;
-        if (r[i].prediction & predict_byte_form) difference_lanes(r[i].base, count, r[i].stride, attribute_slots[i].element);
+        if ((r[i].prediction & predict_byte_form) && !whole) difference_lanes(r[i].base, count, r[i].stride, attribute_slots[i].element);
     }
     decode_attributes(m, in, r, a, b);
     for (Carried& c : m.carried) {
@@ -996,18 +1002,18 @@ void StreamDecoder::Impl::decode_vertices(MeshState& m, ChunkReader& in, uint32_
 void StreamDecoder::Impl::decode_attributes(MeshState& m, ChunkReader& in, const Residuals* r, uint32_t a, uint32_t b) {
     using namespace layout;
     const StreamQuantization& q = m.quantization;
-    predict(m.positions, m, r[0], a, b, 3);
+    predict<3>(m.positions, m, r[0], a, b);
     for (size_t i = size_t(a) * 3; i < m.positions.size(); ++i)
         if (m.positions[i] >> q.position_bits) in.fail("vertex " + std::to_string(i / 3) + " position is off its " + std::to_string(q.position_bits) + "-bit grid", 36);
-    if (m.attributes & attr_normals) predict(m.normals, m, r[1], a, b, 2);
+    if (m.attributes & attr_normals) predict<2>(m.normals, m, r[1], a, b);
     for (int t = 0; t < 2; ++t) {
         if (!(m.attributes & (t ? attr_texcoords1 : attr_texcoords))) continue;
-        predict(m.texcoords[t], m, r[t ? 4 : 2], a, b, 2);
+        predict<2>(m.texcoords[t], m, r[t ? 4 : 2], a, b);
         for (size_t i = size_t(a) * 2; i < m.texcoords[t].size(); ++i)
             if (m.texcoords[t][i] >> q.texcoord_bits) in.fail("vertex " + std::to_string(i / 2) + " texture coordinate is off its grid", 36);
     }
-    if (m.attributes & attr_colors) predict(m.colors, m, r[3], a, b, 4);
-    if (m.attributes & attr_tangents) predict(m.tangents, m, r[5], a, b, 3);
+    if (m.attributes & attr_colors) predict<4>(m.colors, m, r[3], a, b);
+    if (m.attributes & attr_tangents) predict<3>(m.tangents, m, r[5], a, b);
 }
 
 // The rotation block after an index block: the index codec may turn a triangle's corners, and
