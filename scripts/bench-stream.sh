@@ -117,11 +117,14 @@ for r in result:
     summary.append(f"| {r['mesh']} | {r['stream_bytes']} | {r['first_chunk_bytes']} ({100 * r['first_chunk_bytes'] / r['stream_bytes']:.1f}%) | {r['single_cc_bytes']} | "
                    f"{r['stream_bytes'] / r['single_cc_bytes']:.2f} | {r['chain_bytes']} | {at_or_below_cell(r)} | "
                    f"{s['decode_tris_per_s'] / 1e6:.2f} | {s['speed_over_meshopt']:.3f} |")
-speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (same mesh, its codecs) | stream / meshoptimizer |', '|---|---|---:|---:|---:|---:|']
+speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (same mesh, its codecs) | stream / meshoptimizer | progressive: ms (images) |',
+          '|---|---|---:|---:|---:|---:|---:|']
 for w in web:
     chromium = w['browser']['user_agent'].split('Chrome/')[-1].split(' ')[0]
     for where, f in (('native (tomstreambench)', w['native']), (f'browser (chromium {chromium}, wasm)', w['browser'])):
-        speeds.append(f"| {w['mesh']} | {where} | {f['decode_mb_per_s']:.2f} | {f['decode_tris_per_s'] / 1e6:.2f} | {f['meshopt_tris_per_s'] / 1e6:.2f} | {f['speed_over_meshopt']:.3f} |")
+        progressive = f"{f['progressive_ms']:.1f} ({f['progressive_images']})" if 'progressive_ms' in f else '-'
+        speeds.append(f"| {w['mesh']} | {where} | {f['decode_mb_per_s']:.2f} | {f['decode_tris_per_s'] / 1e6:.2f} | {f['meshopt_tris_per_s'] / 1e6:.2f} | "
+                      f"{f['speed_over_meshopt']:.3f} | {progressive} |")
 intro = ['## Streaming', '',
          '`scripts/bench-stream.sh`: each mesh streamed (`tombuild --stream`: positions 14 bits, normals 8, texture coordinates 12,',
          'as gltfpack\'s defaults) and the two-sided Metro mean (`tomerr`, % of the diagonal) of what the bytes received decode',
@@ -133,7 +136,9 @@ intro = ['## Streaming', '',
          'chain (a row each). Decode speed:',
          '`tomstreambench` (every byte through `tom::StreamDecoder` and the `.tom` image of the whole, against meshoptimizer\'s',
          'decoders on the same meshes encoded with its codecs), natively and in headless chromium (`scripts/bench-web.sh`: the',
-         'wasm runtime against meshoptimizer\'s npm decoder on the very bytes the native run decodes).', '',
+         'wasm runtime against meshoptimizer\'s npm decoder on the very bytes the native run decodes). "Progressive" is what a',
+         'viewer spends to show the stream as it arrives: the bytes fed to each chunk boundary and an image (a snapshot) made',
+         'after every chunk, all of it, in milliseconds.', '',
          '![Error against bytes received](images/stream.png)', '']
 text = '\n'.join(intro + summary + [''] + speeds + [''] + lines) + '\n'
 json.dump(result, open(f'{out}/stream.json', 'w'), indent=1)

@@ -29,7 +29,7 @@ for mesh in "${meshes[@]}"; do
   native="$("$tools/tomstreambench" "$work/plain/$name.tom" --json -r 7 --reference-out "$work/ref")"
   rm -f "$work/report.json"
   chromium --headless=new --no-sandbox --user-data-dir="$work/profile" \
-    "http://127.0.0.1:$port/bench.html?reference=/bench/$name.meshopt.json&repeats=15&report=1" > /dev/null 2>&1 &
+    "http://127.0.0.1:$port/bench.html?reference=/bench/$name.meshopt.json&repeats=21&report=1" > /dev/null 2>&1 &
   browser=$!
   for _ in $(seq 600); do [ -s "$work/report.json" ] && break; sleep 0.2; done
   kill "$browser" 2>/dev/null || true; pkill -f "user-data-dir=$work/profile" || true

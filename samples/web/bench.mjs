@@ -1,8 +1,9 @@
 // Decode speed in the browser (scripts/bench-web.sh opens this page): a streamed .tom decoded by
 // the wasm runtime against meshoptimizer's npm decoder on the reference blocks tomstreambench
-// wrote for the same mesh (--reference-out), medians of `repeats` runs after one unmeasured run of
-// each, as the native tomstreambench measures them. ?reference=URL of NAME.meshopt.json [&repeats=7] [&report=1: POST
-// the figures to /report].
+// wrote for the same mesh (--reference-out), medians of `repeats` runs after `warmups` unmeasured
+// runs of each, as the native tomstreambench measures them; and progressively, the bytes fed to
+// each chunk boundary with a snapshot after every chunk, as the loader refines.
+// ?reference=URL of NAME.meshopt.json [&repeats=7] [&warmups=5] [&report=1: POST the figures to /report].
 import { MeshoptDecoder } from 'meshoptimizer/decoder';
 import { createRuntime } from './tom.mjs';
 
@@ -20,10 +21,11 @@ async function measure() {
   const reference = await (await fetch(referenceUrl)).json();
   const stream = await bytesOf(new URL(reference.stream, referenceUrl));
   const blocks = await bytesOf(new URL(reference.blocks, referenceUrl));
-  const repeats = Number(params.get('repeats') || 7);
+  const repeats = Number(params.get('repeats') || 7), warmups = Number(params.get('warmups') || 5);
   const runtime = await createRuntime();
   await MeshoptDecoder.ready;
-  const decode = [], image = [], meshopt = [];
+  const decode = [], image = [], meshopt = [], progressive = [];
+  let snapshots = 0;
   let triangles = 0;
   const decodeTom = (record) => {
     const source = runtime.openSource('bench');
@@ -37,6 +39,20 @@ async function measure() {
     source.dispose();
     if (record) decode.push(decoded), image.push(imaged);
   };
+  const decodeProgressively = (record) => {
+    const source = runtime.openSource('bench');
+    const t0 = performance.now();
+    let images = 0;
+    for (let at = 0; at < stream.length; ) {
+      const next = Math.min(Math.max(source.nextBoundary, at + 1), stream.length);
+      const before = source.decodedChunks;
+      source.append(stream.subarray(at, next));
+      at = next;
+      if (source.decodedChunks > before) source.snapshot(), ++images;
+    }
+    if (record) progressive.push(performance.now() - t0), (snapshots = images);
+    source.dispose();
+  };
   const decodeMeshopt = (record) => {
     const t0 = performance.now();
     for (const m of reference.meshes) {
@@ -47,18 +63,19 @@ async function measure() {
     }
     if (record) meshopt.push(performance.now() - t0);
   };
-  // one unmeasured run of each first: it compiles the wasm's hot code past the baseline tier and
-  // grows its memory (the first run took 3-5x the later ones); then the two alternate, so that
-  // both see the same moments of this shared machine
-  decodeTom(false), decodeMeshopt(false);
-  for (let r = 0; r < repeats; ++r) decodeTom(true), decodeMeshopt(true);
+  // unmeasured runs of each first: they grow the wasm's memory and bring its hot code past the
+  // baseline tier, which V8 does over the first runs (the first five took 2-5x the later ones,
+  // meshoptimizer's too); then they alternate, so that all see the same moments of this shared
+  // machine
+  for (let r = 0; r < warmups; ++r) decodeTom(false), decodeMeshopt(false), decodeProgressively(false);
+  for (let r = 0; r < repeats; ++r) decodeTom(true), decodeMeshopt(true), decodeProgressively(true);
   const total = median(decode) + median(image);
   return {
     stream: reference.stream, triangles, stream_bytes: stream.length, meshopt_bytes: blocks.length,
     decode_ms: median(decode), image_ms: median(image), decode_mb_per_s: stream.length / total / 1e3,
     decode_tris_per_s: (triangles / total) * 1e3, meshopt_decode_ms: median(meshopt), meshopt_tris_per_s: (triangles / median(meshopt)) * 1e3,
-    speed_over_meshopt: median(meshopt) / total, user_agent: navigator.userAgent,
-    runs_ms: { decode, image, meshopt },
+    speed_over_meshopt: median(meshopt) / total, progressive_ms: median(progressive), progressive_images: snapshots, user_agent: navigator.userAgent,
+    runs_ms: { decode, image, meshopt, progressive },
   };
 }
 
