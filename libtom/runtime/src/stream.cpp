@@ -123,6 +123,19 @@ struct TableRecord {
     uint64_t at_mesh = 0, at_vertex_end = 0, at_triangle_end = 0, at_bytes = 0;
 };
 
+/// A section that only grows as chunks arrive (a stream's values per vertex, the substitutes), as
+/// stored, with the checksum of what it holds: an image copies it instead of making it again.
+struct GrowingSection {
+    std::vector<uint8_t> bytes;
+    uint32_t checksum = 0;
+    /// Room for n more bytes, to be written, then counted by grown().
+    uint8_t* extend(size_t n) {
+        bytes.resize(bytes.size() + n);
+        return bytes.data() + bytes.size() - n;
+    }
+    void grown(size_t n) { checksum = crc32(bytes.data() + bytes.size() - n, n, checksum); }
+};
+
 /// A mesh as the directory declares it and as far as its chunks are decoded.
 struct MeshState {
     // declared
@@ -148,6 +161,10 @@ struct MeshState {
     SplitScratch split;                          // the neighbourhood of the split being decoded
     std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
     std::vector<uint32_t> births;                // scratch: a split's born triangles per part
+    // the sections of the vertices [0, resolution) that only grow: the streams dequantized, the
+    // substitutes; and the grid's bounds of the positions (extended after each chunk)
+    GrowingSection positions_out, normals_out, texcoords_out[2], colors_out, tangents_out, substitutes_out;
+    uint16_t grid_min[3] = {0, 0, 0}, grid_max[3] = {0, 0, 0};
 };
 
 /// A mesh's decoded state before a chunk: the streams' lengths. With the corners the chunk
@@ -273,6 +290,7 @@ struct StreamDecoder::Impl {
     void read_chunk_table(const std::vector<TableRecord>& records, uint64_t offset, uint64_t deferred_bytes);
     void read_deferred(const uint8_t* data);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
+    void extend_sections(MeshState& m, uint32_t from, uint32_t to) const;
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
@@ -654,7 +672,59 @@ void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* 
         undo.restore(m);
         throw;
     }
+    extend_sections(m, m.resolution, chunk.vertex_end);
     m.resolution = chunk.vertex_end;
+}
+
+// The growing sections extended by vertices [from, to), decoded (MeshState::positions_out ...).
+void StreamDecoder::Impl::extend_sections(MeshState& m, uint32_t from, uint32_t to) const {
+    using namespace layout;
+    const StreamQuantization& q = m.quantization;
+    // `lanes` floats per vertex, value(v, k) each
+    auto floats = [&](GrowingSection& section, int lanes, auto&& value) {
+        const size_t n = size_t(to - from) * size_t(lanes) * 4;
+        uint8_t* out = section.extend(n);
+        for (uint32_t v = from; v < to; ++v)
+            for (int k = 0; k < lanes; ++k, out += 4) store_f32(out, value(v, k));
+        section.grown(n);
+    };
+    for (uint32_t v = from; v < to; ++v)
+        for (int k = 0; k < 3; ++k) {
+            const uint16_t g = m.positions[3 * size_t(v) + size_t(k)];
+            m.grid_min[k] = v == 0 ? g : std::min(m.grid_min[k], g);
+            m.grid_max[k] = v == 0 ? g : std::max(m.grid_max[k], g);
+        }
+    floats(m.positions_out, 3, [&](uint32_t v, int k) { return dequantize(m.positions[3 * size_t(v) + size_t(k)], q.position_min[k], q.position_step); });
+    if (m.attributes & attr_normals) {
+        float n[3] = {0, 0, 0};
+        floats(m.normals_out, 3, [&](uint32_t v, int k) {
+            if (k == 0) octahedral_decode(m.normals[2 * size_t(v)], m.normals[2 * size_t(v) + 1], q.normal_bits, n);
+            return n[k];
+        });
+    }
+    for (int t = 0; t < 2; ++t)
+        if (m.attributes & (t ? attr_texcoords1 : attr_texcoords))
+            floats(m.texcoords_out[t], 2,
+                   [&](uint32_t v, int k) { return dequantize(m.texcoords[t][2 * size_t(v) + size_t(k)], q.texcoord_min[t][k], q.texcoord_step[t][k]); });
+    if (m.attributes & attr_colors) floats(m.colors_out, 4, [&](uint32_t v, int k) { return float(m.colors[4 * size_t(v) + size_t(k)]) / 255.0f; });
+    if (m.attributes & attr_tangents) {
+        float t[4] = {0, 0, 0, 0};
+        floats(m.tangents_out, 4, [&](uint32_t v, int k) {
+            if (k == 0) {
+                octahedral_decode(m.tangents[3 * size_t(v)], m.tangents[3 * size_t(v) + 1], q.normal_bits, t);
+                t[3] = m.tangents[3 * size_t(v) + 2] < 0 ? -1.0f : 1.0f;
+            }
+            return t[k];
+        });
+    }
+    uint8_t* out = m.substitutes_out.extend(size_t(to - from) * m.index_size);
+    for (uint32_t v = from; v < to; ++v, out += m.index_size) {
+        if (m.index_size == 2)
+            out[0] = uint8_t(m.substitute[v]), out[1] = uint8_t(m.substitute[v] >> 8);
+        else
+            store_u32(out, m.substitute[v]);
+    }
+    m.substitutes_out.grown(size_t(to - from) * m.index_size);
 }
 
 void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
@@ -1067,29 +1137,18 @@ std::vector<uint8_t> clamped_metadata(std::vector<uint8_t> meta, uint32_t resolu
     return meta;
 }
 
-} // namespace
-
-namespace {
-
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
 constexpr bool little_endian_host = true;
 #else
 constexpr bool little_endian_host = false;
 #endif
 
-/// `count` floats as stored, each `value(i)`, written once.
-template <class Value>
-std::vector<uint8_t> float_section(size_t count, Value&& value) {
-    std::vector<uint8_t> out(count * 4);
-    for (size_t i = 0; i < count; ++i) layout::store_f32(&out[4 * i], value(i));
-    return out;
-}
-
 }  // namespace
 
-// The mesh's sections at its decoded resolution, appended to `views`: the streams dequantized
-// into `storage`, the substitutes and a one-part mesh's corners viewed where the state holds them
-// when they are stored as they lie (32-bit indices on a little-endian host).
+// The mesh's sections at its decoded resolution, appended to `views`: the growing ones (streams,
+// substitutes) as the chunks left them, a one-part mesh's corners viewed where the state holds
+// them when they are stored as they lie (32-bit indices on a little-endian host), the others made
+// in `storage`.
 void StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index, std::vector<std::vector<uint8_t>>& storage,
                                         std::vector<layout::SectionView>& views) const {
     using namespace layout;
@@ -1105,15 +1164,12 @@ void StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index, std:
         else
             keep(type, index_bytes(values, m.index_size));
     };
-    // positions and bounds
+    auto grown = [&](uint32_t type, const GrowingSection& g) { views.push_back({type, index, g.bytes.data(), g.bytes.size(), true, g.checksum}); };
+    // the bounds: the grid's extremes dequantized (dequantizing keeps the order)
     float lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    std::vector<uint8_t> positions = float_section(size_t(n) * 3, [&](size_t i) {
-        const size_t k = i % 3;
-        const float x = dequantize(m.positions[i], q.position_min[k], q.position_step);
-        lo[k] = i < 3 ? x : std::min(lo[k], x);
-        hi[k] = i < 3 ? x : std::max(hi[k], x);
-        return x;
-    });
+    if (n > 0)
+        for (int k = 0; k < 3; ++k)
+            lo[k] = dequantize(m.grid_min[k], q.position_min[k], q.position_step), hi[k] = dequantize(m.grid_max[k], q.position_min[k], q.position_step);
     uint32_t live = 0;
     for (const std::vector<uint32_t>& c : m.corners) live += uint32_t(c.size() / 3);
     std::vector<uint8_t> head = m.header;
@@ -1122,33 +1178,14 @@ void StreamDecoder::Impl::mesh_sections(const MeshState& m, uint32_t index, std:
     store_u32(&head[m_min_vertex_count], n ? m.min_vertex_count : 0);
     for (int k = 0; k < 3; ++k) store_f32(&head[m_bounds_min + 4 * k], lo[k]), store_f32(&head[m_bounds_max + 4 * k], hi[k]);
     keep(sec_mesh, std::move(head));
-    keep(sec_positions, std::move(positions));
+    grown(sec_positions, m.positions_out);
     // the other streams, in the order of layout::attribute_streams
-    if (m.attributes & attr_normals) {
-        float normal[3] = {0, 0, 0};
-        keep(sec_normals, float_section(size_t(n) * 3, [&](size_t i) {
-                 if (i % 3 == 0) octahedral_decode(m.normals[2 * (i / 3)], m.normals[2 * (i / 3) + 1], q.normal_bits, normal);
-                 return normal[i % 3];
-             }));
-    }
-    auto texcoords = [&](int t) {
-        return float_section(size_t(n) * 2, [&](size_t i) { return dequantize(m.texcoords[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2]); });
-    };
-    if (m.attributes & attr_texcoords) keep(sec_texcoords, texcoords(0));
-    if (m.attributes & attr_colors) keep(sec_colors, float_section(size_t(n) * 4, [&](size_t i) { return float(m.colors[i]) / 255.0f; }));
-    if (m.attributes & attr_texcoords1) keep(sec_texcoords1, texcoords(1));
-    if (m.attributes & attr_tangents) {
-        float tangent[4] = {0, 0, 0, 0};
-        keep(sec_tangents, float_section(size_t(n) * 4, [&](size_t i) {
-                 const size_t v = i / 4;
-                 if (i % 4 == 0) {
-                     octahedral_decode(m.tangents[3 * v], m.tangents[3 * v + 1], q.normal_bits, tangent);
-                     tangent[3] = m.tangents[3 * v + 2] < 0 ? -1.0f : 1.0f;
-                 }
-                 return tangent[i % 4];
-             }));
-    }
-    indices(sec_substitute, m.substitute);
+    if (m.attributes & attr_normals) grown(sec_normals, m.normals_out);
+    if (m.attributes & attr_texcoords) grown(sec_texcoords, m.texcoords_out[0]);
+    if (m.attributes & attr_colors) grown(sec_colors, m.colors_out);
+    if (m.attributes & attr_texcoords1) grown(sec_texcoords1, m.texcoords_out[1]);
+    if (m.attributes & attr_tangents) grown(sec_tangents, m.tangents_out);
+    grown(sec_substitute, m.substitutes_out);
     if (m.corners.size() == 1) {
         indices(sec_triangles, m.corners[0]);
     } else {  // the parts' live triangles, one after another
