@@ -290,7 +290,6 @@ struct StreamDecoder::Impl {
     void read_chunk_table(const std::vector<TableRecord>& records, uint64_t offset, uint64_t deferred_bytes);
     void read_deferred(const uint8_t* data);
     void decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
-    void extend_sections(MeshState& m, uint32_t from, uint32_t to) const;
     void decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes);
     void decode_base(MeshState& m, ChunkReader& in, const std::vector<uint32_t>& base);
     void decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born);
@@ -661,23 +660,10 @@ void StreamDecoder::Impl::read_deferred(const uint8_t* data) {
     deferred_read = true;
 }
 
-// rules 35 and 36: a chunk's counts, its blocks and the values they decode to; a bad chunk leaves
-// its mesh as it was
-void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
-    MeshState& m = meshes[chunk.mesh];
-    const MeshUndo undo(m);
-    try {
-        decode_chunk_blocks(m, chunk, data, bytes);
-    } catch (...) {
-        undo.restore(m);
-        throw;
-    }
-    extend_sections(m, m.resolution, chunk.vertex_end);
-    m.resolution = chunk.vertex_end;
-}
+namespace {
 
 // The growing sections extended by vertices [from, to), decoded (MeshState::positions_out ...).
-void StreamDecoder::Impl::extend_sections(MeshState& m, uint32_t from, uint32_t to) const {
+void extend_sections(MeshState& m, uint32_t from, uint32_t to) {
     using namespace layout;
     const StreamQuantization& q = m.quantization;
     // `lanes` floats per vertex, value(v, k) each
@@ -725,6 +711,23 @@ void StreamDecoder::Impl::extend_sections(MeshState& m, uint32_t from, uint32_t 
             store_u32(out, m.substitute[v]);
     }
     m.substitutes_out.grown(size_t(to - from) * m.index_size);
+}
+
+}  // namespace
+
+// rules 35 and 36: a chunk's counts, its blocks and the values they decode to; a bad chunk leaves
+// its mesh as it was
+void StreamDecoder::Impl::decode_chunk(const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
+    MeshState& m = meshes[chunk.mesh];
+    const MeshUndo undo(m);
+    try {
+        decode_chunk_blocks(m, chunk, data, bytes);
+    } catch (...) {
+        undo.restore(m);
+        throw;
+    }
+    extend_sections(m, m.resolution, chunk.vertex_end);
+    m.resolution = chunk.vertex_end;
 }
 
 void StreamDecoder::Impl::decode_chunk_blocks(MeshState& m, const StreamChunk& chunk, const uint8_t* data, uint64_t bytes) {
