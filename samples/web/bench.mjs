@@ -1,8 +1,9 @@
 // Decode speed in the browser (scripts/bench-web.sh opens this page): a streamed .tom decoded by
 // the wasm runtime against meshoptimizer's npm decoder on the reference blocks tomstreambench
-// wrote for the same mesh (--reference-out), medians of `repeats` runs after `warmups` unmeasured
-// runs of each, as the native tomstreambench measures them; and progressively, the bytes fed to
-// each chunk boundary with a snapshot after every chunk, as the loader refines.
+// wrote for the same mesh (--reference-out), medians of `repeats` runs after unmeasured runs of
+// each (`warmups` and two seconds at least), as the native tomstreambench measures them; and
+// progressively, the bytes fed to each chunk boundary with a snapshot after every chunk, as the
+// loader refines.
 // ?reference=URL of NAME.meshopt.json [&repeats=7] [&warmups=5] [&report=1: POST the figures to /report].
 import { MeshoptDecoder } from 'meshoptimizer/decoder';
 import { createRuntime } from './tom.mjs';
@@ -63,11 +64,12 @@ async function measure() {
     }
     if (record) meshopt.push(performance.now() - t0);
   };
-  // unmeasured runs of each first: they grow the wasm's memory and bring its hot code past the
-  // baseline tier, which V8 does over the first runs (the first five took 2-5x the later ones,
-  // meshoptimizer's too); then they alternate, so that all see the same moments of this shared
-  // machine
-  for (let r = 0; r < warmups; ++r) decodeTom(false), decodeMeshopt(false), decodeProgressively(false);
+  // unmeasured runs of each first, at least `warmups` and for at least two seconds: they grow the
+  // wasm's memory and bring its hot code past the baseline tier, which V8 does over the first
+  // runs (they took 2-5x the later ones, meshoptimizer's too); then they alternate, so that all
+  // see the same moments of this shared machine
+  const warmStart = performance.now();
+  for (let r = 0; r < 200 && (r < warmups || performance.now() - warmStart < 2000); ++r) decodeTom(false), decodeMeshopt(false), decodeProgressively(false);
   for (let r = 0; r < repeats; ++r) decodeTom(true), decodeMeshopt(true), decodeProgressively(true);
   const total = median(decode) + median(image);
   return {
