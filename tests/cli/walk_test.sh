@@ -184,8 +184,10 @@ j = json.loads(out)
 assert j['renders'] == 40 and j['triangles'] > 0 and j['objects'] > 0, j
 assert j['median_ms'] > 0 and j['std_percent'] > 0, j                          # real frames vary
 # the frame is the one exact planned at the budget, the model corrected on 10 frames there: it
-# takes about the budget (its reserve and allowance below it, the renderer's noise around it)
-assert 0.3 * $budget <= j['median_ms'] <= 1.3 * $budget, (j['median_ms'], $budget)
+# takes about the budget (its reserve and allowance below it, the renderer's noise around it;
+# the calibration ran minutes before on this shared machine, and a change of load in between
+# moved a CI run's median to 1.34x the budget, where the unplanned frame takes 4x)
+assert 0.3 * $budget <= j['median_ms'] <= 1.5 * $budget, (j['median_ms'], $budget)
 assert j['p5_percent'] <= 100 <= j['p95_percent'], j
 lo, hi = j['block10_percent']
 assert 0 < lo <= hi, j                                                        # means of 10 in a row
