@@ -122,9 +122,8 @@ speeds = ['| mesh | where | stream MB/s | stream Mtri/s | meshoptimizer Mtri/s (
 for w in web:
     chromium = w['browser']['user_agent'].split('Chrome/')[-1].split(' ')[0]
     for where, f in (('native (tomstreambench)', w['native']), (f'browser (chromium {chromium}, wasm)', w['browser'])):
-        progressive = f"{f['progressive_ms']:.1f} ({f['progressive_images']})" if 'progressive_ms' in f else '-'
         speeds.append(f"| {w['mesh']} | {where} | {f['decode_mb_per_s']:.2f} | {f['decode_tris_per_s'] / 1e6:.2f} | {f['meshopt_tris_per_s'] / 1e6:.2f} | "
-                      f"{f['speed_over_meshopt']:.3f} | {progressive} |")
+                      f"{f['speed_over_meshopt']:.3f} | {f['progressive_ms']:.1f} ({f['progressive_images']}) |")
 intro = ['## Streaming', '',
          '`scripts/bench-stream.sh`: each mesh streamed (`tombuild --stream`: positions 14 bits, normals 8, texture coordinates 12,',
          'as gltfpack\'s defaults) and the two-sided Metro mean (`tomerr`, % of the diagonal) of what the bytes received decode',

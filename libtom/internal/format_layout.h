@@ -110,10 +110,9 @@ inline std::vector<uint8_t> float_bytes(const std::vector<float>& values) {
     return out;
 }
 
-/// Indices as stored, `index_size` (2 or 4) bytes each (SUBS, TRIS, COAR).
-inline std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uint32_t index_size) {
-    std::vector<uint8_t> out(values.size() * index_size);
-    for (size_t i = 0; i < values.size(); ++i) {
+/// `count` indices as stored at `out`, `index_size` (2 or 4) bytes each (SUBS, TRIS, COAR).
+inline void store_indices(uint8_t* out, const uint32_t* values, size_t count, uint32_t index_size) {
+    for (size_t i = 0; i < count; ++i) {
         if (index_size == 2) {
             out[2 * i] = uint8_t(values[i]);
             out[2 * i + 1] = uint8_t(values[i] >> 8);
@@ -121,6 +120,10 @@ inline std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uin
             store_u32(&out[4 * i], values[i]);
         }
     }
+}
+inline std::vector<uint8_t> index_bytes(const std::vector<uint32_t>& values, uint32_t index_size) {
+    std::vector<uint8_t> out(values.size() * index_size);
+    store_indices(out.data(), values.data(), values.size(), index_size);
     return out;
 }
 

@@ -703,13 +703,7 @@ void extend_sections(MeshState& m, uint32_t from, uint32_t to) {
             return t[k];
         });
     }
-    uint8_t* out = m.substitutes_out.extend(size_t(to - from) * m.index_size);
-    for (uint32_t v = from; v < to; ++v, out += m.index_size) {
-        if (m.index_size == 2)
-            out[0] = uint8_t(m.substitute[v]), out[1] = uint8_t(m.substitute[v] >> 8);
-        else
-            store_u32(out, m.substitute[v]);
-    }
+    store_indices(m.substitutes_out.extend(size_t(to - from) * m.index_size), m.substitute.data() + from, to - from, m.index_size);
     m.substitutes_out.grown(size_t(to - from) * m.index_size);
 }
 
