@@ -87,7 +87,7 @@ nlohmann::ordered_json output_options(const Options& opt, const tom::BuildParams
     if (opt.stream) {
         const tom::StreamOptions& s = opt.stream_options;
         j["stream"] = {{"position_bits", s.position_bits}, {"normal_bits", s.normal_bits}, {"texcoord_bits", s.texcoord_bits},
-                       {"first_chunk", s.first_share}, {"chunk_growth", s.growth}};
+                       {"first_chunk", s.first_share},     {"chunk_growth", s.growth},     {"keep_order", s.keep_order}};
     }
     j["error_curve"] = !opt.no_error_curve;
     if (!opt.no_error_curve) {
@@ -615,6 +615,11 @@ int parse_options(Options& opt, int argc, char** argv) {
                    "With --stream: each next chunk ends at this many times the last one's resolution (default 1.25; smaller: more, smaller chunks, a smoother "
                    "error against bytes, a little more overhead)")
         ->check(CLI::Range(1.01, 16.0))
+        ->needs(stream)
+        ->group("Output");
+    app.add_flag("--keep-order", so.keep_order,
+                 "With --stream: keep the builder's vertex order inside each chunk (by default a chunk's splits are ordered by their substitutes, "
+                 "which code smaller: the same levels at chunk boundaries, a different order between them)")
         ->needs(stream)
         ->group("Output");
     app.add_flag("--no-error-curve", opt.no_error_curve, "Do not measure and store each mesh's error curve (faster builds and reports; the JSON report's error_curve is null)")->group("Output");

@@ -17,7 +17,7 @@
 namespace tom::stream_layout {
 
 constexpr uint8_t magic[8] = {0x89, 'T', 'O', 'S', 0x0D, 0x0A, 0x1A, 0x0A};
-constexpr uint32_t version_major = 1, version_minor = 2;
+constexpr uint32_t version_major = 1, version_minor = 3;
 constexpr uint32_t header_bytes = 64;
 // header field offsets
 constexpr uint32_t h_version_major = 8, h_version_minor = 12, h_file_bytes = 16, h_mesh_count = 24, h_chunk_count = 28,
@@ -214,6 +214,21 @@ constexpr AttributeSlot attribute_slots[6] = {{0, position_element, "POSI"},
 
 /// Bits of a vertex index below v (values 0 to v - 1): 0 for v <= 1.
 inline uint32_t index_bits(uint32_t v) { return v <= 1 ? 0 : 32 - uint32_t(__builtin_clz(v - 1)); }
+
+/// A substitute's difference from the previous one, zigzag-coded as residuals are (since 1.3
+/// the splits block may code substitutes so: FORMAT.md), in 64 bits: it may not fit in 32.
+inline uint64_t zigzag_difference(uint32_t p, uint32_t previous) {
+    const int64_t d = int64_t(p) - int64_t(previous);
+    return d >= 0 ? uint64_t(2 * d) : uint64_t(-2 * d - 1);
+}
+/// The vertex `previous` plus the difference z codes (z from zigzag_difference), or UINT64_MAX
+/// when below zero.
+inline uint64_t add_zigzag(uint32_t previous, uint32_t z) {
+    const int64_t d = z & 1u ? -(int64_t(z) + 1) / 2 : int64_t(z) / 2;
+    return int64_t(previous) + d < 0 ? UINT64_MAX : uint64_t(int64_t(previous) + d);
+}
+/// The bits of gamma(n), n >= 1.
+inline uint32_t gamma_bits(uint64_t n) { return 2 * uint32_t(63 - __builtin_clzll(n)) + 1; }
 
 /// Sorts a list ascending; a short one (a vertex's corners or neighbours: about 6, rarely past
 /// 20) by insertion, where std::sort's set-up cost more than the sorting.

@@ -484,7 +484,18 @@ read -r end5 vertices5 triangles5 < "$work/chunk5"
 check "tomextract --bytes writes the mesh of the last whole chunk" expect_exit 0 "$tools/tomextract" "$work/streamed/bunny00.tom" --bytes $((end5 + 100)) -o "$work/prefix.obj"
 check "which has that chunk's vertices and triangles" grep -q "$vertices5 vertices, $triangles5 triangles" "$work/stdout"
 "$tools/tomextract" "$work/plain/bunny00.tom" --vertices "$vertices5" -o "$work/level.obj" > /dev/null
-check "and the ordinary file's level there, face for face" cmp <(grep '^f' "$work/prefix.obj") <(grep '^f' "$work/level.obj")
+check "and the ordinary file's level there, the same surface within the quantization" /usr/bin/python3 -c "
+import json, subprocess
+e = json.loads(subprocess.run(['$tools/tomerr', '$work/level.obj', '$work/prefix.obj', '--json'], capture_output=True, check=True).stdout)
+assert e['simplified_triangles'] == e['original_triangles'] == $triangles5, e
+assert max(e['forward']['max'], e['backward']['max']) < 0.005, e  # % of the diagonal: half a 14-bit step on each axis is 0.003
+"
+# (the vertices renumbered within the chunks); in the builder's order, the level face for face
+"$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/kept" -q --stream --keep-order
+kept5="$("$tools/tominfo" --json "$work/kept/bunny00.tom" | /usr/bin/python3 -c "import json, sys; print(json.load(sys.stdin)['stream']['chunks'][5]['end_byte'])")"
+"$tools/tomextract" "$work/kept/bunny00.tom" --bytes "$kept5" -o "$work/kept-prefix.obj" > /dev/null
+check "tombuild --stream --keep-order: a prefix is the ordinary file's level, face for face" cmp <(grep '^f' "$work/kept-prefix.obj") <(grep '^f' "$work/level.obj")
+check "and is larger than the default stream" test "$(stat -c %s "$work/kept/bunny00.tom")" -gt "$(stat -c %s "$work/streamed/bunny00.tom")"
 check "tomextract --bytes on an ordinary file exits 1 and says why" expect_exit 1 "$tools/tomextract" "$work/plain/bunny00.tom" --bytes 1000 -o "$work/x.obj"
 check "(a byte limit applies only to streams)" grep -q "not a streamed .tom file" "$work/stderr"
 check "a streamed scene with parts extracts as a .glb" expect_exit 0 "$tools/tomextract" "$work/streamed/spider.tom" --fraction 0.5 -o "$work/spider.glb"
@@ -501,7 +512,7 @@ a, b = coarse['stream']['chunks'], fine['stream']['chunks']
 assert len(b) >= 1.8 * len(a), (len(a), len(b))
 assert all(y['triangles'] <= 1.1 * x['triangles'] + 64 for x, y in zip(b, b[1:])), 'a chunk grows past 1.1x'
 assert fine['stream']['file_bytes'] < coarse['stream']['file_bytes'], (fine['stream']['file_bytes'], coarse['stream']['file_bytes'])
-assert fine['provenance']['options']['stream'] == {'position_bits': 11, 'normal_bits': 8, 'texcoord_bits': 12, 'first_chunk': 0.01, 'chunk_growth': 1.1}, fine['provenance']['options']
+assert fine['provenance']['options']['stream'] == {'position_bits': 11, 'normal_bits': 8, 'texcoord_bits': 12, 'first_chunk': 0.01, 'chunk_growth': 1.1, 'keep_order': False}, fine['provenance']['options']
 "
 check "another --chunk-growth converts the file again" bash -c "'$tools/tombuild' '$data/meshes/bunny00.off' -o '$work/fine' --stream --chunk-growth 1.2 --position-bits 11 2>&1 | grep -q '1 of 1 inputs converted'"
 check "a stream option without --stream is a usage error" expect_exit 2 "$tools/tombuild" "$data/meshes/bunny00.off" -o "$work/fine" --chunk-growth 1.1

@@ -1,9 +1,11 @@
 // Streamed .tom files (docs/FORMAT.md, "Streamed files"): every prefix that ends on a chunk
 // boundary decodes to the level at the vertex counts received, index for index what extraction
-// gives from the ordinary file, with positions and attributes within the stated quantization;
-// bad bytes are errors that name the place, never a crash.
+// gives from the ordinary file the stream stands for (the source renumbered within its chunks,
+// tom::stream_order: at each chunk boundary the same mesh), with positions and attributes within
+// the stated quantization; bad bytes are errors that name the place, never a crash.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -105,10 +107,71 @@ void check_prefix_mesh(const tom::MeshView& o, const tom::MeshView& d, const tom
     }
 }
 
-/// Feeds the stream chunk by chunk, checking each decoded prefix against the ordinary file.
+/// A triangle as the values of its corners (position, then every attribute), turned to start
+/// at its smallest corner: equal for the same triangle of two numberings of one mesh.
+using Corner = std::vector<float>;
+using ValueTriangle = std::array<Corner, 3>;
+
+Corner corner_values(const tom::MeshView& m, uint32_t v) {
+    Corner c(m.positions + 3 * v, m.positions + 3 * v + 3);
+    for (const auto& [data, lanes] : {std::pair{m.normals, 3}, {m.texcoords, 2}, {m.colors, 4}, {m.texcoords1, 2}, {m.tangents, 4}})
+        if (data) c.insert(c.end(), data + size_t(lanes) * v, data + size_t(lanes) * (v + 1));
+    return c;
+}
+
+/// The level of `m` at resolution n as a sorted list of triangles by value, part by part.
+std::vector<ValueTriangle> level_by_value(const tom::MeshView& m, uint32_t n) {
+    const std::vector<uint32_t> corners = level(m, n);
+    std::vector<ValueTriangle> out;
+    for (size_t t = 0; t < corners.size() / 3; ++t) {
+        ValueTriangle x{corner_values(m, corners[3 * t]), corner_values(m, corners[3 * t + 1]), corner_values(m, corners[3 * t + 2])};
+        std::rotate(x.begin(), std::min_element(x.begin(), x.end()), x.end());
+        out.push_back(std::move(x));
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+/// The stream's ordinary file (renumbered within chunks unless the options keep the order)
+/// against the source's at every chunk boundary: the same triangles by value, and within each
+/// chunk the splits' substitutes ascending but within groups of copies (what codes them small).
+void check_stream_order(const tom::File& source, const tom::File& ordered, const std::vector<tom::StreamChunk>& chunks, const tom::StreamOptions& options) {
+    for (uint32_t i = 0; i < source.mesh_count(); ++i) {
+        const tom::MeshView &s = source.mesh(i), &o = ordered.mesh(i);
+        REQUIRE((o.vertex_count == s.vertex_count && o.triangle_count == s.triangle_count && o.min_vertex_count == s.min_vertex_count));
+        CHECK(level_by_value(o, o.min_vertex_count) == level_by_value(s, s.min_vertex_count));
+        uint32_t a = s.min_vertex_count, descents = 0, splits = 0;
+        for (const tom::StreamChunk& c : chunks) {
+            if (c.mesh != i) continue;
+            INFO("mesh " << i << " at " << c.vertex_end << " vertices");
+            CHECK(level_by_value(o, c.vertex_end) == level_by_value(s, c.vertex_end));
+            // each group of copies (or single vertex) keyed by its members' largest substitute
+            // outside it: the keys ascend
+            uint32_t last_key = 0;
+            for (uint32_t first = std::max(a, s.min_vertex_count), end = first; first < c.vertex_end; first = end, ++splits) {
+                uint32_t key = 0;
+                for (end = first + 1; end < c.vertex_end && o.splits_pair(end);) ++end;
+                for (uint32_t v = first; v < end; ++v)
+                    if (o.substitute_at(v) < first) key = std::max(key, o.substitute_at(v));
+                descents += key < last_key;
+                last_key = key;
+            }
+            a = c.vertex_end;
+        }
+        if (options.keep_order)
+            CHECK(std::equal(o.positions, o.positions + 3 * size_t(o.vertex_count), s.positions));
+        else
+            CHECK(descents == 0);
+        std::printf("  mesh %u: %u of %u splits (or groups) with a substitute below the one before within a chunk\n", i, descents, splits);
+    }
+}
+
+/// Feeds the stream chunk by chunk, checking each decoded prefix against the ordinary file it
+/// stands for (tom::stream_order), and that file against the source.
 void check_every_prefix(const std::string& what, const std::vector<uint8_t>& image, const tom::StreamOptions& options = {}) {
     INFO(what);
-    const tom::File original = tom::File::from_bytes(image.data(), image.size(), what);
+    const std::vector<uint8_t> ordered = tom::stream_order(image.data(), image.size(), options, what);
+    const tom::File original = tom::File::from_bytes(ordered.data(), ordered.size(), what);
     const std::vector<uint8_t> stream = tom::encode_stream(image.data(), image.size(), options, what);
     CHECK(tom::encode_stream(image.data(), image.size(), options, what) == stream);  // deterministic
     tom::StreamDecoder decoder(tom::meshopt_codecs(), what);
@@ -123,6 +186,7 @@ void check_every_prefix(const std::string& what, const std::vector<uint8_t>& ima
     REQUIRE(decoder.has_directory());
     REQUIRE(decoder.mesh_count() == original.mesh_count());
     const std::vector<tom::StreamChunk> chunks = decoder.chunks();
+    check_stream_order(tom::File::from_bytes(image.data(), image.size(), what), original, chunks, options);
     std::printf("%s: %zu bytes as .tom, %zu streamed (%.1f%%) in %zu chunks; the first chunk ends at byte %llu (%.1f%%)\n", what.c_str(), image.size(),
                 stream.size(), 100.0 * double(stream.size()) / double(image.size()), chunks.size(), (unsigned long long)chunks[0].end_byte,
                 100.0 * double(chunks[0].end_byte) / double(stream.size()));
@@ -283,7 +347,15 @@ TEST_CASE("residuals in byte form come back exactly, small ones in small bytes",
 }
 
 TEST_CASE("every chunk of a streamed scanned mesh decodes to its level", "[stream]") {
-    check_every_prefix("bunny00", tom_image(test::sample("meshes/bunny00.off")));
+    const std::vector<uint8_t> image = tom_image(test::sample("meshes/bunny00.off"));
+    check_every_prefix("bunny00", image);
+    tom::StreamOptions keep;
+    keep.keep_order = true;
+    check_every_prefix("bunny00 in the builder's order", image, keep);
+    // substitutes ascending within a chunk code as small differences: the file shrinks
+    const size_t ordered = tom::encode_stream(image.data(), image.size()).size(), kept = tom::encode_stream(image.data(), image.size(), keep).size();
+    std::printf("bunny00 streamed: %zu bytes, %zu in the builder's order\n", ordered, kept);
+    CHECK(double(ordered) < 0.9 * double(kept));
 }
 
 TEST_CASE("streamed meshes made here, at every precision, decode to their levels", "[stream]") {
@@ -317,19 +389,22 @@ TEST_CASE("a streamed mesh with every attribute decodes each to its own", "[stre
     check_every_prefix("sphere with every attribute", tom::serialize({tom::build(m)}));
 }
 
-TEST_CASE("a stream written at version 1.1 decodes to its levels", "[stream]") {
-    // tests/data/stream: grid9.obj (normals, texture coordinates) built by the toolkit of stream
-    // version 1.1 (a prediction and a block per attribute, no byte form), streamed and ordinary
-    auto bytes = [](const char* name) {
-        std::ifstream in(std::string(TOM_TEST_DATA_DIR) + "/stream/" + name, std::ios::binary);
-        return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    };
-    const std::vector<uint8_t> stream = bytes("grid9-stream-1.1.tom"), image = bytes("grid9.tom");
+/// A file of tests/data/stream.
+std::vector<uint8_t> stream_data(const char* name) {
+    std::ifstream in(std::string(TOM_TEST_DATA_DIR) + "/stream/" + name, std::ios::binary);
+    return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// A stream of grid9.tom written by an earlier version (in the builder's order: the versions
+/// before 1.3 kept it) decodes at every chunk to grid9.tom's levels.
+void check_old_stream(const char* name, uint32_t minor) {
+    INFO(name);
+    const std::vector<uint8_t> stream = stream_data(name), image = stream_data("grid9.tom");
     REQUIRE(stream.size() > 64);
-    REQUIRE(tom::layout::load_u32(&stream[12]) == 1);  // version_minor
+    REQUIRE(tom::layout::load_u32(&stream[12]) == minor);  // version_minor
     const tom::File original = tom::File::from_bytes(image.data(), image.size(), "grid9.tom");
     REQUIRE((original.mesh(0).normals && original.mesh(0).texcoords));
-    tom::StreamDecoder d(tom::meshopt_codecs(), "grid9-stream-1.1.tom");
+    tom::StreamDecoder d(tom::meshopt_codecs(), name);
     d.append(stream.data(), 64);
     d.append(stream.data() + 64, d.next_boundary() - 64);
     REQUIRE(d.has_directory());
@@ -343,6 +418,18 @@ TEST_CASE("a stream written at version 1.1 decodes to its levels", "[stream]") {
     }
     d.append(stream.data() + fed, stream.size() - fed);
     CHECK(d.complete());
+}
+
+TEST_CASE("streams written at versions 1.1 and 1.2 decode to their levels", "[stream]") {
+    // tests/data/stream: grid9.obj (normals, texture coordinates) built by the toolkit of stream
+    // version 1.1 (a prediction and a block per attribute, no byte form), streamed and ordinary,
+    // and grid9.tom streamed by version 1.2 (substitutes in index_bits(v) bits, no opening bit)
+    check_old_stream("grid9-stream-1.2.tom", 2);
+    check_old_stream("grid9-stream-1.1.tom", 1);
+    const std::vector<uint8_t> stream = stream_data("grid9-stream-1.1.tom");
+    tom::StreamDecoder d(tom::meshopt_codecs());
+    d.append(stream.data(), stream.size());
+    const std::vector<tom::StreamChunk> chunks = d.chunks();
     // the byte form (predictions 2 and 3) is new in 1.2: chunk 1's POSI prediction set to 2,
     // after its part's (base, born) and its splits block, and the chunk's checksum mended in its
     // 24-byte record

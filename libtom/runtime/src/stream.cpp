@@ -114,6 +114,13 @@ struct SplitScratch {
 
 constexpr uint32_t none = UINT32_MAX;  // no vertex
 
+/// How the chunk being decoded codes its splits' substitutes: since 1.3 a bit opens the splits
+/// block, set when each is a difference from the one before (FORMAT.md), else index_bits(v) bits.
+struct SubstituteCode {
+    bool differences = false;
+    uint32_t previous = 0;  // the chunk's last substitute read, 0 before its first
+};
+
 struct Residuals;  // an attribute's residuals in a chunk, below
 
 /// A chunk's record as the directory's table holds it, with the file offsets of its fields (for
@@ -159,6 +166,7 @@ struct MeshState {
     std::vector<uint32_t> ring_items;
     std::vector<size_t> ring_ends;
     SplitScratch split;                          // the neighbourhood of the split being decoded
+    SubstituteCode substitute_code;              // the chunk being decoded's
     std::vector<std::pair<uint32_t, uint32_t>> rewritten;  // the chunk being decoded's corner writes: (3 t + k, old vertex)
     std::vector<uint32_t> births;                // scratch: a split's born triangles per part
     // the sections of the vertices [0, resolution) that only grow: the streams dequantized, the
@@ -933,6 +941,19 @@ uint32_t candidate(SplitScratch& s, uint32_t index) {
 
 }  // namespace
 
+namespace {
+
+/// Vertex v's substitute, below v.
+uint32_t read_substitute(SubstituteCode& code, ChunkReader& in, BitReader& r, uint32_t v) {
+    const uint64_t p = code.differences ? add_zigzag(code.previous, r.gamma() - 1) : r.bits(index_bits(v));
+    if (p >= v)
+        in.fail("vertex " + std::to_string(v) + " substitute " + (p == UINT64_MAX ? std::string("below 0") : std::to_string(p)) + " is not below it", 36);
+    code.previous = uint32_t(p);
+    return uint32_t(p);
+}
+
+}  // namespace
+
 // The splits of vertices [a, b) (FORMAT.md): each vertex's substitute, which of its corners take
 // the vertex, and the triangles born with it; and each vertex's ring for the attributes.
 void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t a, uint32_t b, const std::vector<uint32_t>& born) {
@@ -940,6 +961,7 @@ void StreamDecoder::Impl::decode_splits(MeshState& m, ChunkReader& in, uint32_t 
     BitReader r{data, n, 0, &in};
     std::vector<uint32_t> left = born;
     m.ring_items.clear(), m.ring_ends.clear();
+    m.substitute_code = {minor >= 3 && r.bits(1) != 0, 0};
     for (uint32_t v = a; v < b; ++v) split_vertex(m, in, r, v, left);
     for (size_t q = 0; q < m.parts.size(); ++q)
         if (left[q]) in.fail("part " + std::to_string(q) + " bears " + std::to_string(born[q] - left[q]) + " triangles where the chunk says " + std::to_string(born[q]), 36);
@@ -954,8 +976,7 @@ void StreamDecoder::Impl::split_vertex(MeshState& m, ChunkReader& in, BitReader&
         m.ring_ends.push_back(m.ring_items.size());
         return;
     }
-    const uint32_t p = r.bits(index_bits(v));
-    if (p >= v) in.fail("vertex " + std::to_string(v) + " substitute " + std::to_string(p) + " is not below it", 36);
+    const uint32_t p = read_substitute(m.substitute_code, in, r, v);
     m.substitute.push_back(p);
     move_corners(m, r, p, v);
     const uint64_t births = born_counts(m, in, r, v, left);

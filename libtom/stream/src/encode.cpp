@@ -10,6 +10,7 @@
 #include "format_layout.h"
 #include "scene_codec.h"
 #include "stream_layout.h"
+#include "stream_order.h"
 #include "tom/errors.h"
 #include "tom/stream/stream_file.h"
 
@@ -302,11 +303,37 @@ void put_born_counts(BitWriter& w, const std::vector<uint32_t>& counts) {
 bool has_pair_bit(const Split& s) { return s.born.size() == 2 && s.common == 2; }
 bool split_pair(const Split& s) { return has_pair_bit(s) && s.born[0].index < 2 && s.born[1].index < 2 && s.born[0].index != s.born[1].index; }
 
+/// Since 1.3 the splits block opens with a bit saying how the substitutes are coded: clear, each
+/// in index_bits(v) bits; set, each as gamma(zigzag(p - previous p) + 1), the previous of the
+/// chunk's first 0 (small when the chunk's splits are ordered by substitute, stream_order.h).
+/// The encoder takes whichever is smaller.
+bool differences_smaller(const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
+    uint64_t plain = 0, differences = 0;
+    uint32_t previous = 0;
+    for (uint32_t v = std::max(a, S); v < b; ++v) {
+        const uint32_t p = conn.splits[v - S].p;
+        const uint64_t z = zigzag_difference(p, previous);
+        if (z >= UINT32_MAX) return false;  // gamma codes below 2^32
+        plain += index_bits(v);
+        differences += gamma_bits(z + 1);
+        previous = p;
+    }
+    return differences < plain;
+}
+
 void put_splits(std::vector<uint8_t>& out, const Connectivity& conn, uint32_t S, uint32_t a, uint32_t b) {
     BitWriter w;
+    const bool differences = differences_smaller(conn, S, a, b);
+    w.put(differences ? 1 : 0, 1);
+    uint32_t previous = 0;
     for (uint32_t v = std::max(a, S); v < b; ++v) {
         const Split& s = conn.splits[v - S];
-        w.put(s.p, index_bits(v));
+        if (differences) {
+            w.gamma(uint32_t(zigzag_difference(s.p, previous) + 1));
+        } else {
+            w.put(s.p, index_bits(v));
+        }
+        previous = s.p;
         for (const bool move : s.moves) w.put(move ? 1 : 0, 1);
         put_born_counts(w, s.born_count);
         const bool pair = split_pair(s);
@@ -408,12 +435,12 @@ std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const 
 }
 
 /// Every chunk of mesh `index`.
-std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Quantized& q, const StreamOptions& o) {
+std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Quantized& q, const std::vector<uint32_t>& ends) {
     const Connectivity conn = connectivity(m);
     std::vector<uint32_t> live(part_count(m), 0);
     std::vector<Chunk> out;
     uint32_t a = 0;
-    for (const uint32_t b : chunk_ends(m, o)) {
+    for (const uint32_t b : ends) {
         Chunk c;
         c.mesh = index, c.vertex_end = b;
         c.start = out.empty() ? -1.0 : double(out.back().triangles) / double(std::max(1u, m.triangle_count));
@@ -469,10 +496,31 @@ void check_options(const StreamOptions& o) {
     if (!(o.growth > 1 && o.growth <= 16)) throw ArgumentError("encode_stream: growth is not in (1, 16]");
 }
 
+/// Every mesh's chunk ends.
+std::vector<std::vector<uint32_t>> all_chunk_ends(const File& file, const StreamOptions& options) {
+    std::vector<std::vector<uint32_t>> ends;
+    for (uint32_t i = 0; i < file.mesh_count(); ++i) ends.push_back(chunk_ends(file.mesh(i), options));
+    return ends;
+}
+
 } // namespace
 
-std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamOptions& options, const std::string& name) {
+std::vector<uint8_t> stream_order(const void* bytes, size_t size, const StreamOptions& options, const std::string& name) {
     check_options(options);
+    const File file = File::borrow(bytes, size, name);
+    if (options.keep_order) return std::vector<uint8_t>(static_cast<const uint8_t*>(bytes), static_cast<const uint8_t*>(bytes) + size);
+    return stream_ordered_image(file, static_cast<const uint8_t*>(bytes), all_chunk_ends(file, options));
+}
+
+std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const StreamOptions& options, const std::string& name) {
+    check_options(options);
+    // the chunks end where the source's do (the renumbered groups would move some ends)
+    const File original = File::borrow(source, source_size, name);
+    const std::vector<std::vector<uint32_t>> ends = all_chunk_ends(original, options);
+    const std::vector<uint8_t> ordered =
+        options.keep_order ? std::vector<uint8_t>() : stream_ordered_image(original, static_cast<const uint8_t*>(source), ends);
+    const void* bytes = options.keep_order ? source : ordered.data();
+    const size_t size = options.keep_order ? source_size : ordered.size();
     const File file = File::borrow(bytes, size, name);
     // the directory: kept sections (those a frame needs, then the deferred ones), quantization per
     // mesh, then (below) the chunk table
@@ -498,7 +546,7 @@ std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamO
         const Quantized q = quantize_mesh(m, options);
         const std::vector<uint8_t> record = quantization_record(q.q);
         directory.insert(directory.end(), record.begin(), record.end());
-        for (Chunk& c : mesh_chunks(m, i, q, options)) chunks.push_back(std::move(c));
+        for (Chunk& c : mesh_chunks(m, i, q, ends[i])) chunks.push_back(std::move(c));
     }
     std::stable_sort(chunks.begin(), chunks.end(), [](const Chunk& x, const Chunk& y) { return x.start < y.start; });
     // the deferred block right after the meshes' first chunks

@@ -24,6 +24,11 @@ struct StreamOptions {
     /// each next one grows the resolution by `growth` (a group of copies is never split).
     double first_share = 0.01;
     double growth = 1.25;
+    /// Keep the source's vertex order. By default each chunk's vertices are renumbered, its
+    /// splits ordered by their substitutes (stream_order): the substitutes then code as small
+    /// differences, a smaller file, and the levels at chunk boundaries are the same meshes, but
+    /// the resolutions inside a chunk take its splits in that order, not the builder's.
+    bool keep_order = false;
 };
 
 /// The streamed form of the .tom file image `bytes` (validated first; `name` stands for it in
@@ -31,6 +36,11 @@ struct StreamOptions {
 /// \throw FormatError for an invalid image, ArgumentError for options out of range.
 std::vector<uint8_t> encode_stream(const void* bytes, size_t size, const StreamOptions& options = {}, const std::string& name = "<memory>");
 
+/// The ordinary .tom image that the stream encode_stream(bytes, size, options) writes decodes to
+/// (its quantization aside): `bytes` itself with `options.keep_order`, else its meshes' vertices
+/// renumbered within each chunk (see StreamOptions::keep_order), `COAR` left out.
+/// \throw as encode_stream.
+std::vector<uint8_t> stream_order(const void* bytes, size_t size, const StreamOptions& options = {}, const std::string& name = "<memory>");
 /// libmeshoptimizer's vertex and index decoders, for tom::StreamDecoder.
 StreamCodecs meshopt_codecs();
 
