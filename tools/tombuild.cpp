@@ -607,7 +607,8 @@ int parse_options(Options& opt, int argc, char** argv) {
         ->check(CLI::Range(1u, 16u))
         ->needs(stream)
         ->group("Output");
-    app.add_option("--first-chunk", so.first_share, "With --stream: the share of a mesh's vertices its first chunk holds (default 0.01; at least its coarsest level)")
+    app.add_option("--first-chunk", so.first_share,
+                   "With --stream: the share of a mesh's vertices and triangles its first chunk holds at least (default 0.01; at least its coarsest level)")
         ->check(CLI::Range(1e-6, 1.0))
         ->needs(stream)
         ->group("Output");

@@ -12,6 +12,7 @@
 #include "stream_layout.h"
 #include "stream_order.h"
 #include "tom/errors.h"
+#include "tom/extract.h"
 #include "tom/stream/stream_file.h"
 
 namespace tom {
@@ -80,13 +81,28 @@ Quantized quantize_mesh(const MeshView& m, const StreamOptions& o) {
     return out;
 }
 
-/// The resolutions chunks end at: the first holding about `first_share` of the vertices and the
-/// survivors, each next `growth` times the last, none inside a group of copies, the last V.
+/// The lowest resolution at which at least `share` of the mesh's triangles are live.
+uint32_t resolution_with_share(const MeshView& m, double share) {
+    const double wanted = std::ceil(share * double(m.triangle_count));
+    uint32_t lo = m.min_vertex_count, hi = m.vertex_count;
+    while (lo < hi) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (double(active_triangle_count(m, mid)) >= wanted)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+/// The resolutions chunks end at: the first holding `first_share` of the vertices and of the
+/// triangles at least (and the survivors), each next `growth` times the last, none inside a group
+/// of copies, the last V.
 std::vector<uint32_t> chunk_ends(const MeshView& m, const StreamOptions& o) {
     std::vector<uint32_t> ends;
     const uint32_t V = m.vertex_count;
     if (V == 0) return ends;
-    double target = std::max<double>({double(m.min_vertex_count), std::ceil(o.first_share * V), 1.0});
+    double target = std::max<double>({double(m.min_vertex_count), std::ceil(o.first_share * V), double(resolution_with_share(m, o.first_share)), 1.0});
     while (true) {
         uint32_t b = m.whole_groups_above(uint32_t(std::min<double>(target, V)));
         if (!ends.empty() && b <= ends.back()) b = m.whole_groups_above(ends.back() + 1);

@@ -20,8 +20,9 @@ struct StreamOptions {
     uint32_t position_bits = 14;
     uint32_t normal_bits = 8;     ///< per octahedral component of normals and tangents (gltfpack: 8)
     uint32_t texcoord_bits = 12;  ///< per texture coordinate, over its range (gltfpack: 12)
-    /// The first chunk of a mesh holds about this share of its vertices (at least its survivors);
-    /// each next one grows the resolution by `growth` (a group of copies is never split).
+    /// The first chunk of a mesh holds this share of its vertices and of its triangles at least
+    /// (and its survivors); each next one grows the resolution by `growth` (a group of copies is
+    /// never split).
     double first_share = 0.01;
     double growth = 1.25;
     /// Keep the source's vertex order. By default each chunk's vertices are renumbered, its
