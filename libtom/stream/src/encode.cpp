@@ -4,8 +4,10 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 
 #include "format_layout.h"
 #include "scene_codec.h"
@@ -38,6 +40,74 @@ struct Quantized {
     std::vector<int16_t> tangents;    // 3 per vertex: octahedral pair, w
 };
 
+/// Per point (coincident vertices count once, so that a seam's copies land on one grid point):
+/// the planes of the full mesh's triangles around it, as the area-weighted sum of n n^T over
+/// their unit normals, scaled to trace 1 (0 for a point without triangles).
+struct PointPlanes {
+    std::vector<uint32_t> point;           // per vertex
+    std::vector<std::array<double, 6>> q;  // per point: xx, xy, xz, yy, yz, zz
+};
+
+PointPlanes point_planes(const MeshView& m) {
+    PointPlanes pp;
+    const uint32_t n = m.vertex_count;
+    std::vector<uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    auto key = [&](uint32_t v) { return std::array<float, 3>{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}; };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b) || (key(a) == key(b) && a < b); });
+    pp.point.resize(n);
+    for (uint32_t i = 0, points = 0; i < n; ++i) pp.point[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? points - 1 : points++;
+    pp.q.assign(n ? *std::max_element(pp.point.begin(), pp.point.end()) + 1 : 0, {0, 0, 0, 0, 0, 0});
+    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+        const float* p[3] = {m.positions + 3 * size_t(m.corner(3 * t)), m.positions + 3 * size_t(m.corner(3 * t + 1)),
+                             m.positions + 3 * size_t(m.corner(3 * t + 2))};
+        const double e1[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
+        const double e2[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
+        const double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double twice_area = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(twice_area > 0)) continue;
+        const double w = 1 / twice_area;  // area * n n^T = (c c^T) / (2 |c|): the factor 2 cancels below
+        const std::array<double, 6> add{c[0] * c[0] * w, c[0] * c[1] * w, c[0] * c[2] * w, c[1] * c[1] * w, c[1] * c[2] * w, c[2] * c[2] * w};
+        for (int k = 0; k < 3; ++k)
+            for (int j = 0; j < 6; ++j) pp.q[pp.point[m.corner(3 * t + k)]][j] += add[j];
+    }
+    for (std::array<double, 6>& q : pp.q) {
+        const double trace = q[0] + q[3] + q[5];
+        if (trace > 0)
+            for (double& x : q) x /= trace;
+    }
+    return pp;
+}
+
+/// A position's grid values: of the grid points of the cell around it (at most one step away on
+/// each axis), the one that moves it least off the planes of its triangles, with a small weight
+/// on the move itself: the quantized surface stays nearer the source than rounding each
+/// coordinate does (at a crease or corner, near every plane there).
+std::array<uint32_t, 3> quantize_on_surface(const float x[3], const std::array<double, 6>& planes, const StreamQuantization& q) {
+    constexpr double move_weight = 0.1;  // of the squared move; the planes' terms weigh 1
+    const uint32_t top = (1u << q.position_bits) - 1;
+    uint32_t lo[3];
+    for (int k = 0; k < 3; ++k) {
+        const double f = std::floor((double(x[k]) - double(q.position_min[k])) / double(q.position_step));
+        lo[k] = uint32_t(std::clamp(f, 0.0, double(top)));
+    }
+    std::array<uint32_t, 3> best{};
+    double best_cost = INFINITY;
+    for (int corner = 0; corner < 8; ++corner) {
+        std::array<uint32_t, 3> g;
+        double d[3];
+        for (int k = 0; k < 3; ++k) {
+            g[k] = std::min(top, lo[k] + (corner >> k & 1));
+            d[k] = double(dequantize(g[k], q.position_min[k], q.position_step)) - double(x[k]);
+        }
+        const double planes_cost = planes[0] * d[0] * d[0] + planes[3] * d[1] * d[1] + planes[5] * d[2] * d[2] +
+                                   2 * (planes[1] * d[0] * d[1] + planes[2] * d[0] * d[2] + planes[4] * d[1] * d[2]);
+        const double cost = planes_cost + move_weight * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (cost < best_cost) best_cost = cost, best = g;
+    }
+    return best;
+}
+
 Quantized quantize_mesh(const MeshView& m, const StreamOptions& o) {
     Quantized out;
     StreamQuantization& q = out.q;
@@ -49,7 +119,11 @@ Quantized quantize_mesh(const MeshView& m, const StreamOptions& o) {
         extent = std::max(extent, m.bounds_max[k] - m.bounds_min[k]);
     }
     q.position_step = grid_step(extent, o.position_bits);
-    for (size_t i = 0; i < 3 * n; ++i) out.positions.push_back(uint16_t(quantize(m.positions[i], q.position_min[i % 3], q.position_step, o.position_bits)));
+    const PointPlanes planes = point_planes(m);
+    for (size_t v = 0; v < n; ++v) {
+        const std::array<uint32_t, 3> g = quantize_on_surface(m.positions + 3 * v, planes.q[planes.point[v]], q);
+        out.positions.insert(out.positions.end(), {uint16_t(g[0]), uint16_t(g[1]), uint16_t(g[2])});
+    }
     if (m.normals)
         for (size_t v = 0; v < n; ++v) {
             int16_t e[2];

@@ -52,7 +52,7 @@ struct StreamDeferred {
 struct StreamQuantization {
     uint32_t position_bits = 0, normal_bits = 0, texcoord_bits = 0;
     float position_min[3] = {0, 0, 0};
-    float position_step = 0;                     ///< grid step, the same on every axis: error <= step / 2 per axis
+    float position_step = 0;                     ///< grid step, the same on every axis: error < one step per axis
     float texcoord_min[2][2] = {{0, 0}, {0, 0}}; ///< TEXCOORD_0 and TEXCOORD_1
     float texcoord_step[2][2] = {{0, 0}, {0, 0}};
 };
