@@ -40,121 +40,38 @@ struct Quantized {
     std::vector<int16_t> tangents;    // 3 per vertex: octahedral pair, w
 };
 
-/// Per point (coincident vertices count once, so that a seam's copies land on one grid point):
-/// the planes of the full mesh's triangles around it, as the area-weighted sum of n n^T over
-/// their unit normals, scaled to trace 1 (0 for a point without triangles).
+using Planes = std::array<double, 6>;  // a sum of n n^T: xx, xy, xz, yy, yz, zz
+
+/// Adds the plane of triangle (a, b, c) of `m`, weighted by its area, to `q`.
+void add_plane(Planes& q, const MeshView& m, uint32_t a, uint32_t b, uint32_t c) {
+    const float *p0 = m.positions + 3 * size_t(a), *p1 = m.positions + 3 * size_t(b), *p2 = m.positions + 3 * size_t(c);
+    const double e1[3] = {double(p1[0]) - p0[0], double(p1[1]) - p0[1], double(p1[2]) - p0[2]};
+    const double e2[3] = {double(p2[0]) - p0[0], double(p2[1]) - p0[1], double(p2[2]) - p0[2]};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    const double twice_area = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(twice_area > 0)) return;
+    const double w = 0.5 / twice_area;  // area * unit n n^T = (n n^T) / (2 |n|)
+    const Planes add{n[0] * n[0] * w, n[0] * n[1] * w, n[0] * n[2] * w, n[1] * n[1] * w, n[1] * n[2] * w, n[2] * n[2] * w};
+    for (int j = 0; j < 6; ++j) q[j] += add[j];
+}
+
+/// `q` scaled to trace 1 (left 0 when 0).
+Planes unit_trace(Planes q) {
+    const double trace = q[0] + q[3] + q[5];
+    if (trace > 0)
+        for (double& x : q) x /= trace;
+    return q;
+}
+
+/// What a vertex's quantization should keep it near, per point (coincident vertices count once,
+/// so that a seam's copies land on one grid point): the planes of the full mesh's triangles around
+/// it, and those of the triangles around it at the coarsest level it is in (where it is born, or
+/// the survivors' level), each scaled to trace 1: a vertex serves every level from its birth on,
+/// and at the coarse ones its triangles are the coarse ones.
 struct PointPlanes {
-    std::vector<uint32_t> point;           // per vertex
-    std::vector<std::array<double, 6>> q;  // per point: xx, xy, xz, yy, yz, zz
+    std::vector<uint32_t> point;  // per vertex
+    std::vector<Planes> q;        // per point
 };
-
-PointPlanes point_planes(const MeshView& m) {
-    PointPlanes pp;
-    const uint32_t n = m.vertex_count;
-    std::vector<uint32_t> order(n);
-    std::iota(order.begin(), order.end(), 0u);
-    auto key = [&](uint32_t v) { return std::array<float, 3>{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}; };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b) || (key(a) == key(b) && a < b); });
-    pp.point.resize(n);
-    for (uint32_t i = 0, points = 0; i < n; ++i) pp.point[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? points - 1 : points++;
-    pp.q.assign(n ? *std::max_element(pp.point.begin(), pp.point.end()) + 1 : 0, {0, 0, 0, 0, 0, 0});
-    for (uint32_t t = 0; t < m.triangle_count; ++t) {
-        const float* p[3] = {m.positions + 3 * size_t(m.corner(3 * t)), m.positions + 3 * size_t(m.corner(3 * t + 1)),
-                             m.positions + 3 * size_t(m.corner(3 * t + 2))};
-        const double e1[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
-        const double e2[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
-        const double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        const double twice_area = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        if (!(twice_area > 0)) continue;
-        const double w = 1 / twice_area;  // area * n n^T = (c c^T) / (2 |c|): the factor 2 cancels below
-        const std::array<double, 6> add{c[0] * c[0] * w, c[0] * c[1] * w, c[0] * c[2] * w, c[1] * c[1] * w, c[1] * c[2] * w, c[2] * c[2] * w};
-        for (int k = 0; k < 3; ++k)
-            for (int j = 0; j < 6; ++j) pp.q[pp.point[m.corner(3 * t + k)]][j] += add[j];
-    }
-    for (std::array<double, 6>& q : pp.q) {
-        const double trace = q[0] + q[3] + q[5];
-        if (trace > 0)
-            for (double& x : q) x /= trace;
-    }
-    return pp;
-}
-
-/// A position's grid values: of the grid points of the cell around it (at most one step away on
-/// each axis), the one that moves it least off the planes of its triangles, with a small weight
-/// on the move itself: the quantized surface stays nearer the source than rounding each
-/// coordinate does (at a crease or corner, near every plane there).
-std::array<uint32_t, 3> quantize_on_surface(const float x[3], const std::array<double, 6>& planes, const StreamQuantization& q) {
-    constexpr double move_weight = 0.1;  // of the squared move; the planes' terms weigh 1
-    const uint32_t top = (1u << q.position_bits) - 1;
-    uint32_t lo[3];
-    for (int k = 0; k < 3; ++k) {
-        const double f = std::floor((double(x[k]) - double(q.position_min[k])) / double(q.position_step));
-        lo[k] = uint32_t(std::clamp(f, 0.0, double(top)));
-    }
-    std::array<uint32_t, 3> best{};
-    double best_cost = INFINITY;
-    for (int corner = 0; corner < 8; ++corner) {
-        std::array<uint32_t, 3> g;
-        double d[3];
-        for (int k = 0; k < 3; ++k) {
-            g[k] = std::min(top, lo[k] + (corner >> k & 1));
-            d[k] = double(dequantize(g[k], q.position_min[k], q.position_step)) - double(x[k]);
-        }
-        const double planes_cost = planes[0] * d[0] * d[0] + planes[3] * d[1] * d[1] + planes[5] * d[2] * d[2] +
-                                   2 * (planes[1] * d[0] * d[1] + planes[2] * d[0] * d[2] + planes[4] * d[1] * d[2]);
-        const double cost = planes_cost + move_weight * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        if (cost < best_cost) best_cost = cost, best = g;
-    }
-    return best;
-}
-
-Quantized quantize_mesh(const MeshView& m, const StreamOptions& o) {
-    Quantized out;
-    StreamQuantization& q = out.q;
-    q.position_bits = o.position_bits, q.normal_bits = o.normal_bits, q.texcoord_bits = o.texcoord_bits;
-    const size_t n = m.vertex_count;
-    float extent = 0;
-    for (int k = 0; k < 3; ++k) {
-        q.position_min[k] = m.bounds_min[k];
-        extent = std::max(extent, m.bounds_max[k] - m.bounds_min[k]);
-    }
-    q.position_step = grid_step(extent, o.position_bits);
-    const PointPlanes planes = point_planes(m);
-    for (size_t v = 0; v < n; ++v) {
-        const std::array<uint32_t, 3> g = quantize_on_surface(m.positions + 3 * v, planes.q[planes.point[v]], q);
-        out.positions.insert(out.positions.end(), {uint16_t(g[0]), uint16_t(g[1]), uint16_t(g[2])});
-    }
-    if (m.normals)
-        for (size_t v = 0; v < n; ++v) {
-            int16_t e[2];
-            octahedral_encode(m.normals + 3 * v, o.normal_bits, e);
-            out.normals.insert(out.normals.end(), e, e + 2);
-        }
-    const float* uvs[2] = {m.texcoords, m.texcoords1};
-    for (int t = 0; t < 2; ++t) {
-        if (!uvs[t]) continue;
-        for (int k = 0; k < 2; ++k) {
-            float lo = n ? uvs[t][k] : 0, hi = lo;
-            for (size_t v = 0; v < n; ++v) lo = std::min(lo, uvs[t][2 * v + k]), hi = std::max(hi, uvs[t][2 * v + k]);
-            q.texcoord_min[t][k] = lo;
-            q.texcoord_step[t][k] = grid_step(hi - lo, o.texcoord_bits);
-        }
-        for (size_t i = 0; i < 2 * n; ++i) out.texcoords[t].push_back(uint16_t(quantize(uvs[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2], o.texcoord_bits)));
-    }
-    for (int t = 0; t < 2; ++t)
-        for (int k = 0; k < 2; ++k)
-            if (!uvs[t]) q.texcoord_step[t][k] = 1;
-    if (m.colors)
-        for (size_t i = 0; i < 4 * n; ++i) out.colors.push_back(uint8_t(std::nearbyint(std::clamp(m.colors[i], 0.0f, 1.0f) * 255.0f)));
-    if (m.tangents)
-        for (size_t v = 0; v < n; ++v) {
-            int16_t e[2];
-            octahedral_encode(m.tangents + 4 * v, o.normal_bits, e);
-            out.tangents.insert(out.tangents.end(), {e[0], e[1], int16_t(m.tangents[4 * v + 3] < 0 ? -1 : 1)});
-        }
-    return out;
-}
-
 /// The lowest resolution at which at least `share` of the mesh's triangles are live.
 uint32_t resolution_with_share(const MeshView& m, double share) {
     const double wanted = std::ceil(share * double(m.triangle_count));
@@ -293,6 +210,7 @@ struct Connectivity {
     std::vector<std::vector<uint32_t>> base;  // per part
     std::vector<Split> splits;                // vertex S + i
     std::vector<std::vector<uint32_t>> rings; // vertex S + i: its neighbours just after its split, ascending
+    std::vector<Planes> born_planes;          // every vertex: its triangles' planes at the coarsest level it is in
 };
 
 Connectivity connectivity(const MeshView& m) {
@@ -314,6 +232,7 @@ Connectivity connectivity(const MeshView& m) {
     seen.cover(V);
     out.splits.resize(V - S);
     out.rings.resize(V - S);
+    out.born_planes.assign(V, Planes{0, 0, 0, 0, 0, 0});
     for (uint32_t v = V; v-- > S;) {
         Split& s = out.splits[v - S];
         const uint32_t p = m.substitute_at(v);
@@ -321,6 +240,7 @@ Connectivity connectivity(const MeshView& m) {
         // born at v + 1: the live triangles holding both v and p, each part's last ones
         prune(incident[v]);
         gather_neighbours(incident[v], triangle, v, v, seen, out.rings[v - S]);
+        for (uint32_t g : incident[v]) add_plane(out.born_planes[v], m, triangle(g)[0], triangle(g)[1], triangle(g)[2]);
         std::vector<uint32_t> born;
         for (uint32_t g : incident[v]) {
             const uint32_t* c = &cur[3 * size_t(g / 3)];
@@ -375,7 +295,114 @@ Connectivity connectivity(const MeshView& m) {
     for (uint32_t q = 0; q < P; ++q) {
         const Part part = part_at(m, q);
         out.base.emplace_back(cur.begin() + 3 * size_t(part.first_triangle), cur.begin() + 3 * (size_t(part.first_triangle) + alive_count[q]));
+        for (size_t t = 0; t < out.base.back().size(); t += 3)  // the survivors' coarsest level
+            for (int k = 0; k < 3; ++k)
+                add_plane(out.born_planes[out.base.back()[t + k]], m, out.base.back()[t], out.base.back()[t + 1], out.base.back()[t + 2]);
     }
+    return out;
+}
+
+PointPlanes point_planes(const MeshView& m, const Connectivity& conn) {
+    PointPlanes pp;
+    const uint32_t n = m.vertex_count;
+    std::vector<uint32_t> order(n);
+    std::iota(order.begin(), order.end(), 0u);
+    auto key = [&](uint32_t v) { return std::array<float, 3>{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}; };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b) || (key(a) == key(b) && a < b); });
+    pp.point.resize(n);
+    for (uint32_t i = 0, points = 0; i < n; ++i) pp.point[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? points - 1 : points++;
+    const size_t points = n ? *std::max_element(pp.point.begin(), pp.point.end()) + 1 : 0;
+    std::vector<Planes> fine(points, Planes{0, 0, 0, 0, 0, 0}), born(points, Planes{0, 0, 0, 0, 0, 0});
+    for (uint32_t t = 0; t < m.triangle_count; ++t) {
+        Planes q{0, 0, 0, 0, 0, 0};
+        add_plane(q, m, m.corner(3 * t), m.corner(3 * t + 1), m.corner(3 * t + 2));
+        for (int k = 0; k < 3; ++k)
+            for (int j = 0; j < 6; ++j) fine[pp.point[m.corner(3 * t + k)]][j] += q[j];
+    }
+    for (uint32_t v = 0; v < n; ++v)
+        for (int j = 0; j < 6; ++j) born[pp.point[v]][j] += conn.born_planes[v][j];
+    pp.q.resize(points);
+    for (size_t i = 0; i < points; ++i) {
+        const Planes a = unit_trace(fine[i]), b = unit_trace(born[i]);
+        for (int j = 0; j < 6; ++j) pp.q[i][j] = a[j] + b[j];
+    }
+    return pp;
+}
+
+/// A position's grid values: of the grid points of the cell around it (at most one step away on
+/// each axis), the one that moves it least off the planes of its triangles (PointPlanes), with a
+/// small weight on the move itself: the quantized surface stays nearer the source than rounding each
+/// coordinate does (at a crease or corner, near every plane there).
+std::array<uint32_t, 3> quantize_on_surface(const float x[3], const Planes& planes, const StreamQuantization& q) {
+    constexpr double move_weight = 0.1;  // of the squared move; the planes' terms weigh 1
+    const uint32_t top = (1u << q.position_bits) - 1;
+    uint32_t lo[3];
+    for (int k = 0; k < 3; ++k) {
+        const double f = std::floor((double(x[k]) - double(q.position_min[k])) / double(q.position_step));
+        lo[k] = uint32_t(std::clamp(f, 0.0, double(top)));
+    }
+    std::array<uint32_t, 3> best{};
+    double best_cost = INFINITY;
+    for (int corner = 0; corner < 8; ++corner) {
+        std::array<uint32_t, 3> g;
+        double d[3];
+        for (int k = 0; k < 3; ++k) {
+            g[k] = std::min(top, lo[k] + (corner >> k & 1));
+            d[k] = double(dequantize(g[k], q.position_min[k], q.position_step)) - double(x[k]);
+        }
+        const double planes_cost = planes[0] * d[0] * d[0] + planes[3] * d[1] * d[1] + planes[5] * d[2] * d[2] +
+                                   2 * (planes[1] * d[0] * d[1] + planes[2] * d[0] * d[2] + planes[4] * d[1] * d[2]);
+        const double cost = planes_cost + move_weight * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (cost < best_cost) best_cost = cost, best = g;
+    }
+    return best;
+}
+
+Quantized quantize_mesh(const MeshView& m, const Connectivity& conn, const StreamOptions& o) {
+    Quantized out;
+    StreamQuantization& q = out.q;
+    q.position_bits = o.position_bits, q.normal_bits = o.normal_bits, q.texcoord_bits = o.texcoord_bits;
+    const size_t n = m.vertex_count;
+    float extent = 0;
+    for (int k = 0; k < 3; ++k) {
+        q.position_min[k] = m.bounds_min[k];
+        extent = std::max(extent, m.bounds_max[k] - m.bounds_min[k]);
+    }
+    q.position_step = grid_step(extent, o.position_bits);
+    const PointPlanes planes = point_planes(m, conn);
+    for (size_t v = 0; v < n; ++v) {
+        const std::array<uint32_t, 3> g = quantize_on_surface(m.positions + 3 * v, planes.q[planes.point[v]], q);
+        out.positions.insert(out.positions.end(), {uint16_t(g[0]), uint16_t(g[1]), uint16_t(g[2])});
+    }
+    if (m.normals)
+        for (size_t v = 0; v < n; ++v) {
+            int16_t e[2];
+            octahedral_encode(m.normals + 3 * v, o.normal_bits, e);
+            out.normals.insert(out.normals.end(), e, e + 2);
+        }
+    const float* uvs[2] = {m.texcoords, m.texcoords1};
+    for (int t = 0; t < 2; ++t) {
+        if (!uvs[t]) continue;
+        for (int k = 0; k < 2; ++k) {
+            float lo = n ? uvs[t][k] : 0, hi = lo;
+            for (size_t v = 0; v < n; ++v) lo = std::min(lo, uvs[t][2 * v + k]), hi = std::max(hi, uvs[t][2 * v + k]);
+            q.texcoord_min[t][k] = lo;
+            q.texcoord_step[t][k] = grid_step(hi - lo, o.texcoord_bits);
+        }
+        for (size_t i = 0; i < 2 * n; ++i)
+            out.texcoords[t].push_back(uint16_t(quantize(uvs[t][i], q.texcoord_min[t][i % 2], q.texcoord_step[t][i % 2], o.texcoord_bits)));
+    }
+    for (int t = 0; t < 2; ++t)
+        for (int k = 0; k < 2; ++k)
+            if (!uvs[t]) q.texcoord_step[t][k] = 1;
+    if (m.colors)
+        for (size_t i = 0; i < 4 * n; ++i) out.colors.push_back(uint8_t(std::nearbyint(std::clamp(m.colors[i], 0.0f, 1.0f) * 255.0f)));
+    if (m.tangents)
+        for (size_t v = 0; v < n; ++v) {
+            int16_t e[2];
+            octahedral_encode(m.tangents + 4 * v, o.normal_bits, e);
+            out.tangents.insert(out.tangents.end(), {e[0], e[1], int16_t(m.tangents[4 * v + 3] < 0 ? -1 : 1)});
+        }
     return out;
 }
 
@@ -525,8 +552,7 @@ std::vector<uint8_t> chunk_payload(const MeshView& m, const Quantized& q, const 
 }
 
 /// Every chunk of mesh `index`.
-std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Quantized& q, const std::vector<uint32_t>& ends) {
-    const Connectivity conn = connectivity(m);
+std::vector<Chunk> mesh_chunks(const MeshView& m, uint32_t index, const Connectivity& conn, const Quantized& q, const std::vector<uint32_t>& ends) {
     std::vector<uint32_t> live(part_count(m), 0);
     std::vector<Chunk> out;
     uint32_t a = 0;
@@ -633,10 +659,11 @@ std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const
     std::vector<Chunk> chunks;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         const MeshView& m = file.mesh(i);
-        const Quantized q = quantize_mesh(m, options);
+        const Connectivity conn = connectivity(m);
+        const Quantized q = quantize_mesh(m, conn, options);
         const std::vector<uint8_t> record = quantization_record(q.q);
         directory.insert(directory.end(), record.begin(), record.end());
-        for (Chunk& c : mesh_chunks(m, i, q, ends[i])) chunks.push_back(std::move(c));
+        for (Chunk& c : mesh_chunks(m, i, conn, q, ends[i])) chunks.push_back(std::move(c));
     }
     std::stable_sort(chunks.begin(), chunks.end(), [](const Chunk& x, const Chunk& y) { return x.start < y.start; });
     // the deferred block right after the meshes' first chunks

@@ -16,8 +16,9 @@ namespace tom {
 
 struct StreamOptions {
     /// Bits of the grid positions go to, over the mesh's box (the same step on every axis): each
-    /// to the grid point of the cell around it nearest the planes of its triangles, at most a
-    /// step away per axis (coincident copies to one point). gltfpack's default is 14.
+    /// to the grid point of the cell around it nearest the planes of its triangles (at full
+    /// detail and at the coarsest level it is in), at most a step away per axis (coincident
+    /// copies to one point). gltfpack's default is 14.
     uint32_t position_bits = 14;
     uint32_t normal_bits = 8;     ///< per octahedral component of normals and tangents (gltfpack: 8)
     uint32_t texcoord_bits = 12;  ///< per texture coordinate, over its range (gltfpack: 12)
