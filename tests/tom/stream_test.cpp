@@ -585,6 +585,15 @@ TEST_CASE("bad streams are errors naming the place, and keep what was decoded", 
         CHECK(kept.mesh(0).vertex_count == chunks[2].vertex_end);
         CHECK(kept.mesh(0).triangle_count == chunks[2].triangles);
         CHECK(undone.tom_bytes() == three.tom_bytes());
+        // a substitute coded as a difference below 0: chunk 3's splits block opens with the bit for
+        // differences, then its first split's gamma(2), a difference of -1 from 0
+        std::vector<uint8_t> below = stream;
+        const uint64_t splits = chunks[3].begin_byte + 8 + 4;  // past its part's (base, born) and the block's length
+        REQUIRE((below[splits] & 1u) == 1u);
+        below[splits] = uint8_t((below[splits] & 0xF0u) | 0x05u);
+        reseal(below);
+        CHECK_THROWS_WITH(tom::StreamDecoder(tom::meshopt_codecs(), "b.tom").append(below.data(), below.size()),
+                          Catch::Contains("b.tom") && Catch::Contains("chunk 3") && Catch::Contains("substitute below 0 is not below it (FORMAT.md rule 36)"));
         // a chunk table entry past the mesh's vertices
         std::vector<uint8_t> table = stream;
         Table past = chunk_table(table);

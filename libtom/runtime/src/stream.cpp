@@ -939,10 +939,6 @@ uint32_t candidate(SplitScratch& s, uint32_t index) {
     return s.rest[index - s.common.size()];
 }
 
-}  // namespace
-
-namespace {
-
 /// Vertex v's substitute, below v.
 uint32_t read_substitute(SubstituteCode& code, ChunkReader& in, BitReader& r, uint32_t v) {
     const uint64_t p = code.differences ? add_zigzag(code.previous, r.gamma() - 1) : r.bits(index_bits(v));
