@@ -7,13 +7,13 @@
 
 #include "geometry.h"
 #include "parallel.h"
+#include "points.h"
 #include "substitution.h"
 #include "tom/extract.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <limits>
 
 namespace tom {
@@ -40,26 +40,13 @@ struct Points {
 
 Points weld_by_position(const MeshView& m) {
     const uint32_t V = m.vertex_count;
-    std::vector<uint32_t> order(V);
-    for (uint32_t v = 0; v < V; ++v) order[v] = v;
-    auto key = [&](uint32_t v) {
-        std::array<uint32_t, 3> k;
-        for (int a = 0; a < 3; ++a) {
-            const float x = m.positions[3 * size_t(v) + a] + 0.0f;  // -0 as 0
-            std::memcpy(&k[size_t(a)], &x, 4);
-        }
-        return k;
-    };
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    const detail::PositionPoints at = detail::points_by_position(m.positions, V);
     Points p;
     p.point.assign(V, kNone);
-    std::vector<uint32_t> first(V, kNone);  // per run of equal positions: its lowest vertex
-    for (size_t i = 0; i < V;) {
-        size_t j = i;
-        uint32_t lowest = order[i];
-        while (j < V && key(order[j]) == key(order[i])) lowest = std::min(lowest, order[j++]);
-        for (size_t k = i; k < j; ++k) first[order[k]] = lowest;
-        i = j;
+    std::vector<uint32_t> lowest(at.count, kNone), first(V);  // first: per vertex, the lowest at its position
+    for (uint32_t v = 0; v < V; ++v) {
+        if (lowest[at.point[v]] == kNone) lowest[at.point[v]] = v;
+        first[v] = lowest[at.point[v]];
     }
     // a group of copies the builder removes together (near-coincident ones too) is one point
     auto root = [&](uint32_t v) {

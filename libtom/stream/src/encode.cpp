@@ -7,9 +7,9 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <numeric>
 
 #include "format_layout.h"
+#include "points.h"
 #include "scene_codec.h"
 #include "stream_layout.h"
 #include "stream_order.h"
@@ -209,11 +209,12 @@ struct Split {
 struct Connectivity {
     std::vector<std::vector<uint32_t>> base;  // per part
     std::vector<Split> splits;                // vertex S + i
-    std::vector<std::vector<uint32_t>> rings; // vertex S + i: its neighbours just after its split, ascending
-    std::vector<Planes> born_planes;          // every vertex: its triangles' planes at the coarsest level it is in
+    std::vector<std::vector<uint32_t>> rings;  // vertex S + i: its neighbours just after its split, ascending
 };
 
-Connectivity connectivity(const MeshView& m) {
+/// The mesh's Connectivity, and in `born_planes` every vertex's triangles' planes at the
+/// coarsest level it is in (what quantize_mesh needs; the chunks do not).
+Connectivity connectivity(const MeshView& m, std::vector<Planes>& born_planes) {
     const uint32_t V = m.vertex_count, S = m.min_vertex_count, T = m.triangle_count, P = part_count(m);
     std::vector<uint32_t> cur(3 * size_t(T)), part_of(T), alive_count(P);
     for (size_t c = 0; c < cur.size(); ++c) cur[c] = m.corner(uint32_t(c));
@@ -232,7 +233,7 @@ Connectivity connectivity(const MeshView& m) {
     seen.cover(V);
     out.splits.resize(V - S);
     out.rings.resize(V - S);
-    out.born_planes.assign(V, Planes{0, 0, 0, 0, 0, 0});
+    born_planes.assign(V, Planes{0, 0, 0, 0, 0, 0});
     for (uint32_t v = V; v-- > S;) {
         Split& s = out.splits[v - S];
         const uint32_t p = m.substitute_at(v);
@@ -240,7 +241,10 @@ Connectivity connectivity(const MeshView& m) {
         // born at v + 1: the live triangles holding both v and p, each part's last ones
         prune(incident[v]);
         gather_neighbours(incident[v], triangle, v, v, seen, out.rings[v - S]);
-        for (uint32_t g : incident[v]) add_plane(out.born_planes[v], m, triangle(g)[0], triangle(g)[1], triangle(g)[2]);
+        for (uint32_t g : incident[v]) {
+            const uint32_t* c = triangle(g);
+            add_plane(born_planes[v], m, c[0], c[1], c[2]);
+        }
         std::vector<uint32_t> born;
         for (uint32_t g : incident[v]) {
             const uint32_t* c = &cur[3 * size_t(g / 3)];
@@ -296,22 +300,17 @@ Connectivity connectivity(const MeshView& m) {
         const Part part = part_at(m, q);
         out.base.emplace_back(cur.begin() + 3 * size_t(part.first_triangle), cur.begin() + 3 * (size_t(part.first_triangle) + alive_count[q]));
         for (size_t t = 0; t < out.base.back().size(); t += 3)  // the survivors' coarsest level
-            for (int k = 0; k < 3; ++k)
-                add_plane(out.born_planes[out.base.back()[t + k]], m, out.base.back()[t], out.base.back()[t + 1], out.base.back()[t + 2]);
+            for (int k = 0; k < 3; ++k) add_plane(born_planes[out.base.back()[t + k]], m, out.base.back()[t], out.base.back()[t + 1], out.base.back()[t + 2]);
     }
     return out;
 }
 
-PointPlanes point_planes(const MeshView& m, const Connectivity& conn) {
+PointPlanes point_planes(const MeshView& m, const std::vector<Planes>& born_planes) {
     PointPlanes pp;
     const uint32_t n = m.vertex_count;
-    std::vector<uint32_t> order(n);
-    std::iota(order.begin(), order.end(), 0u);
-    auto key = [&](uint32_t v) { return std::array<float, 3>{m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]}; };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b) || (key(a) == key(b) && a < b); });
-    pp.point.resize(n);
-    for (uint32_t i = 0, points = 0; i < n; ++i) pp.point[order[i]] = (i > 0 && key(order[i]) == key(order[i - 1])) ? points - 1 : points++;
-    const size_t points = n ? *std::max_element(pp.point.begin(), pp.point.end()) + 1 : 0;
+    detail::PositionPoints at = detail::points_by_position(m.positions, n);
+    pp.point = std::move(at.point);
+    const size_t points = at.count;
     std::vector<Planes> fine(points, Planes{0, 0, 0, 0, 0, 0}), born(points, Planes{0, 0, 0, 0, 0, 0});
     for (uint32_t t = 0; t < m.triangle_count; ++t) {
         Planes q{0, 0, 0, 0, 0, 0};
@@ -320,7 +319,7 @@ PointPlanes point_planes(const MeshView& m, const Connectivity& conn) {
             for (int j = 0; j < 6; ++j) fine[pp.point[m.corner(3 * t + k)]][j] += q[j];
     }
     for (uint32_t v = 0; v < n; ++v)
-        for (int j = 0; j < 6; ++j) born[pp.point[v]][j] += conn.born_planes[v][j];
+        for (int j = 0; j < 6; ++j) born[pp.point[v]][j] += born_planes[v][j];
     pp.q.resize(points);
     for (size_t i = 0; i < points; ++i) {
         const Planes a = unit_trace(fine[i]), b = unit_trace(born[i]);
@@ -358,7 +357,7 @@ std::array<uint32_t, 3> quantize_on_surface(const float x[3], const Planes& plan
     return best;
 }
 
-Quantized quantize_mesh(const MeshView& m, const Connectivity& conn, const StreamOptions& o) {
+Quantized quantize_mesh(const MeshView& m, const std::vector<Planes>& born_planes, const StreamOptions& o) {
     Quantized out;
     StreamQuantization& q = out.q;
     q.position_bits = o.position_bits, q.normal_bits = o.normal_bits, q.texcoord_bits = o.texcoord_bits;
@@ -369,7 +368,7 @@ Quantized quantize_mesh(const MeshView& m, const Connectivity& conn, const Strea
         extent = std::max(extent, m.bounds_max[k] - m.bounds_min[k]);
     }
     q.position_step = grid_step(extent, o.position_bits);
-    const PointPlanes planes = point_planes(m, conn);
+    const PointPlanes planes = point_planes(m, born_planes);
     for (size_t v = 0; v < n; ++v) {
         const std::array<uint32_t, 3> g = quantize_on_surface(m.positions + 3 * v, planes.q[planes.point[v]], q);
         out.positions.insert(out.positions.end(), {uint16_t(g[0]), uint16_t(g[1]), uint16_t(g[2])});
@@ -590,8 +589,7 @@ std::vector<layout::PendingSection> kept_sections(const File& file, const uint8_
     using namespace layout;
     std::vector<PendingSection> kept;
     for (const SectionInfo& s : file.sections()) {
-        const char name[5] = {s.type[0], s.type[1], s.type[2], s.type[3], 0};
-        const uint32_t type = fourcc(name);
+        const uint32_t type = fourcc(s.type);
         const bool whole = s.mesh == file_level || type == sec_mesh || type == sec_metadata || type == sec_pairs || type == sec_parts;
         if (whole) kept.push_back({type, s.mesh, std::vector<uint8_t>(bytes + s.offset, bytes + s.offset + s.bytes)});
     }
@@ -619,28 +617,11 @@ std::vector<std::vector<uint32_t>> all_chunk_ends(const File& file, const Stream
     return ends;
 }
 
-} // namespace
-
-std::vector<uint8_t> stream_order(const void* bytes, size_t size, const StreamOptions& options, const std::string& name) {
-    check_options(options);
-    const File file = File::borrow(bytes, size, name);
-    if (options.keep_order) return std::vector<uint8_t>(static_cast<const uint8_t*>(bytes), static_cast<const uint8_t*>(bytes) + size);
-    return stream_ordered_image(file, static_cast<const uint8_t*>(bytes), all_chunk_ends(file, options));
-}
-
-std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const StreamOptions& options, const std::string& name) {
-    check_options(options);
-    // the chunks end where the source's do (the renumbered groups would move some ends)
-    const File original = File::borrow(source, source_size, name);
-    const std::vector<std::vector<uint32_t>> ends = all_chunk_ends(original, options);
-    const std::vector<uint8_t> ordered =
-        options.keep_order ? std::vector<uint8_t>() : stream_ordered_image(original, static_cast<const uint8_t*>(source), ends);
-    const void* bytes = options.keep_order ? source : ordered.data();
-    const size_t size = options.keep_order ? source_size : ordered.size();
-    const File file = File::borrow(bytes, size, name);
+/// The streamed image of `file` (whose bytes are `bytes`), its meshes' chunks ending at `ends`.
+std::vector<uint8_t> encode_file(const File& file, const uint8_t* bytes, const std::vector<std::vector<uint32_t>>& ends, const StreamOptions& options) {
     // the directory: kept sections (those a frame needs, then the deferred ones), quantization per
     // mesh, then (below) the chunk table
-    std::vector<layout::PendingSection> kept = kept_sections(file, static_cast<const uint8_t*>(bytes));
+    std::vector<layout::PendingSection> kept = kept_sections(file, bytes);
     const size_t front = size_t(
         std::stable_partition(kept.begin(), kept.end(), [](const layout::PendingSection& s) { return s.mesh != layout::file_level || !deferrable(s.type); }) -
         kept.begin());
@@ -659,8 +640,10 @@ std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const
     std::vector<Chunk> chunks;
     for (uint32_t i = 0; i < file.mesh_count(); ++i) {
         const MeshView& m = file.mesh(i);
-        const Connectivity conn = connectivity(m);
-        const Quantized q = quantize_mesh(m, conn, options);
+        std::vector<Planes> born_planes;
+        const Connectivity conn = connectivity(m, born_planes);
+        const Quantized q = quantize_mesh(m, born_planes, options);
+        std::vector<Planes>().swap(born_planes);
         const std::vector<uint8_t> record = quantization_record(q.q);
         directory.insert(directory.end(), record.begin(), record.end());
         for (Chunk& c : mesh_chunks(m, i, conn, q, ends[i])) chunks.push_back(std::move(c));
@@ -694,6 +677,25 @@ std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const
     store_u64(&out[h_file_bytes], out.size());
     store_u32(&out[h_header_checksum], crc32(out.data(), h_header_checksum));
     return out;
+}
+
+}  // namespace
+
+std::vector<uint8_t> stream_order(const void* bytes, size_t size, const StreamOptions& options, const std::string& name) {
+    check_options(options);
+    const File file = File::borrow(bytes, size, name);
+    if (options.keep_order) return std::vector<uint8_t>(static_cast<const uint8_t*>(bytes), static_cast<const uint8_t*>(bytes) + size);
+    return stream_ordered_image(file, static_cast<const uint8_t*>(bytes), all_chunk_ends(file, options));
+}
+
+std::vector<uint8_t> encode_stream(const void* source, size_t source_size, const StreamOptions& options, const std::string& name) {
+    check_options(options);
+    // the chunks end where the source's do (the renumbered groups would move some ends)
+    const File original = File::borrow(source, source_size, name);
+    const std::vector<std::vector<uint32_t>> ends = all_chunk_ends(original, options);
+    if (options.keep_order) return encode_file(original, static_cast<const uint8_t*>(source), ends, options);
+    const std::vector<uint8_t> ordered = stream_ordered_image(original, static_cast<const uint8_t*>(source), ends);
+    return encode_file(File::borrow(ordered.data(), ordered.size(), name), ordered.data(), ends, options);
 }
 
 } // namespace tom

@@ -113,19 +113,19 @@ Renumbered renumber_topology(const MeshView& m, const std::vector<uint32_t>& to_
     Renumbered r;
     r.substitute.resize(V);
     for (uint32_t v = 0; v < V; ++v) r.substitute[to_new[v]] = to_new[m.substitute_at(v)];
-    r.corners.resize(3 * size_t(m.triangle_count));
-    std::vector<uint32_t> order, birth(m.triangle_count);
+    std::vector<uint32_t> corners(3 * size_t(m.triangle_count)), order, birth(m.triangle_count);
+    for (size_t c = 0; c < corners.size(); ++c) corners[c] = to_new[m.corner(uint32_t(c))];
     for (uint32_t t = 0; t < m.triangle_count; ++t) {
-        const uint32_t c[3] = {to_new[m.corner(3 * t)], to_new[m.corner(3 * t + 1)], to_new[m.corner(3 * t + 2)]};
+        const uint32_t* c = &corners[3 * size_t(t)];
         birth[t] = std::max({pair_birth(r.substitute, S, c[0], c[1]), pair_birth(r.substitute, S, c[1], c[2]), pair_birth(r.substitute, S, c[0], c[2])});
     }
+    r.corners.resize(corners.size());
     for (uint32_t q = 0; q < part_count(m); ++q) {
         const Part part = part_at(m, q);
         order.resize(part.triangle_count);
         std::iota(order.begin(), order.end(), part.first_triangle);
         std::stable_sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) { return birth[x] < birth[y]; });
-        for (uint32_t i = 0; i < part.triangle_count; ++i)
-            for (int k = 0; k < 3; ++k) r.corners[3 * (size_t(part.first_triangle) + i) + k] = to_new[m.corner(3 * order[i] + k)];
+        for (uint32_t i = 0; i < part.triangle_count; ++i) std::copy_n(&corners[3 * size_t(order[i])], 3, &r.corners[3 * (size_t(part.first_triangle) + i)]);
     }
     if (m.pair_bits) {
         r.pair_bits.assign((size_t(V) + 7) / 8, 0);
@@ -154,8 +154,7 @@ void renumber_sections(const File& file, const uint8_t* bytes, uint32_t index, c
     const Renumbered r = renumber_topology(m, to_new);
     for (const SectionInfo& s : file.sections()) {
         if (s.mesh != index) continue;
-        const char name[5] = {s.type[0], s.type[1], s.type[2], s.type[3], 0};
-        const uint32_t type = fourcc(name);
+        const uint32_t type = fourcc(s.type);
         const uint8_t* data = bytes + s.offset;
         std::vector<uint8_t> section;
         if (type == sec_coarse) continue;
@@ -189,10 +188,8 @@ void renumber_sections(const File& file, const uint8_t* bytes, uint32_t index, c
 std::vector<uint8_t> stream_ordered_image(const File& file, const uint8_t* bytes, const std::vector<std::vector<uint32_t>>& ends) {
     std::vector<layout::PendingSection> sections;
     for (const SectionInfo& s : file.sections())
-        if (s.mesh == layout::file_level) {
-            const char name[5] = {s.type[0], s.type[1], s.type[2], s.type[3], 0};
-            sections.push_back({layout::fourcc(name), s.mesh, std::vector<uint8_t>(bytes + s.offset, bytes + s.offset + s.bytes)});
-        }
+        if (s.mesh == layout::file_level)
+            sections.push_back({layout::fourcc(s.type), s.mesh, std::vector<uint8_t>(bytes + s.offset, bytes + s.offset + s.bytes)});
     for (uint32_t i = 0; i < file.mesh_count(); ++i) renumber_sections(file, bytes, i, ends[i], sections);
     return layout::assemble_file(sections, file.mesh_count());
 }
