@@ -722,8 +722,10 @@ std::vector<double> source_targets(const AttributeTerms& a, const float* source,
 // `targets`: each vertex's values minimise the weighted squared differences of the level's
 // interpolated values from the targets, with the others held, plus a pull toward its values
 // before of a twentieth of a mean vertex's weight (a vertex the terms barely see keeps them);
-// four Gauss-Seidel sweeps.
-void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& targets, size_t width, float* values) {
+// four Gauss-Seidel sweeps. A term weighs `weights[term]` when given, else its own weight.
+void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& targets, size_t width, float* values,
+                const std::vector<double>* weights = nullptr) {
+    const auto weight_of = [&](uint32_t term) { return weights ? (*weights)[term] : double(a.terms[term].weight); };
     std::vector<double> diagonal(n, 0.0);
     double total = 0;
     uint32_t seen = 0;
@@ -731,7 +733,7 @@ void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& 
         for (uint32_t i = a.of_vertex.start[v]; i < a.of_vertex.start[v + 1]; ++i) {
             const AttributeTerms::Term& t = a.terms[a.of_vertex.triangles[i] / 3];
             const double b = t.at_level[a.of_vertex.triangles[i] % 3];
-            diagonal[v] += t.weight * b * b;
+            diagonal[v] += weight_of(a.of_vertex.triangles[i] / 3) * b * b;
         }
         if (diagonal[v] > 0) total += diagonal[v], ++seen;
     }
@@ -750,7 +752,7 @@ void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& 
                     double r = targets[width * term + c];  // less the other corners' share
                     for (uint32_t k = 0; k < 3; ++k)
                         if (k != slot) r -= double(t.at_level[k]) * values[width * t.level[k] + c];
-                    sum[c] += t.weight * t.at_level[slot] * r;
+                    sum[c] += weight_of(term) * t.at_level[slot] * r;
                 }
             }
             for (size_t c = 0; c < width; ++c) values[width * v + c] = float(sum[c] / (diagonal[v] + hold));
@@ -760,14 +762,21 @@ void fit_stream(const AttributeTerms& a, uint32_t n, const std::vector<double>& 
 // The live vertices' normals fitted to the source's directions: a normal drawn is the unit
 // vector of the interpolated one, which between differing unit normals is shorter than one, so
 // each term's target is the source's unit normal at the length the level's interpolation has
-// there (a level whose normals already point as the source's is left as it is); two rounds of
-// fitting and making the normals unit.
+// there (a level whose normals already point as the source's is left as it is). What is judged
+// is the mean angle off the source's normals, not its square: after a first round of least
+// squares each term weighs its own weight over its angle from the last round (iteratively
+// reweighted least squares toward the least mean angle; angles below a tenth of a degree count
+// as that, so that a term already met does not take over), four rounds of fitting and making the
+// normals unit.
 void fit_normals(const AttributeTerms& a, uint32_t n, const float* source, float* normals) {
+    constexpr int rounds = 4;
+    constexpr double least_angle = 0.002;  // radians
     const std::vector<double> directions = source_targets(a, source, 3);
-    std::vector<double> targets(directions.size());
-    for (int round = 0; round < 2; ++round) {
+    std::vector<double> targets(directions.size()), weights(a.terms.size());
+    for (int round = 0; round < rounds; ++round) {
         for (size_t i = 0; i < a.terms.size(); ++i) {
             const AttributeTerms::Term& t = a.terms[i];
+            weights[i] = t.weight;
             if (!(t.weight > 0)) continue;
             double level[3] = {0, 0, 0};
             for (int k = 0; k < 3; ++k)
@@ -776,8 +785,12 @@ void fit_normals(const AttributeTerms& a, uint32_t n, const float* source, float
             const double length = std::sqrt(level[0] * level[0] + level[1] * level[1] + level[2] * level[2]),
                          unit = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             for (int c = 0; c < 3; ++c) targets[3 * i + c] = unit > 0 ? d[c] * length / unit : level[c];
+            if (round > 0 && length > 0 && unit > 0) {
+                const double cosine = std::clamp((level[0] * d[0] + level[1] * d[1] + level[2] * d[2]) / (length * unit), -1.0, 1.0);
+                weights[i] = t.weight / std::max(std::acos(cosine), least_angle);
+            }
         }
-        fit_stream(a, n, targets, 3, normals);
+        fit_stream(a, n, targets, 3, normals, &weights);
         for (uint32_t v = 0; v < n; ++v) normalize(&normals[3 * size_t(v)], 3);
     }
 }
