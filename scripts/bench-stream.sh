@@ -115,7 +115,7 @@ def at_or_below_cell(r):
         if q['mean_percent'] is None: return f"{q['bytes']}: nothing yet"
         held = f"the same {q['triangles']}" if q['triangles'] == q['chain_triangles'] else f"{q['triangles']} triangles against {q['chain_triangles']}"
         above = 100 * (q['mean_percent'] / q['chain_mean_percent'] - 1)
-        return f"{q['bytes']}: {held}, {above:.3f}% above" if above < 0.1 else f"{q['bytes']}: {held}, {above:.2f}% above"
+        return f"{q['bytes']}: {held}, {above:.{3 if above < 0.1 else 2}f}% above"
     worse = [q for q in r['points'] if q['bytes'] in w]
     return f"no: {len(w)} of {len(r['points'])} boundaries ({'; '.join(place(q) for q in worse[:3])}{'; ...' if len(w) > 3 else ''})"
 summary = ['| mesh | stream bytes | first chunk | gltfpack -cc, one level | stream / one level | LOD chain bytes | streamed error at or below the chain at every byte count | decode Mtri/s | x meshoptimizer |',

@@ -19,7 +19,6 @@ struct PositionPoints {
 /// The points of `vertex_count` vertices (3 floats each at `positions`), numbered in the order of
 /// their lowest vertex. Positions compare by their bits, so a NaN is a point of its own bits.
 inline PositionPoints points_by_position(const float* positions, uint32_t vertex_count) {
-    constexpr uint32_t none = ~0u;
     auto key = [&](uint32_t v) {
         std::array<uint32_t, 3> k;
         for (int a = 0; a < 3; ++a) {
@@ -40,8 +39,8 @@ inline PositionPoints points_by_position(const float* positions, uint32_t vertex
         i = j;
     }
     PositionPoints p;
-    p.point.assign(vertex_count, none);
-    for (uint32_t v = 0; v < vertex_count; ++v) p.point[v] = lowest[v] == v ? p.count++ : p.point[lowest[v]];
+    p.point.resize(vertex_count);
+    for (uint32_t v = 0; v < vertex_count; ++v) p.point[v] = lowest[v] == v ? p.count++ : p.point[lowest[v]];  // lowest[v] <= v: numbered
     return p;
 }
 

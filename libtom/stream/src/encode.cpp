@@ -63,29 +63,6 @@ Planes unit_trace(Planes q) {
     return q;
 }
 
-/// What a vertex's quantization should keep it near, per point (coincident vertices count once,
-/// so that a seam's copies land on one grid point): the planes of the full mesh's triangles around
-/// it, and those of the triangles around it at the coarsest level it is in (where it is born, or
-/// the survivors' level), each scaled to trace 1: a vertex serves every level from its birth on,
-/// and at the coarse ones its triangles are the coarse ones.
-struct PointPlanes {
-    std::vector<uint32_t> point;  // per vertex
-    std::vector<Planes> q;        // per point
-};
-/// The lowest resolution at which at least `share` of the mesh's triangles are live.
-uint32_t resolution_with_share(const MeshView& m, double share) {
-    const double wanted = std::ceil(share * double(m.triangle_count));
-    uint32_t lo = m.min_vertex_count, hi = m.vertex_count;
-    while (lo < hi) {
-        const uint32_t mid = lo + (hi - lo) / 2;
-        if (double(active_triangle_count(m, mid)) >= wanted)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    return lo;
-}
-
 /// The resolutions chunks end at: the first holding `first_share` of the vertices and of the
 /// triangles at least (and the survivors), each next `growth` times the last, none inside a group
 /// of copies, the last V.
@@ -93,7 +70,8 @@ std::vector<uint32_t> chunk_ends(const MeshView& m, const StreamOptions& o) {
     std::vector<uint32_t> ends;
     const uint32_t V = m.vertex_count;
     if (V == 0) return ends;
-    double target = std::max<double>({double(m.min_vertex_count), std::ceil(o.first_share * V), double(resolution_with_share(m, o.first_share)), 1.0});
+    double target = std::max<double>({double(m.min_vertex_count), std::ceil(o.first_share * V),
+                                      double(vertex_count_for_triangles(m, uint32_t(std::ceil(o.first_share * m.triangle_count)), Floor::coarsest)), 1.0});
     while (true) {
         uint32_t b = m.whole_groups_above(uint32_t(std::min<double>(target, V)));
         if (!ends.empty() && b <= ends.back()) b = m.whole_groups_above(ends.back() + 1);
@@ -304,6 +282,16 @@ Connectivity connectivity(const MeshView& m, std::vector<Planes>& born_planes) {
     }
     return out;
 }
+
+/// What a vertex's quantization should keep it near, per point (coincident vertices count once,
+/// so that a seam's copies land on one grid point): the planes of the full mesh's triangles around
+/// it, and those of the triangles around it at the coarsest level it is in (where it is born, or
+/// the survivors' level), each scaled to trace 1: a vertex serves every level from its birth on,
+/// and at the coarse ones its triangles are the coarse ones.
+struct PointPlanes {
+    std::vector<uint32_t> point;  // per vertex
+    std::vector<Planes> q;        // per point
+};
 
 PointPlanes point_planes(const MeshView& m, const std::vector<Planes>& born_planes) {
     PointPlanes pp;
